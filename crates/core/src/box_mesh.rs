@@ -1,0 +1,210 @@
+//! The structured box mesher: a box split into `cells` hexahedra, each cut into 6 tetrahedra
+//! along its main diagonal (Kuhn's subdivision, conforming), optionally graded toward a point.
+//! Its facet groups are the six faces `xmin`, `xmax`, `ymin`, `ymax`, `zmin`, `zmax`.
+
+use crate::error::{MeshError, ParameterError, check, join};
+use crate::mesh::{MeshSource, TetMesh, signed_volume};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// `type = "box"`: the box `min ≤ x ≤ max` with `cells` hexahedra per axis.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxMesh {
+    /// Lower corner.
+    pub min: [f64; 3],
+    /// Upper corner.
+    pub max: [f64; 3],
+    /// Number of cells along x, y, z.
+    pub cells: [usize; 3],
+    /// Optional geometric grading toward a point.
+    #[serde(default)]
+    pub grading: Option<Grading>,
+}
+
+/// Geometric grading: along each axis the cells grow geometrically away from the coordinate of
+/// `toward`, the largest being `ratio` times the smallest.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Grading {
+    /// The point the cells shrink toward (clamped into the box).
+    pub toward: [f64; 3],
+    /// Largest over smallest cell size along each side of `toward` (≥ 1).
+    pub ratio: f64,
+}
+
+impl BoxMesh {
+    /// An ungraded box.
+    pub fn new(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> Self {
+        Self { min, max, cells, grading: None }
+    }
+
+    /// The same box graded toward `toward` with size ratio `ratio`.
+    pub fn graded(mut self, toward: [f64; 3], ratio: f64) -> Self {
+        self.grading = Some(Grading { toward, ratio });
+        self
+    }
+
+    /// The node coordinates along axis `k`.
+    pub fn axis_nodes(&self, k: usize) -> Vec<f64> {
+        let (a, b, n) = (self.min[k], self.max[k], self.cells[k]);
+        match &self.grading {
+            None => (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect(),
+            Some(g) => graded_axis(a, b, n, g.toward[k].clamp(a, b), g.ratio),
+        }
+    }
+
+    /// Builds the mesh (infallible for validated parameters).
+    pub fn mesh(&self) -> Result<TetMesh, MeshError> {
+        let xs: [Vec<f64>; 3] = std::array::from_fn(|k| self.axis_nodes(k));
+        let [nx, ny, nz] = self.cells;
+        let id = |i: usize, j: usize, k: usize| i + (nx + 1) * (j + (ny + 1) * k);
+        let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
+        for k in 0..=nz {
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    nodes.push([xs[0][i], xs[1][j], xs[2][k]]);
+                }
+            }
+        }
+        // Kuhn: one tetrahedron per permutation of the axes, along the path 000 → 111.
+        const PERMS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+        let mut tets = Vec::with_capacity(6 * nx * ny * nz);
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    for p in PERMS {
+                        let mut c = [i, j, k];
+                        let mut t = [id(c[0], c[1], c[2]), 0, 0, 0];
+                        for (s, axis) in p.iter().enumerate() {
+                            c[*axis] += 1;
+                            t[s + 1] = id(c[0], c[1], c[2]);
+                        }
+                        if signed_volume(&nodes, &t) < 0.0 {
+                            t.swap(1, 2);
+                        }
+                        tets.push(t);
+                    }
+                }
+            }
+        }
+        let mut faces: Vec<(String, Vec<[usize; 3]>)> = Vec::new();
+        let grid = |n: usize| [n % (nx + 1), (n / (nx + 1)) % (ny + 1), n / ((nx + 1) * (ny + 1))];
+        let probe = TetMesh::new(nodes.clone(), tets.clone(), vec![])?;
+        for (axis, name_lo, name_hi) in [(0, "xmin", "xmax"), (1, "ymin", "ymax"), (2, "zmin", "zmax")] {
+            let last = self.cells[axis];
+            let on = |f: &[usize; 3], v: usize| f.iter().all(|&n| grid(n)[axis] == v);
+            faces.push((name_lo.into(), probe.boundary.iter().filter(|f| on(f, 0)).copied().collect()));
+            faces.push((name_hi.into(), probe.boundary.iter().filter(|f| on(f, last)).copied().collect()));
+        }
+        TetMesh::new(nodes, tets, faces)
+    }
+}
+
+/// Nodes on [a, b] with `n` cells, growing geometrically away from `c` with max/min size `ratio`.
+fn graded_axis(a: f64, b: f64, n: usize, c: f64, ratio: f64) -> Vec<f64> {
+    let (l1, l2) = (c - a, b - c);
+    let mut n1 = ((n as f64) * l1 / (l1 + l2)).round() as usize;
+    if l1 > 0.0 && n1 == 0 {
+        n1 = 1;
+    }
+    if l2 > 0.0 && n1 == n {
+        n1 = n - 1;
+    }
+    let side = |len: f64, m: usize| -> Vec<f64> {
+        // offsets from c of the m nodes after c, cells growing by q each
+        if m == 0 {
+            return vec![];
+        }
+        let q = if m > 1 { ratio.powf(1.0 / (m as f64 - 1.0)) } else { 1.0 };
+        let sizes: Vec<f64> = (0..m).map(|k| q.powi(k as i32)).collect();
+        let total: f64 = sizes.iter().sum();
+        let mut acc = 0.0;
+        sizes
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                acc += s;
+                if k + 1 == m { len } else { len * acc / total }
+            })
+            .collect()
+    };
+    let mut xs: Vec<f64> = side(l1, n1).into_iter().rev().map(|d| c - d).collect();
+    xs.push(c);
+    xs.extend(side(l2, n - n1).into_iter().map(|d| c + d));
+    xs[0] = a;
+    *xs.last_mut().unwrap() = b;
+    xs
+}
+
+#[typetag::serde(name = "box")]
+impl MeshSource for BoxMesh {
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        check::finite_all(path, "min", &self.min)?;
+        check::finite_all(path, "max", &self.max)?;
+        for k in 0..3 {
+            if self.max[k] <= self.min[k] {
+                return Err(ParameterError::new(
+                    join(path, &format!("max[{k}]")),
+                    self.max[k],
+                    format!("must exceed min[{k}] = {}", self.min[k]),
+                ));
+            }
+            if self.cells[k] == 0 {
+                return Err(ParameterError::new(join(path, &format!("cells[{k}]")), 0, "must be >= 1"));
+            }
+        }
+        if let Some(g) = &self.grading {
+            let p = join(path, "grading");
+            check::finite_all(&p, "toward", &g.toward)?;
+            check::finite(&p, "ratio", g.ratio)?;
+            if !(1.0..=1e6).contains(&g.ratio) {
+                return Err(ParameterError::new(join(&p, "ratio"), g.ratio, "must lie in [1, 1e6]"));
+            }
+        }
+        Ok(())
+    }
+
+    fn build(&self, _base_dir: &Path) -> Result<TetMesh, MeshError> {
+        self.mesh()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volumes_add_up_and_faces_are_tagged() {
+        let m = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [3, 4, 2]).mesh().unwrap();
+        assert_eq!(m.n_elements(), 6 * 24);
+        let vol: f64 = (0..m.n_elements()).map(|e| m.volume(e)).sum();
+        assert!((vol - 4.0).abs() < 1e-12);
+        // each face of the box: 2 triangles per cell face
+        assert_eq!(m.groups["zmin"].len(), 2 * 12);
+        assert_eq!(m.groups["xmax"].len(), 2 * 8);
+        let tagged: usize = m.groups.values().map(|g| g.len()).sum();
+        assert_eq!(tagged, m.boundary.len(), "every boundary facet lies on one face");
+        for &f in &m.groups["zmin"] {
+            assert!(m.facet_centroid(f)[2].abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn grading_refines_toward_the_point() {
+        let b = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [20, 20, 10]).graded([0.0, 0.0, 0.0], 4.0);
+        let x = b.axis_nodes(0);
+        assert_eq!(x.len(), 21);
+        assert!(x.windows(2).all(|w| w[1] > w[0]));
+        assert!((x[10]).abs() < 1e-15, "the focus is a node");
+        let small = x[11] - x[10];
+        let large = x[20] - x[19];
+        assert!((large / small - 4.0).abs() < 1e-9);
+        let z = b.axis_nodes(2);
+        assert!((z[0]).abs() < 1e-15 && (z[10] - 1.0).abs() < 1e-15);
+        assert!(((z[10] - z[9]) / (z[1] - z[0]) - 4.0).abs() < 1e-9);
+        let m = b.mesh().unwrap();
+        let vol: f64 = (0..m.n_elements()).map(|e| m.volume(e)).sum();
+        assert!((vol - 4.0).abs() < 1e-12);
+    }
+}

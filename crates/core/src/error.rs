@@ -1,0 +1,145 @@
+//! Typed errors. Each carries the offending value and where it came from (field path, element,
+//! node, file), so that a message alone tells the user what to fix.
+
+use std::fmt::Display;
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// A parameter outside its admissible range: `field` is the full path in the scene
+/// (`material.E`, `yield.h`, `obstacle.gap.R`), `value` what was given.
+#[derive(Debug, Clone, Error, PartialEq)]
+#[error("{field} = {value}: {requirement}")]
+pub struct ParameterError {
+    /// Path of the field in the scene file.
+    pub field: String,
+    /// The offending value as written.
+    pub value: String,
+    /// What the value must satisfy.
+    pub requirement: String,
+}
+
+impl ParameterError {
+    /// An error for `field` holding `value`, which must satisfy `requirement`.
+    pub fn new(field: impl Into<String>, value: impl Display, requirement: impl Into<String>) -> Self {
+        Self { field: field.into(), value: value.to_string(), requirement: requirement.into() }
+    }
+}
+
+/// Joins a table path and a field name: `join("material", "E") == "material.E"`.
+pub fn join(path: &str, field: &str) -> String {
+    if path.is_empty() { field.to_string() } else { format!("{path}.{field}") }
+}
+
+/// Checks for scene parameters: every numeric field rejects NaN and infinities first.
+pub mod check {
+    use super::{ParameterError, join};
+
+    /// `value` is a finite number.
+    pub fn finite(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
+        if value.is_finite() {
+            Ok(value)
+        } else {
+            Err(ParameterError::new(join(path, field), value, "must be a finite number"))
+        }
+    }
+
+    /// `value` is finite and > 0.
+    pub fn positive(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
+        finite(path, field, value)?;
+        if value > 0.0 {
+            Ok(value)
+        } else {
+            Err(ParameterError::new(join(path, field), value, "must be > 0"))
+        }
+    }
+
+    /// `value` is finite and ≥ 0.
+    pub fn non_negative(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
+        finite(path, field, value)?;
+        if value >= 0.0 {
+            Ok(value)
+        } else {
+            Err(ParameterError::new(join(path, field), value, "must be >= 0"))
+        }
+    }
+
+    /// `lo < value < hi`.
+    pub fn open_interval(path: &str, field: &str, value: f64, lo: f64, hi: f64) -> Result<f64, ParameterError> {
+        finite(path, field, value)?;
+        if value > lo && value < hi {
+            Ok(value)
+        } else {
+            Err(ParameterError::new(join(path, field), value, format!("must lie in the open interval ({lo}, {hi})")))
+        }
+    }
+
+    /// Every entry of a coordinate array is finite.
+    pub fn finite_all(path: &str, field: &str, values: &[f64]) -> Result<(), ParameterError> {
+        for (i, v) in values.iter().enumerate() {
+            finite(path, &format!("{field}[{i}]"), *v)?;
+        }
+        Ok(())
+    }
+}
+
+/// A mesh that cannot be used: the message names the element, node or file.
+#[derive(Debug, Clone, Error, PartialEq)]
+pub enum MeshError {
+    /// A tetrahedron with (numerically) zero volume.
+    #[error("element {element} (nodes {nodes:?}) has zero volume ({volume:e}); the mesh is degenerate there")]
+    Degenerate { element: usize, nodes: [usize; 4], volume: f64 },
+    /// A tetrahedron with negative orientation.
+    #[error("element {element} (nodes {nodes:?}) is inverted: signed volume {volume:e} < 0")]
+    Inverted { element: usize, nodes: [usize; 4], volume: f64 },
+    /// An element refers to a node that does not exist.
+    #[error("element {element} refers to node {node}, but the mesh has only {n_nodes} nodes")]
+    DanglingNode { element: usize, node: usize, n_nodes: usize },
+    /// A node coordinate is NaN or infinite.
+    #[error("node {node} has a non-finite coordinate {coords:?}")]
+    NonFiniteNode { node: usize, coords: [f64; 3] },
+    /// No tetrahedra at all.
+    #[error("the mesh has no tetrahedra")]
+    Empty,
+    /// A facet of a named group is not a boundary facet of the tetrahedra.
+    #[error("facet {facet:?} of group `{group}` is not a boundary face of any tetrahedron")]
+    NotABoundaryFacet { group: String, facet: [usize; 3] },
+    /// A file could not be read or parsed.
+    #[error("{path}: {message}")]
+    File { path: PathBuf, message: String },
+}
+
+/// Anything that stops a scene from being built: bad parameters, a bad mesh, an empty region,
+/// a TOML error. The message always names the field or the file.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The scene file could not be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    /// TOML syntax, an unknown field, or an unknown plugin `type`.
+    #[error("{path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    /// A parameter out of range.
+    #[error(transparent)]
+    Parameter(#[from] ParameterError),
+    /// The mesh is unusable.
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// A region selects nothing where something is required.
+    #[error("{field}: {message}")]
+    Region { field: String, message: String },
+}
+
+/// Failures of the sparse linear algebra.
+#[derive(Debug, Clone, Error, PartialEq)]
+pub enum LinalgError {
+    /// Cholesky met a non-positive pivot: the matrix is singular or indefinite.
+    #[error(
+        "the {what} matrix ({n} unknowns) is not positive definite: \
+         the body is not held against rigid-body motion (no or too few Dirichlet conditions), \
+         or the material data make it singular"
+    )]
+    NotPositiveDefinite { what: String, n: usize },
+    /// faer reported an error (allocation, index overflow).
+    #[error("sparse linear algebra failed for the {what} matrix: {message}")]
+    Backend { what: String, message: String },
+}

@@ -1,0 +1,340 @@
+//! **L** — the discrete Lagrangian (SPEC §1 (1.11), §3):
+//! `L(τ̂, (v, V)) = ½[τ̂, τ̂] − (ε(v), τ) + f·V` on P_h × K_h.
+//!
+//! Every solver consumes the discrete problem through this trait, in algebraic terms: stress
+//! points with weights w_T (the volumes |T|), the strain operator ε = B u and its transpose,
+//! the local law of P at each point, the rows of K_h, the load f, and sparse assembly of
+//! `Σ_T w_T B_Tᵀ C_T B_T` on a fixed pattern. From these the provided methods evaluate the
+//! primal energy J (SPEC §3 form 1), the dual energy (form 3) and the KKT residuals (form 2) of
+//! any iterate — independently of the solver that produced it.
+
+use crate::displacements::ConstraintRows;
+use crate::elasticity::Elasticity;
+use crate::linalg::SymmetricPattern;
+use crate::stresses::{AdmissibleStresses, energy_inner};
+use crate::tensor::{Sym, SymOp};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Generalised stresses σ̂_T = (σ_T, q_T) at every stress point, and the plastic flags.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StressField {
+    /// σ_T (Mandel).
+    pub sigma: Vec<Sym>,
+    /// q_T, `stride` entries per point of which the first `q_dim` are used.
+    pub q: Vec<f64>,
+    /// Number of hardening variables.
+    pub q_dim: usize,
+    /// Whether the local law was plastic at the point.
+    pub plastic: Vec<bool>,
+}
+
+impl StressField {
+    /// Zero stresses at `n` points with `q_dim` hardening variables each.
+    pub fn new(n: usize, q_dim: usize) -> Self {
+        Self { sigma: vec![Sym::zeros(); n], q: vec![0.0; n * q_dim.max(1)], q_dim, plastic: vec![false; n] }
+    }
+
+    /// Storage stride of q (at least 1, so that chunks are never empty).
+    pub fn stride(&self) -> usize {
+        self.q_dim.max(1)
+    }
+
+    /// q at point i.
+    pub fn q(&self, i: usize) -> &[f64] {
+        let s = self.stride();
+        &self.q[i * s..i * s + self.q_dim]
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.sigma.len()
+    }
+
+    /// True when there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.sigma.is_empty()
+    }
+
+    /// Number of plastic points.
+    pub fn n_plastic(&self) -> usize {
+        self.plastic.iter().filter(|p| **p).count()
+    }
+}
+
+/// An iterate of the saddle problem: primal (u, V) and dual (σ̂, λ).
+#[derive(Clone, Copy, Debug)]
+pub struct Iterate<'a> {
+    /// Free displacement dofs.
+    pub u: &'a [f64],
+    /// Extra unknowns V.
+    pub extras: &'a [f64],
+    /// Generalised stresses.
+    pub stress: &'a StressField,
+    /// Contact multipliers (nodal contact forces), one per row of K_h.
+    pub lambda: &'a [f64],
+}
+
+/// The KKT residuals of SPEC §3 (form 2), each relative and dimensionless.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct KktResiduals {
+    /// ‖Bᵀσ(u) − Gᵀλ‖ / max(‖Bᵀσ(u)‖, ‖Gᵀλ‖): internal forces against contact forces.
+    pub equilibrium: f64,
+    /// ‖f + Hᵀλ‖ / max(‖f‖, ‖Hᵀλ‖): the load on the extra unknowns (Σλ = F for the punch).
+    pub load_balance: f64,
+    /// max_i |min(λ_i/λ_s, g_i/g_s)|: feasibility g ≥ 0, sign λ ≥ 0 and λ_i g_i = 0 in one
+    /// natural residual; λ_s = max|λ|, g_s the displacement scale.
+    pub complementarity: f64,
+    /// [σ̂ − P_D(Cε(u), 0)]^{1/2} / [P_D(Cε(u), 0)]^{1/2}: the returned stresses against the
+    /// local law of SPEC §2 in the energy norm.
+    pub constitutive: f64,
+}
+
+impl KktResiduals {
+    /// The largest residual; NaN if any residual is NaN.
+    pub fn max(&self) -> f64 {
+        let r = [self.equilibrium, self.load_balance, self.complementarity, self.constitutive];
+        if r.iter().any(|x| x.is_nan()) { f64::NAN } else { r.iter().copied().fold(0.0, f64::max) }
+    }
+}
+
+/// The material of an assembly: one tensor for all points, or one per point.
+#[derive(Clone, Copy, Debug)]
+pub enum Material<'a> {
+    /// The same 6×6 Mandel matrix at every point.
+    Uniform(&'a SymOp),
+    /// One matrix per stress point (consistent tangents).
+    PerPoint(&'a [SymOp]),
+}
+
+impl Material<'_> {
+    /// The matrix at point `i`.
+    #[inline]
+    pub fn at(&self, i: usize) -> &SymOp {
+        match self {
+            Material::Uniform(c) => c,
+            Material::PerPoint(cs) => &cs[i],
+        }
+    }
+}
+
+/// Scratch vectors for evaluations of L, allocated once per solve.
+#[derive(Clone, Debug)]
+pub struct Workspace {
+    /// Strains per point.
+    pub eps: Vec<Sym>,
+    /// Stresses of the local law.
+    pub stress: StressField,
+    /// Internal forces Bᵀσ.
+    pub force: Vec<f64>,
+    /// Gᵀλ.
+    pub gu: Vec<f64>,
+    /// Hᵀλ.
+    pub gv: Vec<f64>,
+    /// Gaps g(u, V).
+    pub gap: Vec<f64>,
+}
+
+impl Workspace {
+    /// Scratch sized for `l`.
+    pub fn new(l: &(impl Lagrangian + ?Sized)) -> Self {
+        Self {
+            eps: vec![Sym::zeros(); l.n_points()],
+            stress: StressField::new(l.n_points(), l.hardening_dim()),
+            force: vec![0.0; l.n_dofs()],
+            gu: vec![0.0; l.n_dofs()],
+            gv: vec![0.0; l.n_extras()],
+            gap: vec![0.0; l.constraints().n_rows()],
+        }
+    }
+}
+
+/// L: the discrete saddle problem every solver consumes.
+pub trait Lagrangian: Sync {
+    /// Number of free displacement dofs (the dimension of W_h).
+    fn n_dofs(&self) -> usize;
+    /// Number of stress points (elements, for P0 stresses).
+    fn n_points(&self) -> usize;
+    /// The elasticity of the energy metric.
+    fn elasticity(&self) -> &Elasticity;
+    /// P, or `None` for an elastic problem.
+    fn stresses(&self) -> Option<&dyn AdmissibleStresses>;
+    /// K_h.
+    fn constraints(&self) -> &ConstraintRows;
+    /// The load f on the extra unknowns.
+    fn load(&self) -> &[f64];
+    /// Quadrature weights w_T (= |T|).
+    fn weights(&self) -> &[f64];
+    /// ε_T = (B u)_T at every point.
+    fn strain(&self, u: &[f64], eps: &mut [Sym]);
+    /// f = Σ_T w_T B_Tᵀ σ_T: the internal forces of a stress field (Bᵀ of SPEC §3).
+    fn divergence(&self, sigma: &[Sym], f: &mut [f64]);
+    /// Sparsity pattern of assembled matrices (lower triangle).
+    fn pattern(&self) -> &SymmetricPattern;
+    /// values = Σ_T w_T B_Tᵀ C_T B_T on [`Lagrangian::pattern`].
+    fn assemble(&self, material: Material<'_>, values: &mut [f64]);
+
+    /// Number of extra unknowns V.
+    fn n_extras(&self) -> usize {
+        self.constraints().n_extras
+    }
+
+    /// Number of hardening variables per point.
+    fn hardening_dim(&self) -> usize {
+        self.plasticity().map_or(0, |p| p.hardening_dim())
+    }
+
+    /// P when it actually bounds the stresses; `None` for elastic problems, which then pay
+    /// nothing for plasticity.
+    fn plasticity(&self) -> Option<&dyn AdmissibleStresses> {
+        self.stresses().filter(|p| !p.is_unbounded())
+    }
+
+    /// The assembled matrix Σ_T w_T B_Tᵀ C_T B_T (values on the pattern).
+    fn stiffness(&self, material: Material<'_>) -> Vec<f64> {
+        let mut v = vec![0.0; self.pattern().nnz()];
+        self.assemble(material, &mut v);
+        v
+    }
+
+    /// The local law at every point: σ̂_T = P_D(Cε_T, 0) and, if asked, the consistent
+    /// tangents (SPEC §2). Returns the number of plastic points.
+    fn local_law(&self, eps: &[Sym], out: &mut StressField, tangents: Option<&mut [SymOp]>) -> usize {
+        let law = *self.elasticity();
+        let Some(p) = self.plasticity() else {
+            let c = law.stiffness_matrix();
+            out.sigma.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s = c * e);
+            out.plastic.par_iter_mut().for_each(|f| *f = false);
+            if let Some(t) = tangents {
+                t.par_iter_mut().for_each(|t| *t = c);
+            }
+            return 0;
+        };
+        let (m, stride) = (out.q_dim, out.stride());
+        let points = out.sigma.par_iter_mut().zip(out.q.par_chunks_mut(stride)).zip(out.plastic.par_iter_mut()).zip(eps.par_iter());
+        match tangents {
+            None => points.map(|(((s, q), pl), e)| {
+                *pl = p.local_law(&law, e, s, &mut q[..m], None);
+                *pl as usize
+            }).sum(),
+            Some(t) => points.zip(t.par_iter_mut()).map(|((((s, q), pl), e), t)| {
+                *pl = p.local_law(&law, e, s, &mut q[..m], Some(t));
+                *pl as usize
+            }).sum(),
+        }
+    }
+
+    /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (SPEC §2).
+    fn energy_of_strain(&self, eps: &[Sym]) -> f64 {
+        let law = *self.elasticity();
+        let w = self.weights();
+        match self.plasticity() {
+            None => eps.par_iter().zip(w.par_iter()).map(|(e, w)| 0.5 * w * e.dot(&law.stress(e))).sum(),
+            Some(p) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| w * p.energy(&law, e)).sum(),
+        }
+    }
+
+    /// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f·V (SPEC §3 form 1).
+    fn energy(&self, u: &[f64], extras: &[f64], ws: &mut Workspace) -> f64 {
+        self.strain(u, &mut ws.eps);
+        self.energy_of_strain(&ws.eps) - self.load().iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
+    }
+
+    /// ½[σ̂, σ̂] = ½ Σ_T |T| (Aσ_T:σ_T + q_T·H⁻¹q_T).
+    fn stress_energy(&self, stress: &StressField) -> f64 {
+        let law = *self.elasticity();
+        let p = self.plasticity();
+        let w = self.weights();
+        (0..stress.len())
+            .into_par_iter()
+            .map(|i| {
+                let (s, q) = (&stress.sigma[i], stress.q(i));
+                0.5 * w[i] * energy_inner(p, &law, s, q, s, q)
+            })
+            .sum()
+    }
+
+    /// The dual energy −(½[σ̂, σ̂] + λ·c) (SPEC §3 form 3). For a dual-feasible pair it is a
+    /// lower bound of J, with equality at the solution: J − dual is the duality gap.
+    fn dual_energy(&self, stress: &StressField, lambda: &[f64]) -> f64 {
+        let c = &self.constraints().offset;
+        -(self.stress_energy(stress) + lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>())
+    }
+
+    /// The KKT residuals of an iterate (SPEC §3 form 2), recomputed from scratch: σ(u) by the
+    /// local law, internal forces, gaps.
+    fn kkt(&self, it: &Iterate<'_>, ws: &mut Workspace) -> KktResiduals {
+        self.strain(it.u, &mut ws.eps);
+        self.local_law(&ws.eps, &mut ws.stress, None);
+        self.kkt_with_stress(it, ws)
+    }
+
+    /// As [`Lagrangian::kkt`], with `ws.stress` already holding P_D(Cε(u), 0) for `it.u`.
+    fn kkt_with_stress(&self, it: &Iterate<'_>, ws: &mut Workspace) -> KktResiduals {
+        let rows = self.constraints();
+        self.divergence(&ws.stress.sigma, &mut ws.force);
+        ws.gu.iter_mut().for_each(|x| *x = 0.0);
+        ws.gv.iter_mut().for_each(|x| *x = 0.0);
+        rows.add_transpose(it.lambda, &mut ws.gu, &mut ws.gv);
+        let equilibrium = relative(
+            norm_diff(&ws.force, &ws.gu),
+            norm(&ws.force).max(norm(&ws.gu)),
+        );
+        let f = self.load();
+        let load_sum: Vec<f64> = f.iter().zip(&ws.gv).map(|(a, b)| a + b).collect();
+        let load_balance = relative(norm(&load_sum), norm(f).max(norm(&ws.gv)));
+        rows.gap(it.u, it.extras, &mut ws.gap);
+        let lambda_s = max_abs(it.lambda);
+        let g_s = max_abs(it.u).max(max_abs(it.extras)).max(max_abs(&rows.offset));
+        let mut complementarity: f64 = 0.0;
+        for (l, g) in it.lambda.iter().zip(&ws.gap) {
+            let a = if lambda_s > 0.0 { l / lambda_s } else { *l };
+            let b = if g_s > 0.0 { g / g_s } else { *g };
+            let r = a.min(b).abs();
+            complementarity = if r.is_nan() || complementarity.is_nan() { f64::NAN } else { complementarity.max(r) };
+        }
+        let law = *self.elasticity();
+        let p = self.plasticity();
+        let w = self.weights();
+        let (num, den) = (0..self.n_points())
+            .into_par_iter()
+            .map(|i| {
+                let (s0, q0) = (&ws.stress.sigma[i], ws.stress.q(i));
+                let ds = it.stress.sigma[i] - s0;
+                let dq: [f64; crate::stresses::MAX_HARDENING_DIM] =
+                    std::array::from_fn(|k| if k < q0.len() { it.stress.q(i)[k] - q0[k] } else { 0.0 });
+                let dq = &dq[..q0.len()];
+                (w[i] * energy_inner(p, &law, &ds, dq, &ds, dq), w[i] * energy_inner(p, &law, s0, q0, s0, q0))
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let constitutive = relative(num.sqrt(), den.sqrt());
+        KktResiduals { equilibrium, load_balance, complementarity, constitutive }
+    }
+}
+
+/// num/den, with 0/0 = 0 and x/0 = 1 for x ≠ 0 (an entirely wrong answer); NaN stays NaN.
+fn relative(num: f64, den: f64) -> f64 {
+    if num.is_nan() || den.is_nan() {
+        f64::NAN
+    } else if den > 0.0 {
+        num / den
+    } else if num == 0.0 {
+        0.0
+    } else {
+        1.0
+    }
+}
+
+/// Euclidean norm.
+pub fn norm(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+fn norm_diff(x: &[f64], y: &[f64]) -> f64 {
+    x.iter().zip(y).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()
+}
+
+/// Largest absolute entry (NaN if any entry is NaN).
+pub fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0, |m: f64, v| if v.is_nan() || m.is_nan() { f64::NAN } else { m.max(v.abs()) })
+}

@@ -1,0 +1,237 @@
+//! The tetrahedral mesh T_h (SPEC §3): nodes, positively oriented tetrahedra, the boundary
+//! facets and named groups of them. Validated on construction: a zero-volume or inverted
+//! tetrahedron is an error that names the element.
+
+use crate::error::{MeshError, ParameterError};
+use std::collections::BTreeMap;
+use std::fmt::Debug;
+use std::path::Path;
+
+/// A conforming mesh of tetrahedra with its boundary.
+#[derive(Clone, Debug)]
+pub struct TetMesh {
+    /// Node coordinates.
+    pub nodes: Vec<[f64; 3]>,
+    /// Tetrahedra (node indices), positively oriented.
+    pub tets: Vec<[usize; 4]>,
+    /// Boundary facets (faces of exactly one tetrahedron), oriented outward.
+    pub boundary: Vec<[usize; 3]>,
+    /// Named groups of boundary facets, as indices into `boundary`.
+    pub groups: BTreeMap<String, Vec<usize>>,
+}
+
+/// The faces of a tetrahedron [a, b, c, d], each opposite one vertex and oriented outward
+/// when the tetrahedron is positively oriented.
+const LOCAL_FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+
+impl TetMesh {
+    /// Builds and validates a mesh. `named_facets` are facet groups given by their nodes (any
+    /// orientation); every facet must be a boundary face of the tetrahedra.
+    pub fn new(
+        nodes: Vec<[f64; 3]>,
+        tets: Vec<[usize; 4]>,
+        named_facets: Vec<(String, Vec<[usize; 3]>)>,
+    ) -> Result<Self, MeshError> {
+        if tets.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        for (node, x) in nodes.iter().enumerate() {
+            if x.iter().any(|c| !c.is_finite()) {
+                return Err(MeshError::NonFiniteNode { node, coords: *x });
+            }
+        }
+        for (element, t) in tets.iter().enumerate() {
+            if let Some(&node) = t.iter().find(|&&n| n >= nodes.len()) {
+                return Err(MeshError::DanglingNode { element, node, n_nodes: nodes.len() });
+            }
+            let volume = signed_volume(&nodes, t);
+            let l = max_edge(&nodes, t);
+            if volume.abs() <= 1e-12 * l * l * l {
+                return Err(MeshError::Degenerate { element, nodes: *t, volume });
+            }
+            if volume < 0.0 {
+                return Err(MeshError::Inverted { element, nodes: *t, volume });
+            }
+        }
+        let boundary = boundary_facets(&tets);
+        let mut index: std::collections::HashMap<[usize; 3], usize> =
+            boundary.iter().enumerate().map(|(i, f)| (sorted(*f), i)).collect();
+        let mut groups = BTreeMap::new();
+        for (name, facets) in named_facets {
+            let mut ids = Vec::with_capacity(facets.len());
+            for f in facets {
+                match index.get_mut(&sorted(f)) {
+                    Some(i) => ids.push(*i),
+                    None => return Err(MeshError::NotABoundaryFacet { group: name, facet: f }),
+                }
+            }
+            ids.sort_unstable();
+            ids.dedup();
+            groups.entry(name).or_insert_with(Vec::new).extend(ids);
+        }
+        Ok(Self { nodes, tets, boundary, groups })
+    }
+
+    /// Number of nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of tetrahedra.
+    pub fn n_elements(&self) -> usize {
+        self.tets.len()
+    }
+
+    /// |T| of element `e`.
+    pub fn volume(&self, e: usize) -> f64 {
+        signed_volume(&self.nodes, &self.tets[e])
+    }
+
+    /// Lower and upper corners of the bounding box.
+    pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for x in &self.nodes {
+            for k in 0..3 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Diameter of the bounding box: the length scale of the body.
+    pub fn diameter(&self) -> f64 {
+        let (lo, hi) = self.bounding_box();
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+    }
+
+    /// Centroid of boundary facet `f`.
+    pub fn facet_centroid(&self, f: usize) -> [f64; 3] {
+        let [a, b, c] = self.boundary[f];
+        std::array::from_fn(|k| (self.nodes[a][k] + self.nodes[b][k] + self.nodes[c][k]) / 3.0)
+    }
+
+    /// Largest edge length of element `e` (the local mesh size h_T).
+    pub fn element_size(&self, e: usize) -> f64 {
+        max_edge(&self.nodes, &self.tets[e])
+    }
+
+    /// Names of the facet groups, for error messages.
+    pub fn group_names(&self) -> Vec<&str> {
+        self.groups.keys().map(|s| s.as_str()).collect()
+    }
+}
+
+/// A source of meshes chosen by `type` in the `[mesh]` table of a scene (the structured box
+/// mesher `box`; file readers).
+#[typetag::serde(tag = "type")]
+pub trait MeshSource: Debug + Send + Sync {
+    /// Checks the parameters; `path` is the table's path in the scene (`mesh`).
+    fn validate(&self, path: &str) -> Result<(), ParameterError>;
+    /// Builds the mesh; relative file names are resolved against `base_dir` (the scene's folder).
+    fn build(&self, base_dir: &Path) -> Result<TetMesh, MeshError>;
+}
+
+/// Signed volume of the tetrahedron `t`: positive when (b−a, c−a, d−a) is right-handed.
+pub fn signed_volume(nodes: &[[f64; 3]], t: &[usize; 4]) -> f64 {
+    let [a, b, c, d] = t.map(|i| nodes[i]);
+    let u = sub(b, a);
+    let v = sub(c, a);
+    let w = sub(d, a);
+    (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])) / 6.0
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn max_edge(nodes: &[[f64; 3]], t: &[usize; 4]) -> f64 {
+    let mut l: f64 = 0.0;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            let d = sub(nodes[t[i]], nodes[t[j]]);
+            l = l.max((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+        }
+    }
+    l
+}
+
+fn sorted(mut f: [usize; 3]) -> [usize; 3] {
+    f.sort_unstable();
+    f
+}
+
+/// Faces that belong to exactly one tetrahedron, oriented outward.
+fn boundary_facets(tets: &[[usize; 4]]) -> Vec<[usize; 3]> {
+    let mut faces: Vec<([usize; 3], [usize; 3])> = Vec::with_capacity(4 * tets.len());
+    for t in tets {
+        for lf in LOCAL_FACES {
+            let f = lf.map(|i| t[i]);
+            faces.push((sorted(f), f));
+        }
+    }
+    faces.sort_unstable_by_key(|x| x.0);
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < faces.len() {
+        let mut j = i + 1;
+        while j < faces.len() && faces[j].0 == faces[i].0 {
+            j += 1;
+        }
+        if j - i == 1 {
+            out.push(faces[i].1);
+        }
+        i = j;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_tet() -> (Vec<[f64; 3]>, Vec<[usize; 4]>) {
+        (vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], vec![[0, 1, 2, 3]])
+    }
+
+    #[test]
+    fn single_tet_has_four_outward_facets() {
+        let (n, t) = unit_tet();
+        let m = TetMesh::new(n, t, vec![("bottom".into(), vec![[0, 1, 2]])]).unwrap();
+        assert!((m.volume(0) - 1.0 / 6.0).abs() < 1e-15);
+        assert_eq!(m.boundary.len(), 4);
+        // outward: the facet on z = 0 has a normal pointing to −z
+        let f = m.boundary[m.groups["bottom"][0]];
+        let [a, b, c] = f.map(|i| m.nodes[i]);
+        let (u, v) = (sub(b, a), sub(c, a));
+        assert!(u[0] * v[1] - u[1] * v[0] < 0.0);
+    }
+
+    #[test]
+    fn inverted_and_degenerate_elements_are_named() {
+        let (n, _) = unit_tet();
+        let err = TetMesh::new(n.clone(), vec![[0, 2, 1, 3]], vec![]).unwrap_err();
+        assert!(matches!(err, MeshError::Inverted { element: 0, .. }), "{err}");
+        let mut flat = n.clone();
+        flat[3] = [0.3, 0.3, 0.0];
+        let err = TetMesh::new(flat, vec![[0, 1, 2, 3]], vec![]).unwrap_err();
+        assert!(matches!(err, MeshError::Degenerate { element: 0, .. }), "{err}");
+        assert!(err.to_string().contains("element 0"));
+        let err = TetMesh::new(n, vec![[0, 1, 2, 9]], vec![]).unwrap_err();
+        assert!(matches!(err, MeshError::DanglingNode { node: 9, .. }));
+    }
+
+    #[test]
+    fn a_group_facet_must_lie_on_the_boundary() {
+        // two tets sharing the face [1, 2, 3]
+        let nodes = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
+        let tets = vec![[0, 1, 2, 3], [1, 2, 3, 4]];
+        let tets = tets
+            .into_iter()
+            .map(|t| if signed_volume(&nodes, &t) < 0.0 { [t[0], t[2], t[1], t[3]] } else { t })
+            .collect();
+        let err = TetMesh::new(nodes, tets, vec![("inner".into(), vec![[3, 2, 1]])]).unwrap_err();
+        assert!(matches!(err, MeshError::NotABoundaryFacet { .. }));
+    }
+}

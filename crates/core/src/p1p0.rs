@@ -1,0 +1,390 @@
+//! The P1–P0 discretisation of L (SPEC §3): continuous piecewise-linear displacements on
+//! tetrahedra, stresses and hardening constant per element. The strain of a P1 field is
+//! constant per tetrahedron, so one stress point per element is exact.
+//!
+//! Hot loops gather rather than scatter, so they run in parallel without locks or colouring:
+//! the strain loops over elements, the internal force Bᵀσ over degrees of freedom (summing the
+//! elements around the node), and assembly over matrix columns (each column owns its slice of
+//! the values; the sparsity pattern is built once).
+
+use crate::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
+use crate::dofs::{DofMap, Dirichlet, FIXED};
+use crate::elasticity::Elasticity;
+use crate::error::SceneError;
+use crate::lagrangian::{Lagrangian, Material};
+use crate::linalg::SymmetricPattern;
+use crate::mesh::TetMesh;
+use crate::solver::Solution;
+use crate::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
+use crate::tensor::{SQRT2, Sym};
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+
+/// L for P1 displacements and P0 generalised stresses on a tetrahedral mesh.
+#[derive(Debug)]
+pub struct P1P0Lagrangian {
+    mesh: TetMesh,
+    dofs: DofMap,
+    law: Elasticity,
+    stresses: Option<Box<dyn AdmissibleStresses>>,
+    obstacle: Option<Box<dyn AdmissibleDisplacements>>,
+    rows: ConstraintRows,
+    load: Vec<f64>,
+    /// |T|.
+    weights: Vec<f64>,
+    /// Gradients of the barycentric coordinates of each element.
+    grads: Vec<[[f64; 3]; 4]>,
+    /// Node → (element, local vertex) adjacency, CSR.
+    adj_ptr: Vec<usize>,
+    adj: Vec<(u32, u8)>,
+    /// Free dof → node and component.
+    dof_node: Vec<u32>,
+    dof_comp: Vec<u8>,
+    pattern: SymmetricPattern,
+}
+
+impl P1P0Lagrangian {
+    /// Assembles L from a mesh, Dirichlet conditions, elasticity, P (`None`: elastic) and K
+    /// (`None`: no contact). Parameters are validated with the scene's paths (`material`,
+    /// `yield`, `obstacle`).
+    pub fn new(
+        mesh: TetMesh,
+        dirichlet: &[Dirichlet],
+        law: Elasticity,
+        stresses: Option<Box<dyn AdmissibleStresses>>,
+        obstacle: Option<Box<dyn AdmissibleDisplacements>>,
+    ) -> Result<Self, SceneError> {
+        law.validate("material")?;
+        if let Some(p) = &stresses {
+            p.validate("yield")?;
+            assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
+        }
+        if let Some(k) = &obstacle {
+            k.validate("obstacle")?;
+        }
+        let dofs = DofMap::new(&mesh, dirichlet)?;
+        let (grads, weights): (Vec<_>, Vec<_>) = (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
+        let (adj_ptr, adj) = node_element_adjacency(&mesh);
+        let mut dof_node = vec![0u32; dofs.n_free];
+        let mut dof_comp = vec![0u8; dofs.n_free];
+        for (n, d) in dofs.dof.iter().enumerate() {
+            for c in 0..3 {
+                if d[c] != FIXED {
+                    dof_node[d[c] as usize] = n as u32;
+                    dof_comp[d[c] as usize] = c as u8;
+                }
+            }
+        }
+        let pattern = stiffness_pattern(&mesh, &dofs, &adj_ptr, &adj);
+        let (rows, load) = match &obstacle {
+            Some(k) => (k.discretise(&mesh, &dofs, "obstacle")?, k.load()),
+            None => (ConstraintRows::new(0), vec![]),
+        };
+        Ok(Self { mesh, dofs, law, stresses, obstacle, rows, load, weights, grads, adj_ptr, adj, dof_node, dof_comp, pattern })
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &TetMesh {
+        &self.mesh
+    }
+
+    /// The dof numbering.
+    pub fn dofs(&self) -> &DofMap {
+        &self.dofs
+    }
+
+    /// K, if the problem has contact.
+    pub fn obstacle(&self) -> Option<&dyn AdmissibleDisplacements> {
+        self.obstacle.as_deref()
+    }
+
+    /// Nodal displacements (fixed components zero).
+    pub fn nodal_displacements(&self, u: &[f64]) -> Vec<[f64; 3]> {
+        self.dofs.nodal(u)
+    }
+
+    /// What the obstacle reports about a solution.
+    pub fn contact_report(&self, sol: &Solution) -> Option<ContactReport> {
+        self.obstacle.as_ref().map(|k| k.report(&self.mesh, &self.rows, &sol.extras, &sol.lambda))
+    }
+
+    /// Warnings about the set-up (P's parameters, nodes dropped from K_h).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = self.stresses.as_ref().map_or(vec![], |p| p.warnings());
+        w.extend(self.rows.warnings.iter().cloned());
+        w
+    }
+
+    #[inline]
+    fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
+        self.dofs.dof[n].map(|d| if d == FIXED { 0.0 } else { u[d as usize] })
+    }
+
+    /// Assembles the columns lo..hi into `vals` (their part of the values), splitting the
+    /// range in two halves run in parallel until it is small.
+    fn assemble_range(&self, lo: usize, hi: usize, vals: &mut [f64], material: &Material<'_>) {
+        let cp = self.pattern.col_ptr();
+        if hi - lo <= 128 {
+            let base = cp[lo];
+            for j in lo..hi {
+                self.assemble_column(j, &mut vals[cp[j] - base..cp[j + 1] - base], material);
+            }
+        } else {
+            let mid = (lo + hi) / 2;
+            let (a, b) = vals.split_at_mut(cp[mid] - cp[lo]);
+            rayon::join(|| self.assemble_range(lo, mid, a, material), || self.assemble_range(mid, hi, b, material));
+        }
+    }
+
+    /// Column j of Σ_T |T| B_Tᵀ C_T B_T (rows ≥ j), gathered from the elements around its node.
+    fn assemble_column(&self, j: usize, col: &mut [f64], material: &Material<'_>) {
+        col.iter_mut().for_each(|v| *v = 0.0);
+        let cp = self.pattern.col_ptr();
+        let rows = &self.pattern.row_idx()[cp[j]..cp[j + 1]];
+        let (b, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
+        for &(e, lb) in &self.adj[self.adj_ptr[b]..self.adj_ptr[b + 1]] {
+            let e = e as usize;
+            let g = &self.grads[e];
+            let cb = material.at(e) * strain_of_unit(&g[lb as usize], c) * self.weights[e];
+            for (a, &na) in self.mesh.tets[e].iter().enumerate() {
+                let da = self.dofs.dof[na];
+                // the free dofs of node a that are ≥ j are consecutive rows of the column
+                let Some(first) = (0..3).find(|&k| da[k] != FIXED && da[k] as usize >= j) else { continue };
+                let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
+                for k in first..3 {
+                    if da[k] != FIXED {
+                        col[pos] += strain_of_unit_dot(&g[a], k, &cb);
+                        pos += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The Mandel strain of the unit displacement e_c at a node with barycentric gradient g:
+/// the column of B for that dof.
+#[inline]
+fn strain_of_unit(g: &[f64; 3], c: usize) -> Sym {
+    let s = 1.0 / SQRT2;
+    match c {
+        0 => Sym::new(g[0], 0.0, 0.0, 0.0, s * g[2], s * g[1]),
+        1 => Sym::new(0.0, g[1], 0.0, s * g[2], 0.0, s * g[0]),
+        _ => Sym::new(0.0, 0.0, g[2], s * g[1], s * g[0], 0.0),
+    }
+}
+
+/// strain_of_unit(g, c) · v without forming the vector: row c of the tensor v applied to g.
+#[inline]
+fn strain_of_unit_dot(g: &[f64; 3], c: usize, v: &Sym) -> f64 {
+    let s = 1.0 / SQRT2;
+    match c {
+        0 => g[0] * v[0] + s * (g[2] * v[4] + g[1] * v[5]),
+        1 => g[1] * v[1] + s * (g[2] * v[3] + g[0] * v[5]),
+        _ => g[2] * v[2] + s * (g[1] * v[3] + g[0] * v[4]),
+    }
+}
+
+/// Gradients of the barycentric coordinates and the volume of element e.
+fn element_gradients(mesh: &TetMesh, e: usize) -> ([[f64; 3]; 4], f64) {
+    let x = mesh.tets[e].map(|n| mesh.nodes[n]);
+    let jac = Matrix3::from_fn(|i, k| x[k + 1][i] - x[0][i]);
+    let inv = jac.try_inverse().expect("validated mesh has no degenerate element");
+    let mut g = [[0.0; 3]; 4];
+    for a in 1..4 {
+        for i in 0..3 {
+            g[a][i] = inv[(a - 1, i)];
+            g[0][i] -= inv[(a - 1, i)];
+        }
+    }
+    (g, jac.determinant() / 6.0)
+}
+
+/// Node → (element, local vertex) adjacency in CSR form.
+fn node_element_adjacency(mesh: &TetMesh) -> (Vec<usize>, Vec<(u32, u8)>) {
+    let mut ptr = vec![0usize; mesh.n_nodes() + 1];
+    for t in &mesh.tets {
+        for &n in t {
+            ptr[n + 1] += 1;
+        }
+    }
+    for i in 0..mesh.n_nodes() {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut adj = vec![(0u32, 0u8); ptr[mesh.n_nodes()]];
+    for (e, t) in mesh.tets.iter().enumerate() {
+        for (a, &n) in t.iter().enumerate() {
+            adj[fill[n]] = (e as u32, a as u8);
+            fill[n] += 1;
+        }
+    }
+    (ptr, adj)
+}
+
+/// The lower-triangle pattern coupling every pair of free dofs of nodes sharing an element.
+fn stiffness_pattern(mesh: &TetMesh, dofs: &DofMap, adj_ptr: &[usize], adj: &[(u32, u8)]) -> SymmetricPattern {
+    let neighbours: Vec<Vec<usize>> = (0..mesh.n_nodes())
+        .into_par_iter()
+        .map(|b| {
+            let mut nb: Vec<usize> = adj[adj_ptr[b]..adj_ptr[b + 1]].iter().flat_map(|&(e, _)| mesh.tets[e as usize]).filter(|&a| a >= b).collect();
+            nb.sort_unstable();
+            nb.dedup();
+            nb
+        })
+        .collect();
+    let mut col_ptr = Vec::with_capacity(dofs.n_free + 1);
+    col_ptr.push(0);
+    let mut row_idx = Vec::new();
+    for (b, nb) in neighbours.iter().enumerate() {
+        for c in 0..3 {
+            let Some(j) = dofs.free(b, c) else { continue };
+            for &a in nb {
+                for k in 0..3 {
+                    if let Some(i) = dofs.free(a, k).filter(|&i| i >= j) {
+                        row_idx.push(i);
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+    }
+    SymmetricPattern::new(dofs.n_free, col_ptr, row_idx)
+}
+
+impl Lagrangian for P1P0Lagrangian {
+    fn n_dofs(&self) -> usize {
+        self.dofs.n_free
+    }
+
+    fn n_points(&self) -> usize {
+        self.mesh.n_elements()
+    }
+
+    fn elasticity(&self) -> &Elasticity {
+        &self.law
+    }
+
+    fn stresses(&self) -> Option<&dyn AdmissibleStresses> {
+        self.stresses.as_deref()
+    }
+
+    fn constraints(&self) -> &ConstraintRows {
+        &self.rows
+    }
+
+    fn load(&self) -> &[f64] {
+        &self.load
+    }
+
+    fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    fn strain(&self, u: &[f64], eps: &mut [Sym]) {
+        eps.par_iter_mut().enumerate().for_each(|(e, out)| {
+            let g = &self.grads[e];
+            // ∇u = Σ_a u_a ⊗ ∇λ_a
+            let mut m = [[0.0; 3]; 3];
+            for (a, &n) in self.mesh.tets[e].iter().enumerate() {
+                let ua = self.nodal(u, n);
+                for i in 0..3 {
+                    for k in 0..3 {
+                        m[i][k] += ua[i] * g[a][k];
+                    }
+                }
+            }
+            let s = 1.0 / SQRT2;
+            *out = Sym::new(m[0][0], m[1][1], m[2][2], s * (m[1][2] + m[2][1]), s * (m[0][2] + m[2][0]), s * (m[0][1] + m[1][0]));
+        });
+    }
+
+    fn divergence(&self, sigma: &[Sym], f: &mut [f64]) {
+        f.par_iter_mut().enumerate().for_each(|(j, fj)| {
+            let (n, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
+            *fj = self.adj[self.adj_ptr[n]..self.adj_ptr[n + 1]]
+                .iter()
+                .map(|&(e, a)| self.weights[e as usize] * strain_of_unit_dot(&self.grads[e as usize][a as usize], c, &sigma[e as usize]))
+                .sum();
+        });
+    }
+
+    fn pattern(&self) -> &SymmetricPattern {
+        &self.pattern
+    }
+
+    fn assemble(&self, material: Material<'_>, values: &mut [f64]) {
+        assert_eq!(values.len(), self.pattern.nnz());
+        self.assemble_range(0, self.dofs.n_free, values, &material);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::box_mesh::BoxMesh;
+    use crate::region::Region;
+    use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    fn problem() -> P1P0Lagrangian {
+        let mesh = BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [3, 4, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
+        let bc = [Dirichlet::clamped(Region::Group("zmax".into())), Dirichlet::roller(Region::Group("xmin".into()), crate::dofs::Component::X)];
+        P1P0Lagrangian::new(mesh, &bc, Elasticity::new(10.0, 0.3).unwrap(), None, None).unwrap()
+    }
+
+    #[test]
+    fn strain_of_a_linear_field_is_exact() {
+        let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
+        let l = P1P0Lagrangian::new(mesh, &[], Elasticity::new(1.0, 0.2).unwrap(), None, None).unwrap();
+        let grad = Matrix3::new(0.1, 0.2, -0.3, 0.05, -0.4, 0.7, 0.3, 0.0, 0.25);
+        let mut u = vec![0.0; l.n_dofs()];
+        for (n, x) in l.mesh.nodes.iter().enumerate() {
+            let v = grad * nalgebra::Vector3::from(*x);
+            for c in 0..3 {
+                u[l.dofs.free(n, c).unwrap()] = v[c];
+            }
+        }
+        let mut eps = vec![Sym::zeros(); l.n_points()];
+        l.strain(&u, &mut eps);
+        let exact = crate::tensor::from_matrix(&grad);
+        assert!(eps.iter().all(|e| (e - exact).norm() < 1e-14));
+    }
+
+    #[test]
+    fn divergence_is_the_transpose_of_strain() {
+        let l = problem();
+        let mut rng = StdRng::seed_from_u64(7);
+        let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let sigma: Vec<Sym> = (0..l.n_points()).map(|_| Sym::from_fn(|_, _| rng.random_range(-1.0..1.0))).collect();
+        let mut eps = vec![Sym::zeros(); l.n_points()];
+        l.strain(&u, &mut eps);
+        let lhs: f64 = eps.iter().zip(&sigma).zip(&l.weights).map(|((e, s), w)| w * e.dot(s)).sum();
+        let mut f = vec![0.0; l.n_dofs()];
+        l.divergence(&sigma, &mut f);
+        let rhs: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
+        assert!((lhs - rhs).abs() < 1e-12 * lhs.abs().max(1.0), "{lhs} vs {rhs}");
+    }
+
+    #[test]
+    fn assembled_stiffness_matches_the_operator() {
+        // K u = Bᵀ (C B u) for a random u: assembly against the matrix-free operator
+        let l = problem();
+        let c = l.law.stiffness_matrix();
+        let values = l.stiffness(Material::Uniform(&c));
+        let mut rng = StdRng::seed_from_u64(3);
+        let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut ku = vec![0.0; l.n_dofs()];
+        l.pattern.matvec(&values, &u, &mut ku);
+        let mut eps = vec![Sym::zeros(); l.n_points()];
+        l.strain(&u, &mut eps);
+        let sigma: Vec<Sym> = eps.iter().map(|e| c * e).collect();
+        let mut f = vec![0.0; l.n_dofs()];
+        l.divergence(&sigma, &mut f);
+        let err = ku.iter().zip(&f).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let scale = f.iter().map(|a| a.abs()).fold(0.0, f64::max);
+        assert!(err < 1e-12 * scale, "{err} vs {scale}");
+        // and the energy ½uᵀKu equals Σ|T| ½ ε:Cε
+        let e1: f64 = 0.5 * ku.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
+        assert!((e1 - l.energy_of_strain(&eps)).abs() < 1e-12 * e1);
+    }
+}

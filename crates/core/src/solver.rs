@@ -1,0 +1,148 @@
+//! The solver interface (SPEC §4–§5): a solver takes the Lagrangian L and returns a
+//! [`Solution`] with an honest [`SolveReport`] — residuals, per-phase wall time and why it
+//! stopped — or a typed [`SolveError`]. NaN or Inf never leaves a solver unreported.
+
+use crate::error::{LinalgError, ParameterError};
+use crate::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt::Debug;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Why a solver stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The relative KKT residual reached the tolerance.
+    Converged,
+    /// The iteration budget ran out first.
+    MaxIterations,
+    /// The residual stopped decreasing (round-off floor above the tolerance).
+    Stagnated,
+}
+
+/// What a solve reports (SPEC §5).
+#[derive(Clone, Debug, Serialize)]
+pub struct SolveReport {
+    /// Solver type name.
+    pub solver: String,
+    /// True when the tolerance was met.
+    pub converged: bool,
+    /// Why the solver stopped.
+    pub stop_reason: StopReason,
+    /// Outer iterations.
+    pub iterations: usize,
+    /// The relative KKT tolerance asked for.
+    pub tolerance: f64,
+    /// KKT residuals of the returned iterate.
+    pub kkt: KktResiduals,
+    /// The relative KKT residual after each iteration.
+    pub residual_history: Vec<f64>,
+    /// Wall time per phase in seconds, in order of first use.
+    pub phases: Vec<(String, f64)>,
+    /// Solver-specific numbers: step sizes, factorisations, triangular solves, duality gap, ...
+    pub counters: BTreeMap<String, f64>,
+}
+
+impl SolveReport {
+    /// Total wall time of the phases.
+    pub fn wall_s(&self) -> f64 {
+        self.phases.iter().map(|p| p.1).sum()
+    }
+}
+
+/// A solution of the discrete problem with its report.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// Free displacement dofs u.
+    pub u: Vec<f64>,
+    /// Extra unknowns V (the punch's U).
+    pub extras: Vec<f64>,
+    /// Generalised stresses σ̂ per point.
+    pub stress: StressField,
+    /// Contact forces λ_i per row of K_h.
+    pub lambda: Vec<f64>,
+    /// How it was obtained.
+    pub report: SolveReport,
+}
+
+impl Solution {
+    /// The solution as an iterate, for residual evaluations.
+    pub fn iterate(&self) -> Iterate<'_> {
+        Iterate { u: &self.u, extras: &self.extras, stress: &self.stress, lambda: &self.lambda }
+    }
+}
+
+/// Why a solve failed.
+#[derive(Debug, Error)]
+pub enum SolveError {
+    /// A factorisation failed (singular: the body is not held).
+    #[error(transparent)]
+    Linalg(#[from] LinalgError),
+    /// The iteration diverged; `hint` says which parameter to change.
+    #[error("{solver} diverged at iteration {iteration}: KKT residual {residual:.3e}; {hint}")]
+    Diverged { solver: String, iteration: usize, residual: f64, hint: String },
+    /// NaN or Inf appeared.
+    #[error("{solver}: non-finite value (NaN or Inf) in {what} at iteration {iteration}")]
+    NonFinite { solver: String, what: String, iteration: usize },
+    /// A solver parameter is out of range.
+    #[error(transparent)]
+    Parameter(#[from] ParameterError),
+    /// The problem is outside what this solver handles.
+    #[error("{solver}: {message}")]
+    Unsupported { solver: String, message: String },
+}
+
+/// Observer of a running solve (progress bars, logs).
+pub trait Monitor {
+    /// The solver enters a phase ("factorisation", "iterations", ...).
+    fn phase(&mut self, _name: &str) {}
+    /// Iteration `it` done with relative KKT residual `residual`; the target is `tolerance`.
+    fn iteration(&mut self, _it: usize, _residual: f64, _tolerance: f64) {}
+}
+
+/// A monitor that does nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Silent;
+impl Monitor for Silent {}
+
+/// A solver, chosen by `type` in the `[solver]` table of a scene or by `saddle run --solver`.
+#[typetag::serde(tag = "type")]
+pub trait Solver: Debug + Send + Sync {
+    /// Checks the parameters; `path` is the table's path (`solver`).
+    fn validate(&self, path: &str) -> Result<(), ParameterError>;
+    /// The relative KKT tolerance it stops at.
+    fn tolerance(&self) -> f64;
+    /// Solves the discrete problem.
+    fn solve(&self, problem: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError>;
+}
+
+/// Accumulates wall time per named phase.
+#[derive(Clone, Debug, Default)]
+pub struct PhaseTimer {
+    phases: Vec<(String, f64)>,
+}
+
+impl PhaseTimer {
+    /// Runs `f`, adding its wall time to phase `name`.
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let t0 = Instant::now();
+        let out = f();
+        self.add(name, t0.elapsed().as_secs_f64());
+        out
+    }
+
+    /// Adds `seconds` to phase `name`.
+    pub fn add(&mut self, name: &str, seconds: f64) {
+        match self.phases.iter_mut().find(|p| p.0 == name) {
+            Some(p) => p.1 += seconds,
+            None => self.phases.push((name.to_string(), seconds)),
+        }
+    }
+
+    /// The phases and their times.
+    pub fn into_phases(self) -> Vec<(String, f64)> {
+        self.phases
+    }
+}
