@@ -122,6 +122,11 @@ impl ContactReport {
 /// `[obstacle]` table of a scene.
 #[typetag::serde(tag = "type")]
 pub trait AdmissibleDisplacements: Debug + Send + Sync {
+    /// The `type` name of the plugin in scene files.
+    fn name(&self) -> &'static str {
+        self.typetag_name()
+    }
+
     /// Checks the parameters; `path` is the table's path in the scene (`obstacle`).
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
 
@@ -134,6 +139,11 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync {
     /// K_h on a mesh (SPEC §3): the rows g(u, V) ≥ 0. Errors name `path`'s fields (a contact
     /// zone with no nodes, a missing group).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError>;
+
+    /// g(u, V) evaluated directly from the geometry at the nodes of `rows` (the current position
+    /// of each node against the obstacle). The rows of [`AdmissibleDisplacements::discretise`]
+    /// must be its linearisation; the conformance kit of `saddle-contact` checks this.
+    fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]);
 
     /// What to report about a solution (U, force, contact set and radius, warnings).
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport;

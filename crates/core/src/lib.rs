@@ -26,6 +26,7 @@ pub mod lagrangian;
 pub mod linalg;
 pub mod mesh;
 pub mod p1p0;
+pub mod projection;
 pub mod region;
 pub mod solver;
 pub mod stresses;

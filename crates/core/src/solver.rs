@@ -110,6 +110,10 @@ impl Monitor for Silent {}
 /// A solver, chosen by `type` in the `[solver]` table of a scene or by `saddle run --solver`.
 #[typetag::serde(tag = "type")]
 pub trait Solver: Debug + Send + Sync {
+    /// The `type` name of the solver in scene files.
+    fn name(&self) -> &'static str {
+        self.typetag_name()
+    }
     /// Checks the parameters; `path` is the table's path (`solver`).
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
     /// The relative KKT tolerance it stops at.

@@ -41,6 +41,11 @@ pub struct ConeDescription {
 /// by `type` in the `[yield]` table of a scene.
 #[typetag::serde(tag = "type")]
 pub trait AdmissibleStresses: Debug + Send + Sync {
+    /// The `type` name of the plugin in scene files.
+    fn name(&self) -> &'static str {
+        self.typetag_name()
+    }
+
     /// Checks the parameters; `path` is the table's path in the scene (`yield`).
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
 

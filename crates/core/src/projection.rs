@@ -1,0 +1,265 @@
+//! Projection onto the polyhedral K_h (SPEC §3–§4): what solvers need to project onto K.
+//!
+//! Projecting onto {g(w, V) = G w + H V + c ≥ 0} in a metric is, by duality, a small dense
+//! quadratic programme in the contact multipliers μ ≥ 0 (one per row) with the Delassus
+//! matrix S = G M⁻¹ Gᵀ (+ H m⁻¹ Hᵀ). [`DenseQp`] solves it exactly — a finite primal
+//! active-set method, warm-started from the previous call and reusing the Cholesky factor of the
+//! free block while the active set does not change. [`project_euclidean`] uses it for M = I.
+
+use crate::displacements::ConstraintRows;
+use nalgebra::{DMatrix, DVector, linalg::Cholesky};
+use thiserror::Error;
+
+/// Failure of the dense QP.
+#[derive(Debug, Clone, Error, PartialEq)]
+pub enum QpError {
+    /// The equality constraints E x = e have no solution with x ≥ 0 from the start we know.
+    #[error("no feasible starting point for the equality constraints of the K_h projection (E x = e, x >= 0)")]
+    Infeasible,
+    /// A block of S that should be positive definite is not (dependent rows in K_h).
+    #[error("the Delassus matrix of K_h is singular on the active rows (linearly dependent constraint rows)")]
+    Singular,
+    /// The active-set iteration did not terminate within its budget (cycling).
+    #[error("the active-set iteration did not terminate in {0} steps")]
+    NoTermination(usize),
+}
+
+/// min ½ xᵀ S x + qᵀ x subject to x ≥ 0 and E x = e, for a dense SPD S and few equalities.
+#[derive(Clone, Debug)]
+pub struct DenseQp {
+    s: DMatrix<f64>,
+    e_mat: DMatrix<f64>,
+    e_rhs: DVector<f64>,
+    x: DVector<f64>,
+    free: Vec<bool>,
+    cached: Option<(Vec<bool>, Cholesky<f64, nalgebra::Dyn>, DMatrix<f64>, Cholesky<f64, nalgebra::Dyn>)>,
+    /// Active-set steps of the last solve.
+    pub last_steps: usize,
+    /// Cholesky factorisations of free blocks so far.
+    pub factorisations: usize,
+}
+
+/// The solution of a [`DenseQp`].
+#[derive(Clone, Debug)]
+pub struct QpSolution<'a> {
+    /// x ≥ 0.
+    pub x: &'a DVector<f64>,
+    /// Multipliers y of the equalities: S x + q + Eᵀ y ≥ 0, = 0 where x > 0.
+    pub y: DVector<f64>,
+}
+
+impl DenseQp {
+    /// The programme with Hessian `s` and equalities `e_mat x = e_rhs` (`e_mat` may have 0 rows).
+    pub fn new(s: DMatrix<f64>, e_mat: DMatrix<f64>, e_rhs: DVector<f64>) -> Result<Self, QpError> {
+        let n = s.nrows();
+        assert_eq!(e_mat.ncols(), n);
+        // least-norm point of E x = e; it must be ≥ 0 (true for the punch: uniform μ)
+        let x = if e_mat.nrows() == 0 {
+            DVector::zeros(n)
+        } else {
+            let eet = &e_mat * e_mat.transpose();
+            let y = eet.cholesky().ok_or(QpError::Infeasible)?.solve(&e_rhs);
+            e_mat.transpose() * y
+        };
+        if x.iter().any(|v| *v < -1e-14 * x.amax().max(1e-300)) {
+            return Err(QpError::Infeasible);
+        }
+        let x = x.map(|v| v.max(0.0));
+        let free = x.iter().map(|v| *v > 0.0).collect();
+        Ok(Self { s, e_mat, e_rhs, x, free, cached: None, last_steps: 0, factorisations: 0 })
+    }
+
+    /// Number of variables.
+    pub fn n(&self) -> usize {
+        self.s.nrows()
+    }
+
+    /// The Hessian S.
+    pub fn hessian(&self) -> &DMatrix<f64> {
+        &self.s
+    }
+
+    /// Solves for linear term `q`, warm-started from the previous solution.
+    pub fn solve(&mut self, q: &DVector<f64>) -> Result<QpSolution<'_>, QpError> {
+        let n = self.n();
+        let m = self.e_mat.nrows();
+        let budget = 10 * n + 50;
+        let scale = q.amax() + self.s.amax() * self.x.amax();
+        let tol = 1e-13 * scale.max(f64::MIN_POSITIVE);
+        for step in 0..budget {
+            let (xf, y) = self.solve_free(q)?;
+            let idx: Vec<usize> = (0..n).filter(|&i| self.free[i]).collect();
+            let blocking = idx.iter().zip(xf.iter()).any(|(_, v)| *v < 0.0);
+            if !blocking {
+                for (k, &i) in idx.iter().enumerate() {
+                    self.x[i] = xf[k];
+                }
+                for i in 0..n {
+                    if !self.free[i] {
+                        self.x[i] = 0.0;
+                    }
+                }
+                // optimality on the bound set: w = S x + q + Eᵀ y ≥ 0
+                let w = &self.s * &self.x + q + self.e_mat.transpose() * &y;
+                let worst = (0..n).filter(|&i| !self.free[i]).min_by(|&a, &b| w[a].total_cmp(&w[b]));
+                match worst {
+                    Some(i) if w[i] < -tol => self.free[i] = true,
+                    _ => {
+                        self.last_steps = step + 1;
+                        return Ok(QpSolution { x: &self.x, y });
+                    }
+                }
+            } else {
+                // step toward the free solution until the first variable hits zero; it leaves
+                let mut alpha = 1.0f64;
+                let mut block = 0;
+                for (k, &i) in idx.iter().enumerate() {
+                    if xf[k] < 0.0 {
+                        let r = self.x[i] / (self.x[i] - xf[k]);
+                        if r < alpha {
+                            alpha = r;
+                            block = i;
+                        }
+                    }
+                }
+                for (k, &i) in idx.iter().enumerate() {
+                    self.x[i] = (self.x[i] + alpha * (xf[k] - self.x[i])).max(0.0);
+                }
+                self.x[block] = 0.0;
+                for i in idx {
+                    if self.x[i] == 0.0 {
+                        self.free[i] = false;
+                    }
+                }
+            }
+            if m > 0 && !self.free.iter().any(|f| *f) {
+                return Err(QpError::Infeasible);
+            }
+        }
+        Err(QpError::NoTermination(budget))
+    }
+
+    /// Minimiser on the free set with the bound variables at 0: x_F and the equality
+    /// multipliers y, from the (cached) Cholesky factor of S_FF and the small Schur system.
+    fn solve_free(&mut self, q: &DVector<f64>) -> Result<(DVector<f64>, DVector<f64>), QpError> {
+        let idx: Vec<usize> = (0..self.n()).filter(|&i| self.free[i]).collect();
+        let m = self.e_mat.nrows();
+        let fresh = !matches!(&self.cached, Some((f, ..)) if *f == self.free);
+        if fresh {
+            let sff = self.s.select_rows(&idx).select_columns(&idx);
+            let chol = sff.cholesky().ok_or(QpError::Singular)?;
+            let ef = self.e_mat.select_columns(&idx);
+            // Schur complement E_F S_FF⁻¹ E_Fᵀ of the equality block
+            let z = chol.solve(&ef.transpose());
+            let schur = (&ef * z).cholesky().or_else(|| if m == 0 { DMatrix::<f64>::zeros(0, 0).cholesky() } else { None });
+            let schur = schur.ok_or(QpError::Infeasible)?;
+            self.factorisations += 1;
+            self.cached = Some((self.free.clone(), chol, ef, schur));
+        }
+        let (_, chol, ef, schur) = self.cached.as_ref().unwrap();
+        let qf = DVector::from_iterator(idx.len(), idx.iter().map(|&i| q[i]));
+        let sq = chol.solve(&qf);
+        let y = if m == 0 { DVector::zeros(0) } else { schur.solve(&(-(ef * &sq) - &self.e_rhs)) };
+        let xf = -(sq + chol.solve(&(ef.transpose() * &y)));
+        Ok((xf, y))
+    }
+}
+
+/// The Euclidean projection of (z, Z) onto K_h, with the multipliers μ ≥ 0 of the rows:
+/// w = z + Gᵀμ, V = Z + Hᵀμ, g(w, V) ≥ 0, μ_i g_i = 0.
+pub fn project_euclidean(rows: &ConstraintRows, z: &[f64], zv: &[f64]) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), QpError> {
+    let nr = rows.n_rows();
+    // S = G Gᵀ + H Hᵀ (rows are sparse; form it by a sparse dot per pair)
+    let mut dense_g = vec![std::collections::HashMap::new(); nr];
+    for (i, d) in dense_g.iter_mut().enumerate() {
+        let (cols, vals) = rows.row(i);
+        for (&j, &v) in cols.iter().zip(vals) {
+            *d.entry(j).or_insert(0.0) += v;
+        }
+    }
+    let s = DMatrix::from_fn(nr, nr, |a, b| {
+        let gg: f64 = dense_g[a].iter().map(|(j, v)| v * dense_g[b].get(j).copied().unwrap_or(0.0)).sum();
+        let hh: f64 = rows.extra_row(a).iter().zip(rows.extra_row(b)).map(|(x, y)| x * y).sum();
+        gg + hh
+    });
+    let mut g = vec![0.0; nr];
+    rows.gap(z, zv, &mut g);
+    let mut qp = DenseQp::new(s, DMatrix::zeros(0, nr), DVector::zeros(0))?;
+    let mu: Vec<f64> = qp.solve(&DVector::from_vec(g))?.x.iter().copied().collect();
+    let mut w = z.to_vec();
+    let mut v = zv.to_vec();
+    rows.add_transpose(&mu, &mut w, &mut v);
+    Ok((w, v, mu))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    fn random_spd(n: usize, rng: &mut StdRng) -> DMatrix<f64> {
+        let a = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+        &a * a.transpose() + DMatrix::identity(n, n) * 0.1
+    }
+
+    /// KKT of the QP checked directly: x ≥ 0, E x = e, w = Sx + q + Eᵀy ≥ 0, x·w = 0.
+    fn assert_kkt(s: &DMatrix<f64>, e: &DMatrix<f64>, rhs: &DVector<f64>, q: &DVector<f64>, x: &DVector<f64>, y: &DVector<f64>) {
+        let w = s * x + q + e.transpose() * y;
+        let sc = q.amax().max(1.0);
+        assert!(x.iter().all(|v| *v >= 0.0));
+        assert!((e * x - rhs).amax() < 1e-10 * sc);
+        assert!(w.iter().all(|v| *v > -1e-10 * sc), "{w}");
+        assert!(x.iter().zip(w.iter()).all(|(a, b)| (a * b).abs() < 1e-10 * sc * sc));
+    }
+
+    #[test]
+    fn bound_constrained_qp_meets_kkt_and_warm_starts() {
+        let mut rng = StdRng::seed_from_u64(11);
+        for n in [1, 5, 30] {
+            let s = random_spd(n, &mut rng);
+            let mut qp = DenseQp::new(s.clone(), DMatrix::zeros(0, n), DVector::zeros(0)).unwrap();
+            for _ in 0..5 {
+                let q = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+                let sol = qp.solve(&q).unwrap();
+                let (x, y) = (sol.x.clone(), sol.y.clone());
+                assert_kkt(&s, &DMatrix::zeros(0, n), &DVector::zeros(0), &q, &x, &y);
+            }
+        }
+    }
+
+    #[test]
+    fn equality_constrained_qp_meets_kkt() {
+        let mut rng = StdRng::seed_from_u64(5);
+        let n = 25;
+        let s = random_spd(n, &mut rng);
+        let e = DMatrix::from_element(1, n, -1.0);
+        let rhs = DVector::from_element(1, -0.7);
+        let mut qp = DenseQp::new(s.clone(), e.clone(), rhs.clone()).unwrap();
+        for _ in 0..5 {
+            let q = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+            let sol = qp.solve(&q).unwrap();
+            let (x, y) = (sol.x.clone(), sol.y.clone());
+            assert_kkt(&s, &e, &rhs, &q, &x, &y);
+            assert!((x.sum() - 0.7).abs() < 1e-12);
+        }
+        // an unchanged active set reuses the factor
+        let q = DVector::from_fn(n, |i, _| i as f64 * 1e-3);
+        qp.solve(&q).unwrap();
+        let f = qp.factorisations;
+        qp.solve(&(q * 1.0000001)).unwrap();
+        assert_eq!(qp.factorisations, f);
+    }
+
+    #[test]
+    fn euclidean_projection_onto_a_half_space_with_an_extra() {
+        // one row: u0 + 0.5 − V ≥ 0; project (u0, V) = (0, 1): closest point on u0 − V = −0.5
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(0, 1.0)], &[-1.0], 0.5, 0);
+        let (w, v, mu) = project_euclidean(&rows, &[0.0, 3.0], &[1.0]).unwrap();
+        assert!((w[0] - 0.25).abs() < 1e-15 && (v[0] - 0.75).abs() < 1e-15 && w[1] == 3.0);
+        assert!((mu[0] - 0.25).abs() < 1e-15);
+        // feasible points stay put
+        let (w, v, mu) = project_euclidean(&rows, &[1.0, 0.0], &[0.0]).unwrap();
+        assert_eq!((w[0], v[0], mu[0]), (1.0, 0.0, 0.0));
+    }
+}
