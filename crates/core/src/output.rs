@@ -1,0 +1,189 @@
+//! Output of a solve: `summary.json` (the numbers scripts read) and `solution.vtu` (fields for
+//! ParaView: u, σ, von Mises stress, ξ, plastic flag, contact force).
+
+use crate::lagrangian::{KktResiduals, Lagrangian, Workspace};
+use crate::p1p0::P1P0Lagrangian;
+use crate::solver::{Solution, StopReason};
+use crate::tensor::{to_vtk, von_mises};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+/// The numbers of a solve, written as `summary.json`. The keys are an interface: extend, do
+/// not rename.
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct Summary {
+    /// Scene title.
+    pub title: Option<String>,
+    /// Solver type.
+    pub solver: String,
+    /// True when the solver met its tolerance.
+    pub converged: bool,
+    /// Why it stopped.
+    pub stop_reason: StopReason,
+    /// Outer iterations.
+    pub iterations: usize,
+    /// Wall time of the solve in seconds (set-up of the problem excluded).
+    pub wall_s: f64,
+    /// The punch's displacement U (null without obstacle).
+    pub U: Option<f64>,
+    /// Total contact force Σλ (null without obstacle).
+    pub force: Option<f64>,
+    /// Number of contact nodes.
+    pub contact_nodes: usize,
+    /// Largest distance of a contact node from the punch centre.
+    pub contact_radius: f64,
+    /// Number of plastic elements.
+    pub plastic_elements: usize,
+    /// Largest von Mises stress sqrt(3/2)|dev σ|.
+    pub max_von_mises: f64,
+    /// Primal energy J(u, U).
+    pub J: f64,
+    /// Dual energy −(½[σ̂,σ̂] + λ·c).
+    pub dual_energy: f64,
+    /// The largest relative KKT residual, recomputed independently of the solver.
+    pub kkt_residual: f64,
+    /// Its components.
+    pub kkt: KktResiduals,
+    /// The tolerance asked of the solver.
+    pub tolerance: f64,
+    /// Free displacement dofs.
+    pub dofs: usize,
+    /// Tetrahedra.
+    pub elements: usize,
+    /// Nodes.
+    pub nodes: usize,
+    /// Rows of K_h (candidate contact nodes).
+    pub contact_rows: usize,
+    /// Wall time per solver phase.
+    pub phases: BTreeMap<String, f64>,
+    /// Solver-specific counters.
+    pub counters: BTreeMap<String, f64>,
+    /// Relative KKT residual per iteration.
+    pub residual_history: Vec<f64>,
+    /// Warnings from the plugins and the solver.
+    pub warnings: Vec<String>,
+}
+
+impl Summary {
+    /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch.
+    pub fn new(l: &P1P0Lagrangian, sol: &Solution, title: Option<String>) -> Self {
+        let mut ws = Workspace::new(l);
+        let kkt = l.kkt(&sol.iterate(), &mut ws);
+        let j = l.energy(&sol.u, &sol.extras, &mut ws);
+        let contact = l.contact_report(sol);
+        let mut warnings = l.warnings();
+        if let Some(c) = &contact {
+            warnings.extend(c.warnings.iter().cloned());
+        }
+        Self {
+            title,
+            solver: sol.report.solver.clone(),
+            converged: sol.report.converged,
+            stop_reason: sol.report.stop_reason,
+            iterations: sol.report.iterations,
+            wall_s: sol.report.wall_s(),
+            U: contact.as_ref().and_then(|c| c.get("U")),
+            force: contact.as_ref().and_then(|c| c.get("force")),
+            contact_nodes: contact.as_ref().map_or(0, |c| c.contact_nodes),
+            contact_radius: contact.as_ref().map_or(0.0, |c| c.contact_radius),
+            plastic_elements: sol.stress.n_plastic(),
+            max_von_mises: sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max),
+            J: j,
+            dual_energy: l.dual_energy(&sol.stress, &sol.lambda),
+            kkt_residual: kkt.max(),
+            kkt,
+            tolerance: sol.report.tolerance,
+            dofs: l.n_dofs(),
+            elements: l.n_points(),
+            nodes: l.mesh().n_nodes(),
+            contact_rows: l.constraints().n_rows(),
+            phases: sol.report.phases.iter().cloned().collect(),
+            counters: sol.report.counters.clone(),
+            residual_history: sol.report.residual_history.clone(),
+            warnings,
+        }
+    }
+
+    /// Writes the summary as pretty JSON.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
+        std::fs::write(path, text + "\n")
+    }
+}
+
+/// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data.
+/// Point data: `displacement`, `contact_force` (Gᵀλ at the nodes). Cell data: `stress`
+/// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises`, `xi` (hardening variables),
+/// `plastic` (0/1).
+pub fn write_vtu(path: &Path, l: &P1P0Lagrangian, sol: &Solution) -> std::io::Result<()> {
+    let mesh = l.mesh();
+    let disp = l.nodal_displacements(&sol.u);
+    let mut gu = vec![0.0; l.n_dofs()];
+    let mut gv = vec![0.0; l.n_extras()];
+    l.constraints().add_transpose(&sol.lambda, &mut gu, &mut gv);
+    let force = l.dofs().nodal(&gu);
+    let mut arrays: Vec<(&str, &str, usize, Vec<u8>)> = Vec::new(); // (section, name, components, bytes)
+    let f64s = |it: &mut dyn Iterator<Item = f64>| it.flat_map(f64::to_le_bytes).collect::<Vec<u8>>();
+    arrays.push(("point", "displacement", 3, f64s(&mut disp.iter().flatten().copied())));
+    arrays.push(("point", "contact_force", 3, f64s(&mut force.iter().flatten().copied())));
+    arrays.push(("cell", "stress", 6, f64s(&mut sol.stress.sigma.iter().flat_map(to_vtk))));
+    arrays.push(("cell", "von_mises", 1, f64s(&mut sol.stress.sigma.iter().map(von_mises))));
+    if sol.stress.q_dim > 0 {
+        let xi = (0..sol.stress.len()).flat_map(|i| sol.stress.q(i).to_vec());
+        arrays.push(("cell", "xi", sol.stress.q_dim, f64s(&mut xi.into_iter())));
+    }
+    arrays.push(("cell", "plastic", 1, sol.stress.plastic.iter().map(|p| *p as u8).collect()));
+    arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));
+    let conn: Vec<u8> = mesh.tets.iter().flatten().flat_map(|&n| (n as i64).to_le_bytes()).collect();
+    let offs: Vec<u8> = (1..=mesh.n_elements()).flat_map(|e| (4 * e as i64).to_le_bytes()).collect();
+    arrays.push(("cells", "connectivity", 1, conn));
+    arrays.push(("cells", "offsets", 1, offs));
+    arrays.push(("cells", "types", 1, vec![10u8; mesh.n_elements()])); // VTK_TETRA
+
+    let vtk_type = |name: &str| match name {
+        "plastic" | "types" => "UInt8",
+        "connectivity" | "offsets" => "Int64",
+        _ => "Float64",
+    };
+    let mut xml = String::new();
+    let mut offset = 0usize;
+    let mut section = |xml: &mut String, which: &str| {
+        for (_, name, comps, bytes) in arrays.iter().filter(|a| a.0 == which) {
+            xml.push_str(&format!(
+                "        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{}\"/>\n",
+                vtk_type(name),
+                name,
+                comps,
+                offset
+            ));
+            offset += 8 + bytes.len();
+        }
+    };
+    xml.push_str("<?xml version=\"1.0\"?>\n");
+    xml.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
+    xml.push_str("  <UnstructuredGrid>\n");
+    xml.push_str(&format!("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.n_nodes(), mesh.n_elements()));
+    xml.push_str("      <PointData Vectors=\"displacement\">\n");
+    section(&mut xml, "point");
+    xml.push_str("      </PointData>\n      <CellData Scalars=\"von_mises\" Tensors=\"stress\">\n");
+    section(&mut xml, "cell");
+    xml.push_str("      </CellData>\n      <Points>\n");
+    section(&mut xml, "points");
+    xml.push_str("      </Points>\n      <Cells>\n");
+    section(&mut xml, "cells");
+    xml.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n_");
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    file.write_all(xml.as_bytes())?;
+    // appended blocks in the order the XML declares them
+    for which in ["point", "cell", "points", "cells"] {
+        for (_, _, _, bytes) in arrays.iter().filter(|a| a.0 == which) {
+            file.write_all(&(bytes.len() as u64).to_le_bytes())?;
+            file.write_all(bytes)?;
+        }
+    }
+    file.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
+    file.flush()
+}

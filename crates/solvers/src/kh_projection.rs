@@ -1,0 +1,176 @@
+//! Step (ii) of Uzawa (SPEC §4): the projection onto K_h in the metric diag(M, m), solved
+//! exactly for the contact rows.
+//!
+//! With Y = M⁻¹Gᵀ computed once (one multi-column solve with the factor of M) the projection of
+//! a trial (z, Z) is the dense QP over the row multipliers μ ≥ 0
+//!
+//! `min ½ μᵀ S μ + μᵀ (G z + H₊ Z₊ + c)` with `S = G Y + H₊ m₊⁻¹ H₊ᵀ`, `H₀ᵀ μ = −ρ f₀`,
+//!
+//! where H₊ are the extras with a metric weight m > 0 and H₀ those with m = 0, whose V is then
+//! eliminated exactly (it is the multiplier of the equality). The new point is
+//! `w = z + Y μ`, `V₊ = Z₊ + m₊⁻¹ H₊ᵀ μ`, `V₀ = y`.
+
+use nalgebra::{DMatrix, DVector};
+use saddle_core::projection::{DenseQp, QpError};
+use saddle_core::{ConstraintRows, SolveError, SparseCholesky};
+
+/// Above this many bytes M⁻¹Gᵀ is not kept; each projection then costs one more solve.
+const MAX_STORED_BYTES: usize = 512 << 20;
+
+/// Exact projection onto K_h in the metric diag(M, m).
+#[derive(Debug)]
+pub struct MetricProjection {
+    n: usize,
+    /// M⁻¹Gᵀ, column-major n × rows, if kept.
+    y: Option<Vec<f64>>,
+    qp: DenseQp,
+    /// Metric weights of the extras (0: eliminated exactly).
+    m: Vec<f64>,
+    q: DVector<f64>,
+    /// Scratch: the trial extras with the eliminated ones zeroed, and M⁻¹Gᵀμ when Y is not kept.
+    zv: Vec<f64>,
+    gtmu: Vec<f64>,
+    gv: Vec<f64>,
+    /// Triangular solve pairs spent in set-up.
+    pub setup_solves: usize,
+}
+
+impl MetricProjection {
+    /// Set-up for rows `rows` with the factor `chol` of M, extras' weights `m_rel` relative to
+    /// their natural stiffness H_kᵀ (G M⁻¹ Gᵀ)⁻¹ H_k, step `rho` and load `f`.
+    pub fn new(rows: &ConstraintRows, chol: &mut SparseCholesky, m_rel: f64, rho: f64, f: &[f64]) -> Result<Self, SolveError> {
+        let n = chol.n();
+        let nr = rows.n_rows();
+        let ne = rows.n_extras;
+        let mut s = DMatrix::zeros(nr, nr);
+        let keep = n * nr * 8 <= MAX_STORED_BYTES;
+        let mut y = keep.then(|| vec![0.0; n * nr]);
+        // Y = M⁻¹Gᵀ in blocks of columns; S = G Y
+        let block = 64;
+        let mut buf = vec![0.0; n * block.min(nr.max(1))];
+        let mut setup_solves = 0;
+        for c0 in (0..nr).step_by(block) {
+            let nc = block.min(nr - c0);
+            let cols = &mut buf[..n * nc];
+            cols.iter_mut().for_each(|x| *x = 0.0);
+            for k in 0..nc {
+                let (idx, val) = rows.row(c0 + k);
+                for (&j, &v) in idx.iter().zip(val) {
+                    cols[k * n + j] += v;
+                }
+            }
+            chol.solve_columns(cols, nc);
+            setup_solves += nc;
+            for k in 0..nc {
+                let col = &cols[k * n..(k + 1) * n];
+                for i in 0..nr {
+                    let (idx, val) = rows.row(i);
+                    s[(i, c0 + k)] = idx.iter().zip(val).map(|(&j, v)| v * col[j]).sum();
+                }
+            }
+            if let Some(y) = &mut y {
+                y[c0 * n..(c0 + nc) * n].copy_from_slice(cols);
+            }
+        }
+        let s = (&s + s.transpose()) * 0.5;
+        let h = DMatrix::from_fn(nr, ne, |i, k| rows.extra_row(i)[k]);
+        // natural stiffness of each extra: H_kᵀ S⁻¹ H_k (all rows active)
+        let mut m = vec![0.0; ne];
+        if m_rel > 0.0 && nr > 0 {
+            let chol_s = s.clone().cholesky().ok_or(SolveError::Unsupported {
+                solver: "uzawa".into(),
+                message: "the contact rows are linearly dependent (singular Delassus matrix)".into(),
+            })?;
+            for k in 0..ne {
+                let hk = h.column(k).into_owned();
+                m[k] = m_rel * hk.dot(&chol_s.solve(&hk));
+            }
+        }
+        let plus: Vec<usize> = (0..ne).filter(|&k| m[k] > 0.0).collect();
+        let zero: Vec<usize> = (0..ne).filter(|&k| m[k] == 0.0).collect();
+        let mut s = s;
+        for &k in &plus {
+            let hk = h.column(k);
+            s += hk * hk.transpose() / m[k];
+        }
+        let e_mat = DMatrix::from_fn(zero.len(), nr, |r, i| h[(i, zero[r])]);
+        let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);
+        let qp = DenseQp::new(s, e_mat, e_rhs).map_err(qp_error)?;
+        let gtmu = if keep { vec![] } else { vec![0.0; n] };
+        Ok(Self { n, y, qp, m, q: DVector::zeros(nr), zv: vec![0.0; ne], gtmu, gv: vec![0.0; ne], setup_solves })
+    }
+
+    /// True when M⁻¹Gᵀ is kept and a projection costs no triangular solve.
+    pub fn keeps_delassus_columns(&self) -> bool {
+        self.y.is_some()
+    }
+
+    /// Active-set steps and factorisations of the dense QP so far.
+    pub fn qp_work(&self) -> (usize, usize) {
+        (self.qp.last_steps, self.qp.factorisations)
+    }
+
+    /// Projects the trial (z, Z) onto K_h: on return `w` holds the new u, `v` the new V and
+    /// `mu` the row multipliers (ρ times the contact forces). `v` holds Z on entry for the
+    /// extras with m > 0 (the others are ignored). Returns the solves spent (0 or 1).
+    pub fn project(
+        &mut self,
+        rows: &ConstraintRows,
+        chol: &mut SparseCholesky,
+        z: &[f64],
+        v: &mut [f64],
+        w: &mut [f64],
+        mu: &mut [f64],
+    ) -> Result<usize, SolveError> {
+        let nr = rows.n_rows();
+        w.copy_from_slice(z);
+        if nr == 0 {
+            return Ok(0);
+        }
+        // q = G z + H₊ Z₊ + c
+        for (k, m) in self.m.iter().enumerate() {
+            self.zv[k] = if *m == 0.0 { 0.0 } else { v[k] };
+        }
+        rows.gap(z, &self.zv, self.q.as_mut_slice());
+        let sol = self.qp.solve(&self.q).map_err(qp_error)?;
+        mu.copy_from_slice(sol.x.as_slice());
+        let y = sol.y;
+        // V₊ = Z₊ + m⁻¹ H₊ᵀ μ, V₀ = y
+        let mut r = 0;
+        for k in 0..self.m.len() {
+            if self.m[k] > 0.0 {
+                let htmu: f64 = (0..nr).map(|i| rows.extra_row(i)[k] * mu[i]).sum();
+                v[k] += htmu / self.m[k];
+            } else {
+                v[k] = y[r];
+                r += 1;
+            }
+        }
+        // w = z + M⁻¹Gᵀμ
+        match &self.y {
+            Some(ycols) => {
+                for (i, &m) in mu.iter().enumerate() {
+                    if m != 0.0 {
+                        for (wj, yj) in w.iter_mut().zip(&ycols[i * self.n..(i + 1) * self.n]) {
+                            *wj += m * yj;
+                        }
+                    }
+                }
+                Ok(0)
+            }
+            None => {
+                self.gtmu.iter_mut().for_each(|x| *x = 0.0);
+                rows.add_transpose(mu, &mut self.gtmu, &mut self.gv);
+                chol.solve(&mut self.gtmu);
+                for (wj, d) in w.iter_mut().zip(&self.gtmu) {
+                    *wj += d;
+                }
+                Ok(1)
+            }
+        }
+    }
+}
+
+fn qp_error(e: QpError) -> SolveError {
+    SolveError::Unsupported { solver: "uzawa".into(), message: format!("projection onto K_h failed: {e}") }
+}

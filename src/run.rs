@@ -1,0 +1,91 @@
+//! Running a scene file end to end: read and validate, assemble, solve, summarise, write
+//! `summary.json` and `solution.vtu`. Nothing is written unless the solve returns a solution.
+
+use saddle_core::{Monitor, P1P0Lagrangian, Scene, SceneError, Solution, SolveError, Solver, Summary, write_vtu};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a run failed.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The scene is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The solver failed.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// `--solver` names no known solver.
+    #[error("--solver {name}: {message}")]
+    UnknownSolver { name: String, message: String },
+    /// Output could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+}
+
+/// The solver used when a scene names none: the paper's Uzawa method.
+pub fn default_solver() -> Box<dyn Solver> {
+    Box::new(saddle_solvers::Uzawa::default())
+}
+
+/// A solver of type `name` with its default parameters (as `[solver] type = "name"`).
+pub fn solver_by_type(name: &str) -> Result<Box<dyn Solver>, RunError> {
+    let text = format!("type = {}", toml::Value::String(name.to_string()));
+    toml::from_str::<Box<dyn Solver>>(&text)
+        .map_err(|e| RunError::UnknownSolver { name: name.to_string(), message: e.message().to_string() })
+}
+
+/// A loaded problem: L, the solver to use, and the scene's title.
+pub struct Loaded {
+    /// L.
+    pub problem: P1P0Lagrangian,
+    /// The solver (the scene's, the override, or the default).
+    pub solver: Box<dyn Solver>,
+    /// Scene title.
+    pub title: Option<String>,
+}
+
+/// Reads a scene, applies a `--solver` override, and assembles L.
+pub fn load(scene: &Path, solver_override: Option<&str>) -> Result<Loaded, RunError> {
+    let scene = Scene::from_file(scene)?;
+    let title = scene.title.clone();
+    let override_solver = solver_override.map(solver_by_type).transpose()?;
+    let (problem, solver) = scene.into_problem()?;
+    let solver = override_solver.or(solver).unwrap_or_else(default_solver);
+    Ok(Loaded { problem, solver, title })
+}
+
+/// The result of a run.
+pub struct Outcome {
+    /// The solution.
+    pub solution: Solution,
+    /// Its summary (also written as `summary.json`).
+    pub summary: Summary,
+    /// Where the files went.
+    pub out_dir: PathBuf,
+}
+
+/// Solves a loaded problem and writes `out_dir/summary.json` and `out_dir/solution.vtu`.
+pub fn solve_and_write(loaded: &Loaded, out_dir: &Path, monitor: &mut dyn Monitor) -> Result<Outcome, RunError> {
+    let solution = loaded.solver.solve(&loaded.problem, monitor)?;
+    let summary = Summary::new(&loaded.problem, &solution, loaded.title.clone());
+    write_outputs(out_dir, &loaded.problem, &solution, &summary)?;
+    Ok(Outcome { solution, summary, out_dir: out_dir.to_path_buf() })
+}
+
+/// Writes both files through temporary names, so that a failure leaves no half-written file.
+fn write_outputs(out_dir: &Path, l: &P1P0Lagrangian, sol: &Solution, summary: &Summary) -> Result<(), RunError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| RunError::Io { path, source }
+    };
+    std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
+    let vtu = out_dir.join("solution.vtu");
+    let json = out_dir.join("summary.json");
+    let vtu_tmp = out_dir.join(".solution.vtu.partial");
+    let json_tmp = out_dir.join(".summary.json.partial");
+    write_vtu(&vtu_tmp, l, sol).map_err(io(&vtu))?;
+    summary.write(&json_tmp).map_err(io(&json))?;
+    std::fs::rename(&vtu_tmp, &vtu).map_err(io(&vtu))?;
+    std::fs::rename(&json_tmp, &json).map_err(io(&json))?;
+    Ok(())
+}
