@@ -9,7 +9,11 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 #[derive(Parser)]
-#[command(name = "saddle", version, about = "Variational inequalities in solid mechanics: elasto-plastic contact and friends")]
+#[command(
+    name = "saddle",
+    version,
+    about = "Variational inequalities in solid mechanics: elasto-plastic contact and friends"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -46,21 +46,13 @@ pub mod check {
     /// `value` is finite and > 0.
     pub fn positive(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
         finite(path, field, value)?;
-        if value > 0.0 {
-            Ok(value)
-        } else {
-            Err(ParameterError::new(join(path, field), value, "must be > 0"))
-        }
+        if value > 0.0 { Ok(value) } else { Err(ParameterError::new(join(path, field), value, "must be > 0")) }
     }
 
     /// `value` is finite and ≥ 0.
     pub fn non_negative(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
         finite(path, field, value)?;
-        if value >= 0.0 {
-            Ok(value)
-        } else {
-            Err(ParameterError::new(join(path, field), value, "must be >= 0"))
-        }
+        if value >= 0.0 { Ok(value) } else { Err(ParameterError::new(join(path, field), value, "must be >= 0")) }
     }
 
     /// `lo < value < hi`.

@@ -211,16 +211,26 @@ pub trait Lagrangian: Sync {
             return 0;
         };
         let (m, stride) = (out.q_dim, out.stride());
-        let points = out.sigma.par_iter_mut().zip(out.q.par_chunks_mut(stride)).zip(out.plastic.par_iter_mut()).zip(eps.par_iter());
+        let points = out
+            .sigma
+            .par_iter_mut()
+            .zip(out.q.par_chunks_mut(stride))
+            .zip(out.plastic.par_iter_mut())
+            .zip(eps.par_iter());
         match tangents {
-            None => points.map(|(((s, q), pl), e)| {
-                *pl = p.local_law(&law, e, s, &mut q[..m], None);
-                *pl as usize
-            }).sum(),
-            Some(t) => points.zip(t.par_iter_mut()).map(|((((s, q), pl), e), t)| {
-                *pl = p.local_law(&law, e, s, &mut q[..m], Some(t));
-                *pl as usize
-            }).sum(),
+            None => points
+                .map(|(((s, q), pl), e)| {
+                    *pl = p.local_law(&law, e, s, &mut q[..m], None);
+                    *pl as usize
+                })
+                .sum(),
+            Some(t) => points
+                .zip(t.par_iter_mut())
+                .map(|((((s, q), pl), e), t)| {
+                    *pl = p.local_law(&law, e, s, &mut q[..m], Some(t));
+                    *pl as usize
+                })
+                .sum(),
         }
     }
 
@@ -276,10 +286,7 @@ pub trait Lagrangian: Sync {
         ws.gu.iter_mut().for_each(|x| *x = 0.0);
         ws.gv.iter_mut().for_each(|x| *x = 0.0);
         rows.add_transpose(it.lambda, &mut ws.gu, &mut ws.gv);
-        let equilibrium = relative(
-            norm_diff(&ws.force, &ws.gu),
-            norm(&ws.force).max(norm(&ws.gu)),
-        );
+        let equilibrium = relative(norm_diff(&ws.force, &ws.gu), norm(&ws.force).max(norm(&ws.gu)));
         let f = self.load();
         let load_sum: Vec<f64> = f.iter().zip(&ws.gv).map(|(a, b)| a + b).collect();
         let load_balance = relative(norm(&load_sum), norm(f).max(norm(&ws.gv)));

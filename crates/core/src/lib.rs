@@ -40,14 +40,14 @@ pub use displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, 
 pub use dofs::{Component, Dirichlet, DofMap};
 pub use elasticity::Elasticity;
 pub use error::{LinalgError, MeshError, ParameterError, SceneError};
+pub use inline_mesh::InlineMesh;
 pub use lagrangian::{Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace};
 pub use linalg::{SparseCholesky, SymmetricPattern};
 pub use mesh::{MeshSource, TetMesh};
+pub use output::{Summary, write_vtu};
 pub use p1p0::P1P0Lagrangian;
 pub use region::Region;
+pub use scene::Scene;
 pub use solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
 pub use stresses::{AdmissibleStresses, ConeDescription, SocBlock};
 pub use tensor::{Sym, SymOp};
-pub use scene::Scene;
-pub use output::{Summary, write_vtu};
-pub use inline_mesh::InlineMesh;

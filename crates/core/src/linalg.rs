@@ -90,7 +90,11 @@ pub struct SparseCholesky {
 
 impl std::fmt::Debug for SparseCholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SparseCholesky").field("what", &self.what).field("n", &self.n()).field("nnz_l", &self.l_values.len()).finish()
+        f.debug_struct("SparseCholesky")
+            .field("what", &self.what)
+            .field("n", &self.n())
+            .field("nnz_l", &self.l_values.len())
+            .finish()
     }
 }
 
@@ -148,7 +152,10 @@ impl SparseCholesky {
         assert_eq!(pattern.n(), self.n(), "pattern does not match the analysed one");
         if values.iter().any(|v| !v.is_finite()) {
             self.factorised = false;
-            return Err(LinalgError::Backend { what: self.what.clone(), message: "matrix has NaN or infinite entries".into() });
+            return Err(LinalgError::Backend {
+                what: self.what.clone(),
+                message: "matrix has NaN or infinite entries".into(),
+            });
         }
         let stack = MemStack::new(&mut self.scratch);
         let result = self.symbolic.factorize_numeric_llt::<f64>(

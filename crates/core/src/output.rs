@@ -163,9 +163,15 @@ pub fn write_vtu(path: &Path, l: &P1P0Lagrangian, sol: &Solution) -> std::io::Re
         }
     };
     xml.push_str("<?xml version=\"1.0\"?>\n");
-    xml.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
+    xml.push_str(
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+    );
     xml.push_str("  <UnstructuredGrid>\n");
-    xml.push_str(&format!("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.n_nodes(), mesh.n_elements()));
+    xml.push_str(&format!(
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+        mesh.n_nodes(),
+        mesh.n_elements()
+    ));
     xml.push_str("      <PointData Vectors=\"displacement\">\n");
     section(&mut xml, "point");
     xml.push_str("      </PointData>\n      <CellData Scalars=\"von_mises\" Tensors=\"stress\">\n");

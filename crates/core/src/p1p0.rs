@@ -8,7 +8,7 @@
 //! the values; the sparsity pattern is built once).
 
 use crate::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
-use crate::dofs::{DofMap, Dirichlet, FIXED};
+use crate::dofs::{Dirichlet, DofMap, FIXED};
 use crate::elasticity::Elasticity;
 use crate::error::SceneError;
 use crate::lagrangian::{Lagrangian, Material};
@@ -63,7 +63,8 @@ impl P1P0Lagrangian {
             k.validate("obstacle")?;
         }
         let dofs = DofMap::new(&mesh, dirichlet)?;
-        let (grads, weights): (Vec<_>, Vec<_>) = (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
+        let (grads, weights): (Vec<_>, Vec<_>) =
+            (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
         let (adj_ptr, adj) = node_element_adjacency(&mesh);
         let mut dof_node = vec![0u32; dofs.n_free];
         let mut dof_comp = vec![0u8; dofs.n_free];
@@ -80,7 +81,22 @@ impl P1P0Lagrangian {
             Some(k) => (k.discretise(&mesh, &dofs, "obstacle")?, k.load()),
             None => (ConstraintRows::new(0), vec![]),
         };
-        Ok(Self { mesh, dofs, law, stresses, obstacle, rows, load, weights, grads, adj_ptr, adj, dof_node, dof_comp, pattern })
+        Ok(Self {
+            mesh,
+            dofs,
+            law,
+            stresses,
+            obstacle,
+            rows,
+            load,
+            weights,
+            grads,
+            adj_ptr,
+            adj,
+            dof_node,
+            dof_comp,
+            pattern,
+        })
     }
 
     /// The mesh.
@@ -151,8 +167,8 @@ impl P1P0Lagrangian {
                 // the free dofs of node a that are ≥ j are consecutive rows of the column
                 let Some(first) = (0..3).find(|&k| da[k] != FIXED && da[k] as usize >= j) else { continue };
                 let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
-                for k in first..3 {
-                    if da[k] != FIXED {
+                for (k, &dk) in da.iter().enumerate().skip(first) {
+                    if dk != FIXED {
                         col[pos] += strain_of_unit_dot(&g[a], k, &cb);
                         pos += 1;
                     }
@@ -227,7 +243,11 @@ fn stiffness_pattern(mesh: &TetMesh, dofs: &DofMap, adj_ptr: &[usize], adj: &[(u
     let neighbours: Vec<Vec<usize>> = (0..mesh.n_nodes())
         .into_par_iter()
         .map(|b| {
-            let mut nb: Vec<usize> = adj[adj_ptr[b]..adj_ptr[b + 1]].iter().flat_map(|&(e, _)| mesh.tets[e as usize]).filter(|&a| a >= b).collect();
+            let mut nb: Vec<usize> = adj[adj_ptr[b]..adj_ptr[b + 1]]
+                .iter()
+                .flat_map(|&(e, _)| mesh.tets[e as usize])
+                .filter(|&a| a >= b)
+                .collect();
             nb.sort_unstable();
             nb.dedup();
             nb
@@ -295,7 +315,14 @@ impl Lagrangian for P1P0Lagrangian {
                 }
             }
             let s = 1.0 / SQRT2;
-            *out = Sym::new(m[0][0], m[1][1], m[2][2], s * (m[1][2] + m[2][1]), s * (m[0][2] + m[2][0]), s * (m[0][1] + m[1][0]));
+            *out = Sym::new(
+                m[0][0],
+                m[1][1],
+                m[2][2],
+                s * (m[1][2] + m[2][1]),
+                s * (m[0][2] + m[2][0]),
+                s * (m[0][1] + m[1][0]),
+            );
         });
     }
 
@@ -304,7 +331,10 @@ impl Lagrangian for P1P0Lagrangian {
             let (n, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
             *fj = self.adj[self.adj_ptr[n]..self.adj_ptr[n + 1]]
                 .iter()
-                .map(|&(e, a)| self.weights[e as usize] * strain_of_unit_dot(&self.grads[e as usize][a as usize], c, &sigma[e as usize]))
+                .map(|&(e, a)| {
+                    self.weights[e as usize]
+                        * strain_of_unit_dot(&self.grads[e as usize][a as usize], c, &sigma[e as usize])
+                })
                 .sum();
         });
     }
@@ -327,8 +357,12 @@ mod tests {
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     fn problem() -> P1P0Lagrangian {
-        let mesh = BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [3, 4, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
-        let bc = [Dirichlet::clamped(Region::Group("zmax".into())), Dirichlet::roller(Region::Group("xmin".into()), crate::dofs::Component::X)];
+        let mesh =
+            BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [3, 4, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
+        let bc = [
+            Dirichlet::clamped(Region::Group("zmax".into())),
+            Dirichlet::roller(Region::Group("xmin".into()), crate::dofs::Component::X),
+        ];
         P1P0Lagrangian::new(mesh, &bc, Elasticity::new(10.0, 0.3).unwrap(), None, None).unwrap()
     }
 

@@ -32,11 +32,23 @@ pub struct DenseQp {
     e_rhs: DVector<f64>,
     x: DVector<f64>,
     free: Vec<bool>,
-    cached: Option<(Vec<bool>, Cholesky<f64, nalgebra::Dyn>, DMatrix<f64>, Cholesky<f64, nalgebra::Dyn>)>,
+    cached: Option<FreeBlock>,
     /// Active-set steps of the last solve.
     pub last_steps: usize,
     /// Cholesky factorisations of free blocks so far.
     pub factorisations: usize,
+}
+
+/// The factorised free block of the last solve: reused while the free set is unchanged.
+#[derive(Clone, Debug)]
+struct FreeBlock {
+    free: Vec<bool>,
+    /// Cholesky factor of S_FF.
+    chol: Cholesky<f64, nalgebra::Dyn>,
+    /// E_F.
+    ef: DMatrix<f64>,
+    /// Cholesky factor of the Schur complement E_F S_FF⁻¹ E_Fᵀ.
+    schur: Cholesky<f64, nalgebra::Dyn>,
 }
 
 /// The solution of a [`DenseQp`].
@@ -144,19 +156,20 @@ impl DenseQp {
     fn solve_free(&mut self, q: &DVector<f64>) -> Result<(DVector<f64>, DVector<f64>), QpError> {
         let idx: Vec<usize> = (0..self.n()).filter(|&i| self.free[i]).collect();
         let m = self.e_mat.nrows();
-        let fresh = !matches!(&self.cached, Some((f, ..)) if *f == self.free);
+        let fresh = !matches!(&self.cached, Some(b) if b.free == self.free);
         if fresh {
             let sff = self.s.select_rows(&idx).select_columns(&idx);
             let chol = sff.cholesky().ok_or(QpError::Singular)?;
             let ef = self.e_mat.select_columns(&idx);
             // Schur complement E_F S_FF⁻¹ E_Fᵀ of the equality block
             let z = chol.solve(&ef.transpose());
-            let schur = (&ef * z).cholesky().or_else(|| if m == 0 { DMatrix::<f64>::zeros(0, 0).cholesky() } else { None });
+            let schur =
+                (&ef * z).cholesky().or_else(|| if m == 0 { DMatrix::<f64>::zeros(0, 0).cholesky() } else { None });
             let schur = schur.ok_or(QpError::Infeasible)?;
             self.factorisations += 1;
-            self.cached = Some((self.free.clone(), chol, ef, schur));
+            self.cached = Some(FreeBlock { free: self.free.clone(), chol, ef, schur });
         }
-        let (_, chol, ef, schur) = self.cached.as_ref().unwrap();
+        let FreeBlock { chol, ef, schur, .. } = self.cached.as_ref().unwrap();
         let qf = DVector::from_iterator(idx.len(), idx.iter().map(|&i| q[i]));
         let sq = chol.solve(&qf);
         let y = if m == 0 { DVector::zeros(0) } else { schur.solve(&(-(ef * &sq) - &self.e_rhs)) };
@@ -165,9 +178,20 @@ impl DenseQp {
     }
 }
 
+/// A point of K_h obtained by projection, with the row multipliers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Projected {
+    /// Displacement dofs w.
+    pub u: Vec<f64>,
+    /// Extra unknowns V.
+    pub extras: Vec<f64>,
+    /// Multipliers μ ≥ 0 of the rows.
+    pub multipliers: Vec<f64>,
+}
+
 /// The Euclidean projection of (z, Z) onto K_h, with the multipliers μ ≥ 0 of the rows:
 /// w = z + Gᵀμ, V = Z + Hᵀμ, g(w, V) ≥ 0, μ_i g_i = 0.
-pub fn project_euclidean(rows: &ConstraintRows, z: &[f64], zv: &[f64]) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), QpError> {
+pub fn project_euclidean(rows: &ConstraintRows, z: &[f64], zv: &[f64]) -> Result<Projected, QpError> {
     let nr = rows.n_rows();
     // S = G Gᵀ + H Hᵀ (rows are sparse; form it by a sparse dot per pair)
     let mut dense_g = vec![std::collections::HashMap::new(); nr];
@@ -189,7 +213,7 @@ pub fn project_euclidean(rows: &ConstraintRows, z: &[f64], zv: &[f64]) -> Result
     let mut w = z.to_vec();
     let mut v = zv.to_vec();
     rows.add_transpose(&mu, &mut w, &mut v);
-    Ok((w, v, mu))
+    Ok(Projected { u: w, extras: v, multipliers: mu })
 }
 
 #[cfg(test)]
@@ -203,7 +227,14 @@ mod tests {
     }
 
     /// KKT of the QP checked directly: x ≥ 0, E x = e, w = Sx + q + Eᵀy ≥ 0, x·w = 0.
-    fn assert_kkt(s: &DMatrix<f64>, e: &DMatrix<f64>, rhs: &DVector<f64>, q: &DVector<f64>, x: &DVector<f64>, y: &DVector<f64>) {
+    fn assert_kkt(
+        s: &DMatrix<f64>,
+        e: &DMatrix<f64>,
+        rhs: &DVector<f64>,
+        q: &DVector<f64>,
+        x: &DVector<f64>,
+        y: &DVector<f64>,
+    ) {
         let w = s * x + q + e.transpose() * y;
         let sc = q.amax().max(1.0);
         assert!(x.iter().all(|v| *v >= 0.0));
@@ -255,11 +286,11 @@ mod tests {
         // one row: u0 + 0.5 − V ≥ 0; project (u0, V) = (0, 1): closest point on u0 − V = −0.5
         let mut rows = ConstraintRows::new(1);
         rows.push(&[(0, 1.0)], &[-1.0], 0.5, 0);
-        let (w, v, mu) = project_euclidean(&rows, &[0.0, 3.0], &[1.0]).unwrap();
+        let Projected { u: w, extras: v, multipliers: mu } = project_euclidean(&rows, &[0.0, 3.0], &[1.0]).unwrap();
         assert!((w[0] - 0.25).abs() < 1e-15 && (v[0] - 0.75).abs() < 1e-15 && w[1] == 3.0);
         assert!((mu[0] - 0.25).abs() < 1e-15);
         // feasible points stay put
-        let (w, v, mu) = project_euclidean(&rows, &[1.0, 0.0], &[0.0]).unwrap();
+        let Projected { u: w, extras: v, multipliers: mu } = project_euclidean(&rows, &[1.0, 0.0], &[0.0]).unwrap();
         assert_eq!((w[0], v[0], mu[0]), (1.0, 0.0, 0.0));
     }
 }

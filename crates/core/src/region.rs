@@ -60,7 +60,9 @@ impl Region {
                 check::positive(&p, "radius", *radius)?;
                 Ok(())
             }
-            Region::All(rs) | Region::Any(rs) => rs.iter().enumerate().try_for_each(|(i, r)| r.validate(&format!("{path}[{i}]"))),
+            Region::All(rs) | Region::Any(rs) => {
+                rs.iter().enumerate().try_for_each(|(i, r)| r.validate(&format!("{path}[{i}]")))
+            }
             Region::Not(r) => r.validate(&join(path, "not")),
         }
     }
@@ -107,7 +109,10 @@ impl Region {
             Region::All(rs) => rs.iter().all(|r| r.contains_node(mesh, n, facet_groups)),
             Region::Any(rs) => rs.iter().any(|r| r.contains_node(mesh, n, facet_groups)),
             Region::Not(r) => facet_groups.on_boundary[n] && !r.contains_node(mesh, n, facet_groups),
-            geometric => facet_groups.on_boundary[n] && geometric.contains_point(&mesh.nodes[n], mesh.diameter()).unwrap_or(false),
+            geometric => {
+                facet_groups.on_boundary[n]
+                    && geometric.contains_point(&mesh.nodes[n], mesh.diameter()).unwrap_or(false)
+            }
         }
     }
 

@@ -27,12 +27,12 @@
 //! type = "uzawa"
 //! ```
 
+use crate::displacements::AdmissibleDisplacements;
 use crate::dofs::Dirichlet;
 use crate::elasticity::Elasticity;
 use crate::error::SceneError;
 use crate::mesh::MeshSource;
 use crate::p1p0::P1P0Lagrangian;
-use crate::displacements::AdmissibleDisplacements;
 use crate::solver::Solver;
 use crate::stresses::AdmissibleStresses;
 use serde::{Deserialize, Serialize};
@@ -69,7 +69,8 @@ pub struct Scene {
 impl Scene {
     /// Reads and validates a scene file.
     pub fn from_file(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
         let mut scene = Self::from_toml(&text, path)?;
         scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(scene)
@@ -77,8 +78,10 @@ impl Scene {
 
     /// Parses and validates scene text; `origin` names it in error messages.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self, SceneError> {
-        let scene: Scene =
-            toml::from_str(text).map_err(|e| SceneError::Parse { path: origin.to_path_buf(), message: e.to_string().trim_end().to_string() })?;
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: origin.to_path_buf(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
         scene.validate()?;
         Ok(scene)
     }

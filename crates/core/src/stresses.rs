@@ -69,7 +69,14 @@ pub trait AdmissibleStresses: Debug + Send + Sync {
 
     /// The local law (SPEC §2): σ̂ = P_D(Cε, 0), and its consistent tangent dσ/dε when asked.
     /// Returns true when the point is plastic (the trial was outside D).
-    fn local_law(&self, law: &Elasticity, eps: &Sym, sigma: &mut Sym, q: &mut [f64], tangent: Option<&mut SymOp>) -> bool;
+    fn local_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool;
 
     /// The reduced energy density ψ(ε) = ε:σ − ½[σ̂, σ̂] at σ̂ = P_D(Cε, 0) (SPEC §2).
     /// Override with a closed form where one is known.
@@ -94,6 +101,13 @@ pub trait AdmissibleStresses: Debug + Send + Sync {
 }
 
 /// The energy inner product [σ̂, τ̂] = Aσ:τ + q·H⁻¹r at one point (SPEC §1).
-pub fn energy_inner(p: Option<&dyn AdmissibleStresses>, law: &Elasticity, sigma: &Sym, q: &[f64], tau: &Sym, r: &[f64]) -> f64 {
+pub fn energy_inner(
+    p: Option<&dyn AdmissibleStresses>,
+    law: &Elasticity,
+    sigma: &Sym,
+    q: &[f64],
+    tau: &Sym,
+    r: &[f64],
+) -> f64 {
     law.compliance(sigma).dot(tau) + p.map_or(0.0, |p| p.hardening_inner(q, r))
 }

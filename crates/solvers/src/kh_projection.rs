@@ -38,7 +38,13 @@ pub struct MetricProjection {
 impl MetricProjection {
     /// Set-up for rows `rows` with the factor `chol` of M, extras' weights `m_rel` relative to
     /// their natural stiffness H_kᵀ (G M⁻¹ Gᵀ)⁻¹ H_k, step `rho` and load `f`.
-    pub fn new(rows: &ConstraintRows, chol: &mut SparseCholesky, m_rel: f64, rho: f64, f: &[f64]) -> Result<Self, SolveError> {
+    pub fn new(
+        rows: &ConstraintRows,
+        chol: &mut SparseCholesky,
+        m_rel: f64,
+        rho: f64,
+        f: &[f64],
+    ) -> Result<Self, SolveError> {
         let n = chol.n();
         let nr = rows.n_rows();
         let ne = rows.n_extras;
@@ -81,9 +87,9 @@ impl MetricProjection {
                 solver: "uzawa".into(),
                 message: "the contact rows are linearly dependent (singular Delassus matrix)".into(),
             })?;
-            for k in 0..ne {
+            for (k, mk) in m.iter_mut().enumerate() {
                 let hk = h.column(k).into_owned();
-                m[k] = m_rel * hk.dot(&chol_s.solve(&hk));
+                *mk = m_rel * hk.dot(&chol_s.solve(&hk));
             }
         }
         let plus: Vec<usize> = (0..ne).filter(|&k| m[k] > 0.0).collect();
@@ -137,12 +143,12 @@ impl MetricProjection {
         let y = sol.y;
         // V₊ = Z₊ + m⁻¹ H₊ᵀ μ, V₀ = y
         let mut r = 0;
-        for k in 0..self.m.len() {
-            if self.m[k] > 0.0 {
+        for (k, (vk, &mk)) in v.iter_mut().zip(&self.m).enumerate() {
+            if mk > 0.0 {
                 let htmu: f64 = (0..nr).map(|i| rows.extra_row(i)[k] * mu[i]).sum();
-                v[k] += htmu / self.m[k];
+                *vk += htmu / mk;
             } else {
-                v[k] = y[r];
+                *vk = y[r];
                 r += 1;
             }
         }

@@ -97,7 +97,8 @@ impl Solver for Uzawa {
         drop(m_values);
         monitor.phase("contact set-up");
         let rows = l.constraints();
-        let mut proj = timer.time("contact set-up", || MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load()))?;
+        let mut proj = timer
+            .time("contact set-up", || MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load()))?;
 
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let mut u = vec![0.0; n];
@@ -127,7 +128,11 @@ impl Solver for Uzawa {
             history.push(r);
             monitor.iteration(it, r, self.tol);
             if !r.is_finite() {
-                return Err(SolveError::NonFinite { solver: "uzawa".into(), what: "the KKT residual".into(), iteration: it });
+                return Err(SolveError::NonFinite {
+                    solver: "uzawa".into(),
+                    what: "the KKT residual".into(),
+                    iteration: it,
+                });
             }
             if r <= self.tol {
                 break (StopReason::Converged, kkt);
@@ -136,7 +141,12 @@ impl Solver for Uzawa {
                 best = (r, it);
             }
             if it >= 10 && r > 1e3 * best.0 {
-                return Err(SolveError::Diverged { solver: "uzawa".into(), iteration: it, residual: r, hint: self.divergence_hint() });
+                return Err(SolveError::Diverged {
+                    solver: "uzawa".into(),
+                    iteration: it,
+                    residual: r,
+                    hint: self.divergence_hint(),
+                });
             }
             if it >= self.max_iter {
                 break (StopReason::MaxIterations, kkt);
@@ -194,7 +204,10 @@ impl Uzawa {
                 self.rho
             )
         } else {
-            format!("solver.rho = {} is below the stable bound {RHO_BOUND}: the problem data may be inconsistent", self.rho)
+            format!(
+                "solver.rho = {} is below the stable bound {RHO_BOUND}: the problem data may be inconsistent",
+                self.rho
+            )
         }
     }
 }

@@ -1,1 +1,104 @@
-//! placeholder
+//! # saddle-yield
+//!
+//! Yield surfaces — implementations of **P**, the admissible generalised stresses of SPEC §1
+//! ([`AdmissibleStresses`]) — and the conformance kit every implementation must pass.
+//!
+//! A generalised stress is σ̂ = (σ, q): a stress σ (Mandel vector, see
+//! [`saddle_core::tensor`]) and `hardening_dim()` hardening variables q. P is the set of
+//! fields with σ̂(x) ∈ D at every point, for a closed convex set D, and the energy inner
+//! product is `[σ̂, τ̂] = Aσ:τ + q·H⁻¹r`. Everything a solver needs follows from the
+//! projection onto D in that metric (SPEC §2): the local law σ̂ = P_D(Cε, 0), its derivative
+//! (the consistent tangent), the reduced energy ψ(ε) with ∂ψ/∂ε = σ, and for conic solvers a
+//! description of D by second-order cones (SPEC §3).
+//!
+//! Provided here, chosen by `type` in the `[yield]` table of a scene:
+//!
+//! * [`VonMises`] (`type = "von_mises"`, `k0`, `h`): `D = {|dev σ| ≤ k₀ + ξ}`, metric ξη/h —
+//!   the material of SPEC §1;
+//! * [`Elastic`] (`type = "elastic"`): D is the whole space.
+//!
+//! ## Adding a yield surface
+//!
+//! Write one small file with a serde struct for the parameters and an
+//! `#[typetag::serde(name = "...")] impl AdmissibleStresses`, and run the
+//! [`conformance`] kit in its tests. For example, von Mises without hardening (a plugin with no
+//! hardening variable):
+//!
+//! ```
+//! use saddle_core::error::{ParameterError, check};
+//! use saddle_core::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+//! use saddle_core::{AdmissibleStresses, Elasticity};
+//! use saddle_yield::conformance::{KitConfig, check_all};
+//! use serde::{Deserialize, Serialize};
+//!
+//! /// D = {|dev σ| ≤ k}: perfect plasticity with no hardening variable.
+//! #[derive(Debug, Serialize, Deserialize)]
+//! #[serde(deny_unknown_fields)]
+//! struct PerfectMises {
+//!     k: f64,
+//! }
+//!
+//! #[typetag::serde(name = "perfect_mises")]
+//! impl AdmissibleStresses for PerfectMises {
+//!     fn validate(&self, path: &str) -> Result<(), ParameterError> {
+//!         check::positive(path, "k", self.k).map(|_| ())
+//!     }
+//!     fn hardening_dim(&self) -> usize {
+//!         0
+//!     }
+//!     fn hardening_inner(&self, _q: &[f64], _r: &[f64]) -> f64 {
+//!         0.0
+//!     }
+//!     fn contains(&self, sigma: &Sym, _q: &[f64], tol: f64) -> bool {
+//!         deviator(sigma).norm() <= self.k + tol * self.k.max(sigma.norm())
+//!     }
+//!     fn project(&self, _law: &Elasticity, sigma: &mut Sym, _q: &mut [f64]) -> bool {
+//!         let (s, r) = (deviator(sigma), deviator(sigma).norm());
+//!         if r <= self.k {
+//!             return false;
+//!         }
+//!         *sigma = identity() * (trace(sigma) / 3.0) + s * (self.k / r);
+//!         true
+//!     }
+//!     fn local_law(&self, law: &Elasticity, eps: &Sym, sigma: &mut Sym, q: &mut [f64], tangent: Option<&mut SymOp>) -> bool {
+//!         *sigma = law.stress(eps);
+//!         let plastic = self.project(law, sigma, q);
+//!         if let Some(t) = tangent {
+//!             *t = law.stiffness_matrix();
+//!             if plastic {
+//!                 let s_tr = deviator(&law.stress(eps));
+//!                 let (r, g2) = (s_tr.norm(), 2.0 * law.shear_modulus());
+//!                 let n = s_tr / r;
+//!                 *t = volumetric_projector() * (3.0 * law.bulk_modulus())
+//!                     + (deviatoric_projector() - n * n.transpose()) * (g2 * self.k / r);
+//!             }
+//!         }
+//!         plastic
+//!     }
+//! }
+//!
+//! // in the plugin's tests:
+//! let law = Elasticity::new(100.0, 0.3).unwrap();
+//! check_all(&PerfectMises { k: 1.0 }, &KitConfig::new(law, 1.0)).unwrap();
+//! // and it can be read from a scene:
+//! let p: Box<dyn AdmissibleStresses> = toml::from_str("type = \"perfect_mises\"\nk = 1.0").unwrap();
+//! assert_eq!(p.name(), "perfect_mises");
+//! ```
+//!
+//! The kit checks (SPEC §2) that the projection lies in D, is idempotent, satisfies the
+//! variational inequality and is non-expansive in the energy metric; that ∂ψ/∂ε = σ and the
+//! tangent is the derivative of σ(ε) (finite differences); that ψ is convex, equals
+//! ε:σ − ½[σ̂, σ̂], and that the local law is the projection of (Cε, 0); and that the cone
+//! description, if any, describes D. Also give `energy` a closed form where one is known, and
+//! `warnings` for legal but delicate parameters.
+//!
+//! A binary reads plugins by name only if this crate is linked into it: refer to it somewhere
+//! (e.g. `use saddle_yield as _;`), or the `von_mises` / `elastic` names are unknown.
+
+pub mod conformance;
+mod elastic;
+mod von_mises;
+
+pub use elastic::Elastic;
+pub use saddle_core::stresses::AdmissibleStresses;
+pub use von_mises::VonMises;

@@ -1,0 +1,611 @@
+//! The conformance kit: what every K plugin ([`AdmissibleDisplacements`]) must satisfy on a
+//! mesh for the solvers of SPEC §4 to be right about it. A plugin author calls [`check_all`]
+//! from a test with a mesh, its Dirichlet conditions, a seed and a displacement scale (the
+//! size of the random displacements and extras, comparable to the gaps φ in the zone):
+//!
+//! ```
+//! use saddle_contact::{RigidPunch, Paraboloid, conformance::check_all};
+//! use saddle_core::{BoxMesh, Dirichlet, DofMap, Region};
+//! let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [4, 4, 2]).mesh().unwrap();
+//! let dofs = DofMap::new(&mesh, &[Dirichlet::clamped(Region::Group("zmax".into()))]).unwrap();
+//! let zone = Region::Group("zmin".into());
+//! let punch = RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0)));
+//! check_all(&punch, &mesh, &dofs, 1, 0.01).unwrap();
+//! ```
+//!
+//! The checks, in the order [`check_all`] runs them, with the [`KitFailure::check`] name each
+//! failure carries:
+//!
+//! * `setup` — the scale is finite and > 0; `validate` — `validate("obstacle")` succeeds;
+//!   `discretise` — `discretise(mesh, dofs, "obstacle")` succeeds.
+//! * `rows` (d): the rows are well formed (CSR pointers, columns below the number of free
+//!   dofs, nodes of the mesh, one H column per [`AdmissibleDisplacements::extra_names`]), there is
+//!   at least one row, every entry is finite, and no row is identically zero in u and V (a
+//!   constant constraint is either void or infeasible).
+//! * `gap_derivative`, `gap_value` (a): the rows are the linearisation of
+//!   [`AdmissibleDisplacements::gap`] at the reference configuration (u, V) = (0, 0). Central
+//!   finite differences of `gap()` along random directions in u, then in V, equal G·du and
+//!   H·dV; the offsets equal gap(0, 0); and at random (u, V) of the given scale the rows and
+//!   `gap()` agree to round-off (an affine gap, the polyhedral K_h of SPEC §3) or at least to
+//!   second order: the difference must drop by 8 or more when (u, V) is quartered (a curved
+//!   gap; a first-order disagreement drops by 4 only).
+//! * `load`, `force`, `report` (b): [`AdmissibleDisplacements::load`] has one finite entry per
+//!   extra unknown. The kit then builds multipliers λ ≥ 0 that balance it, Hᵀλ = −f (the KKT
+//!   condition on the extras, SPEC §3; Σλ = F for the punch): the point closest to a random
+//!   λ̃ ≥ 0 on that set, found by the dense QP of `saddle_core::projection` (with a
+//!   regularised least-squares fallback when its least-norm start is not ≥ 0). Without extras
+//!   any λ ≥ 0 will do. No such λ is a `load` failure: the discrete problem has no solution.
+//!   For this λ and random extras, a reported quantity `force` must equal Σλ (`force`); the
+//!   report must count [`saddle_core::contact_set`]`(λ)` as its contact nodes, have a finite
+//!   contact radius ≥ 0 and finite quantities, report every extra unknown it names by its
+//!   value, and for λ = 0 have no contact node, radius 0 and force 0 (`report`).
+//! * `projection`, `projection_feasible`, `projection_idempotent`, `projection_vi` (c):
+//!   [`project_euclidean`] of random points succeeds, gives points feasible both for the rows
+//!   and for `gap()` (g ≥ −tol), is idempotent, and satisfies the variational inequality of
+//!   the projection, (z − Pz)·(w − Pz) ≤ tol for feasible w (the projections of the other
+//!   random points).
+//!
+//! Tolerances are relative: g is compared to 1e-9 × (max|c| + scale × the largest row norm).
+
+use nalgebra::{DMatrix, DVector};
+use rand::{Rng, SeedableRng, rngs::StdRng};
+use saddle_core::projection::{DenseQp, Projected, project_euclidean};
+use saddle_core::{AdmissibleDisplacements, ConstraintRows, DofMap, TetMesh, contact_set};
+use thiserror::Error;
+
+/// A failed conformance check: which (`check`, one of [`CHECKS`]) and what, with numbers.
+#[derive(Clone, Debug, Error, PartialEq)]
+#[error("conformance check `{check}` failed: {message}")]
+pub struct KitFailure {
+    /// The name of the failed check.
+    pub check: &'static str,
+    /// What went wrong, with the numbers.
+    pub message: String,
+}
+
+/// The names of the checks, in the order [`check_all`] runs them (see the module docs).
+pub const CHECKS: [&str; 13] = [
+    "setup",
+    "validate",
+    "discretise",
+    "rows",
+    "gap_derivative",
+    "gap_value",
+    "load",
+    "force",
+    "report",
+    "projection",
+    "projection_feasible",
+    "projection_idempotent",
+    "projection_vi",
+];
+
+/// Random samples per check.
+const SAMPLES: usize = 6;
+
+fn fail(check: &'static str, message: String) -> Result<(), KitFailure> {
+    Err(KitFailure { check, message })
+}
+
+/// Runs every check of the kit: `validate`, then [`check_rows`], [`check_linearisation`],
+/// [`check_load`] and [`check_projection`]. `scale` is the size of the random displacements
+/// and extras (comparable to the gaps in the zone, e.g. 0.01 for the default scene).
+pub fn check_all(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    seed: u64,
+    scale: f64,
+) -> Result<(), KitFailure> {
+    if let Err(e) = k.validate("obstacle") {
+        return fail("validate", e.to_string());
+    }
+    check_rows(k, mesh, dofs, seed, scale)?;
+    check_linearisation(k, mesh, dofs, seed, scale)?;
+    check_load(k, mesh, dofs, seed, scale)?;
+    check_projection(k, mesh, dofs, seed, scale)
+}
+
+/// (d) The rows are well formed, finite and none is identically zero in u and V.
+pub fn check_rows(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    seed: u64,
+    scale: f64,
+) -> Result<(), KitFailure> {
+    Ctx::new(k, mesh, dofs, seed, scale).map(|_| ())
+}
+
+/// (a) The rows are the linearisation of `gap()` at (0, 0): derivatives along random
+/// directions (`gap_derivative`), then values (`gap_value`).
+pub fn check_linearisation(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    seed: u64,
+    scale: f64,
+) -> Result<(), KitFailure> {
+    let mut ctx = Ctx::new(k, mesh, dofs, seed, scale)?;
+    ctx.derivatives()?;
+    ctx.values()
+}
+
+/// (b) The load term, the force and the rest of the report for balanced multipliers.
+pub fn check_load(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    seed: u64,
+    scale: f64,
+) -> Result<(), KitFailure> {
+    Ctx::new(k, mesh, dofs, seed, scale)?.load()
+}
+
+/// (c) The Euclidean projection onto K_h: feasible, idempotent, the variational inequality.
+pub fn check_projection(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    seed: u64,
+    scale: f64,
+) -> Result<(), KitFailure> {
+    Ctx::new(k, mesh, dofs, seed, scale)?.projection()
+}
+
+/// The obstacle discretised on the mesh, with a random source and tolerances.
+struct Ctx<'a> {
+    k: &'a dyn AdmissibleDisplacements,
+    mesh: &'a TetMesh,
+    dofs: &'a DofMap,
+    rows: ConstraintRows,
+    rng: StdRng,
+    scale: f64,
+    /// Absolute tolerance on g.
+    tol: f64,
+}
+
+/// (max |x_i|, argmax); NaN counts as +∞.
+fn max_abs(x: impl IntoIterator<Item = f64>) -> (f64, usize) {
+    let mut best = (0.0, 0);
+    for (i, v) in x.into_iter().enumerate() {
+        let a = if v.is_nan() { f64::INFINITY } else { v.abs() };
+        if a > best.0 {
+            best = (a, i);
+        }
+    }
+    best
+}
+
+/// (argmin, min); NaN counts as −∞.
+fn min_at(g: &[f64]) -> (usize, f64) {
+    let mut best = (0, f64::INFINITY);
+    for (i, &v) in g.iter().enumerate() {
+        if v.is_nan() || v < best.1 {
+            best = (i, v);
+        }
+    }
+    best
+}
+
+/// a ≤ b; false when either is NaN, so that a NaN fails every check.
+fn le(a: f64, b: f64) -> bool {
+    a <= b
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+impl<'a> Ctx<'a> {
+    fn new(
+        k: &'a dyn AdmissibleDisplacements,
+        mesh: &'a TetMesh,
+        dofs: &'a DofMap,
+        seed: u64,
+        scale: f64,
+    ) -> Result<Self, KitFailure> {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(KitFailure {
+                check: "setup",
+                message: format!("the displacement scale must be finite and > 0, got {scale}"),
+            });
+        }
+        let rows = k
+            .discretise(mesh, dofs, "obstacle")
+            .map_err(|e| KitFailure { check: "discretise", message: e.to_string() })?;
+        shape(k, mesh, dofs, &rows)?;
+        entries(&rows)?;
+        let row_norm = (0..rows.n_rows())
+            .map(|i| rows.row(i).1.iter().chain(rows.extra_row(i)).map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let tol = 1e-9 * (max_abs(rows.offset.iter().copied()).0 + scale * row_norm);
+        Ok(Self { k, mesh, dofs, rows, rng: StdRng::seed_from_u64(seed), scale, tol })
+    }
+
+    fn n_free(&self) -> usize {
+        self.dofs.n_free
+    }
+
+    fn n_extras(&self) -> usize {
+        self.rows.n_extras
+    }
+
+    /// n entries uniform in (−s, s).
+    fn random(&mut self, n: usize, s: f64) -> Vec<f64> {
+        (0..n).map(|_| s * self.rng.random_range(-1.0..1.0)).collect()
+    }
+
+    /// g from the plugin's `gap()`.
+    fn kgap(&self, u: &[f64], v: &[f64]) -> Vec<f64> {
+        let mut g = vec![0.0; self.rows.n_rows()];
+        self.k.gap(self.mesh, self.dofs, &self.rows, u, v, &mut g);
+        g
+    }
+
+    /// g from the rows.
+    fn rgap(&self, u: &[f64], v: &[f64]) -> Vec<f64> {
+        let mut g = vec![0.0; self.rows.n_rows()];
+        self.rows.gap(u, v, &mut g);
+        g
+    }
+
+    /// G du + H dv.
+    fn linear(&self, du: &[f64], dv: &[f64]) -> Vec<f64> {
+        (0..self.rows.n_rows())
+            .map(|i| {
+                let (cols, vals) = self.rows.row(i);
+                cols.iter().zip(vals).map(|(&j, a)| a * du[j]).sum::<f64>() + dot(self.rows.extra_row(i), dv)
+            })
+            .collect()
+    }
+
+    fn where_(&self, i: usize) -> String {
+        let n = self.rows.node[i];
+        let x = self.mesh.nodes[n];
+        format!("row {i} (node {n} at ({}, {}, {}))", x[0], x[1], x[2])
+    }
+
+    /// Central differences of gap() at (0, 0) along random directions against G du and H dV.
+    fn derivatives(&mut self) -> Result<(), KitFailure> {
+        let h = 1e-3 * self.scale;
+        for s in 0..SAMPLES {
+            for in_u in [true, false] {
+                if !in_u && self.n_extras() == 0 {
+                    continue;
+                }
+                let (du, dv) = if in_u {
+                    (self.random(self.n_free(), 1.0), vec![0.0; self.n_extras()])
+                } else {
+                    (vec![0.0; self.n_free()], self.random(self.n_extras(), 1.0))
+                };
+                let scaled = |x: &[f64], t: f64| x.iter().map(|v| t * v).collect::<Vec<_>>();
+                let plus = self.kgap(&scaled(&du, h), &scaled(&dv, h));
+                let minus = self.kgap(&scaled(&du, -h), &scaled(&dv, -h));
+                let fd: Vec<f64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
+                let lin = self.linear(&du, &dv);
+                let (err, i) = max_abs(fd.iter().zip(&lin).map(|(a, b)| a - b));
+                let mag = max_abs(lin.iter().copied()).0.max(max_abs(fd.iter().copied()).0);
+                let gmag = max_abs(plus.iter().chain(&minus).copied()).0;
+                let tol = 1e-6 * mag + 1e2 * f64::EPSILON * gmag / h;
+                if !le(err, tol) {
+                    let (what, term) = if in_u { ("∂g/∂u", "G·du") } else { ("∂g/∂V", "H·dV") };
+                    return fail(
+                        "gap_derivative",
+                        format!(
+                            "{what} along random direction {s}, {}: the central difference of gap() (step {h:e}) is {:.6e}, \
+                             the rows' {term} is {:.6e}: difference {err:.3e} > tolerance {tol:.1e}",
+                            self.where_(i),
+                            fd[i],
+                            lin[i]
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Offsets = gap(0, 0); rows and gap() agree at random (u, V), at least to second order.
+    fn values(&mut self) -> Result<(), KitFailure> {
+        let g0 = self.kgap(&vec![0.0; self.n_free()], &vec![0.0; self.n_extras()]);
+        let (e0, i) = max_abs(g0.iter().zip(&self.rows.offset).map(|(a, b)| a - b));
+        if !le(e0, self.tol) {
+            return fail(
+                "gap_value",
+                format!(
+                    "at (u, V) = 0, {}: the offset c = {:.6e} but gap() = {:.6e} (difference {e0:.3e} > tolerance {:.1e}); \
+                     the offsets must be g(0, 0)",
+                    self.where_(i),
+                    self.rows.offset[i],
+                    g0[i],
+                    self.tol
+                ),
+            );
+        }
+        for s in 0..SAMPLES {
+            let u = self.random(self.n_free(), self.scale);
+            let v = self.random(self.n_extras(), self.scale);
+            let diff = |ctx: &Self, t: f64| {
+                let (ut, vt): (Vec<f64>, Vec<f64>) =
+                    (u.iter().map(|x| t * x).collect(), v.iter().map(|x| t * x).collect());
+                let (r, g) = (ctx.rgap(&ut, &vt), ctx.kgap(&ut, &vt));
+                let (e, i) = max_abs(r.iter().zip(&g).map(|(a, b)| a - b));
+                (e, i, r[i], g[i])
+            };
+            let (e1, i, r, g) = diff(self, 1.0);
+            if e1 <= self.tol {
+                continue;
+            }
+            let (e4, ..) = diff(self, 0.25);
+            if !le(e4, e1 / 8.0 + self.tol) {
+                return fail(
+                    "gap_value",
+                    format!(
+                        "at random (u, V) {s} of size {:e}, {}: the rows give {r:.6e} and gap() {g:.6e} (difference {e1:.3e} > \
+                         tolerance {:.1e}); at a quarter of that (u, V) they still differ by {e4:.3e}, more than the \
+                         second-order {:.3e}: the rows are not the linearisation of gap()",
+                        self.scale,
+                        self.where_(i),
+                        self.tol,
+                        e1 / 16.0
+                    ),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Load entries, balanced multipliers, force = Σλ and report consistency.
+    fn load(&mut self) -> Result<(), KitFailure> {
+        let f = self.k.load();
+        let names = self.k.extra_names();
+        if f.len() != names.len() {
+            return fail(
+                "load",
+                format!("load() has {} entries for the {} extra unknowns {names:?}", f.len(), names.len()),
+            );
+        }
+        if let Some(j) = f.iter().position(|v| !v.is_finite()) {
+            return fail("load", format!("load()[{j}] (on extra `{}`) = {} is not finite", names[j], f[j]));
+        }
+        let lambda = self.balanced(&f)?;
+        let extras = self.random(self.n_extras(), self.scale);
+        let report = self.k.report(self.mesh, &self.rows, &extras, &lambda);
+        let sum: f64 = lambda.iter().sum();
+        if let Some(force) = report.get("force")
+            && !le((force - sum).abs(), 1e-12 * sum.abs() + f64::MIN_POSITIVE)
+        {
+            return fail(
+                "force",
+                format!(
+                    "for multipliers λ ≥ 0 balancing the load f = {f:?} (Hᵀλ = −f), the report gives force = {force:.12e}, \
+                     but Σλ = {sum:.12e}"
+                ),
+            );
+        }
+        let expected = contact_set(&lambda).len();
+        if report.contact_nodes != expected {
+            return fail(
+                "report",
+                format!("the report counts {} contact nodes, contact_set(λ) has {expected}", report.contact_nodes),
+            );
+        }
+        if !(report.contact_radius.is_finite() && report.contact_radius >= 0.0) {
+            return fail("report", format!("the contact radius {} is not finite and >= 0", report.contact_radius));
+        }
+        if let Some((name, v)) = report.quantities.iter().find(|(_, v)| !v.is_finite()) {
+            return fail("report", format!("the reported quantity {name} = {v} is not finite"));
+        }
+        for (name, &x) in names.iter().zip(&extras) {
+            if let Some(v) = report.get(name)
+                && !le((v - x).abs(), 1e-12 * x.abs())
+            {
+                return fail(
+                    "report",
+                    format!("the report gives {name} = {v:e}, but the extra unknown {name} is {x:e}"),
+                );
+            }
+        }
+        let zero = vec![0.0; self.rows.n_rows()];
+        let report = self.k.report(self.mesh, &self.rows, &extras, &zero);
+        let force = report.get("force").unwrap_or(0.0);
+        if report.contact_nodes != 0 || report.contact_radius != 0.0 || force != 0.0 {
+            return fail(
+                "report",
+                format!(
+                    "for λ = 0 the report gives {} contact nodes, contact radius {} and force {force}; expected 0, 0 and 0",
+                    report.contact_nodes, report.contact_radius
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// λ ≥ 0 with Hᵀλ = −f, closest to a random λ̃ ≥ 0 (any random λ̃ without extras).
+    fn balanced(&mut self, f: &[f64]) -> Result<Vec<f64>, KitFailure> {
+        let n = self.rows.n_rows();
+        let m = self.n_extras();
+        let mut lt: Vec<f64> =
+            (0..n).map(|_| if self.rng.random_bool(0.25) { 0.0 } else { self.rng.random_range(0.0..1.0) }).collect();
+        if m == 0 {
+            return Ok(lt);
+        }
+        let h = DMatrix::from_fn(n, m, |i, k| self.rows.extra_row(i)[k]);
+        let fv = DVector::from_column_slice(f);
+        // bring λ̃ to the size of the load
+        let ht_lt = h.transpose() * DVector::from_column_slice(&lt);
+        if ht_lt.amax() > 0.0 {
+            let s = fv.amax() / ht_lt.amax();
+            lt.iter_mut().for_each(|v| *v *= s);
+        }
+        let lt = DVector::from_vec(lt);
+        // min ½|λ − λ̃|² subject to Hᵀλ = −f, λ ≥ 0
+        let exact = DenseQp::new(DMatrix::identity(n, n), h.transpose(), -&fv)
+            .and_then(|mut qp| qp.solve(&(-&lt)).map(|s| s.x.clone()));
+        let lambda = match exact {
+            Ok(x) => x,
+            Err(_) => {
+                // least-norm start not ≥ 0: min ½|Hᵀλ + f|² + ½ε|λ − λ̃|² over λ ≥ 0
+                let hht = &h * h.transpose();
+                let eps = 1e-10 * hht.diagonal().amax().max(f64::MIN_POSITIVE);
+                let s = hht + DMatrix::identity(n, n) * eps;
+                let q = &h * &fv - &lt * eps;
+                let mut qp = DenseQp::new(s, DMatrix::zeros(0, n), DVector::zeros(0))
+                    .map_err(|e| KitFailure { check: "load", message: format!("balancing the load: {e}") })?;
+                let x = qp
+                    .solve(&q)
+                    .map_err(|e| KitFailure { check: "load", message: format!("balancing the load: {e}") })?;
+                x.x.clone()
+            }
+        };
+        let res = h.transpose() * &lambda + &fv;
+        let tol = 1e-8 * fv.amax().max((h.transpose() * &lambda).amax());
+        if !le(res.amax(), tol) || lambda.iter().any(|v| *v < 0.0) {
+            return Err(KitFailure {
+                check: "load",
+                message: format!(
+                    "no multipliers λ ≥ 0 balance the load f = {f:?}: the best found leaves |Hᵀλ + f| = {:.3e} (tolerance \
+                     {tol:.1e}); the KKT condition Hᵀλ = −f on the extra unknowns (SPEC §3) cannot hold, so the discrete \
+                     problem has no solution",
+                    res.amax()
+                ),
+            });
+        }
+        Ok(lambda.iter().copied().collect())
+    }
+
+    /// Projections of random points: feasible, idempotent, the variational inequality.
+    fn projection(&mut self) -> Result<(), KitFailure> {
+        let mut points = Vec::with_capacity(SAMPLES);
+        for s in 0..SAMPLES {
+            let z = self.random(self.n_free(), self.scale);
+            let zv = self.random(self.n_extras(), self.scale);
+            let Projected { u: w, extras: wv, .. } = project_euclidean(&self.rows, &z, &zv).map_err(|e| {
+                KitFailure { check: "projection", message: format!("projecting random point {s}: {e}") }
+            })?;
+            for (which, g) in [("the rows", self.rgap(&w, &wv)), ("gap()", self.kgap(&w, &wv))] {
+                let (i, gmin) = min_at(&g);
+                if !le(-self.tol, gmin) {
+                    return fail(
+                        "projection_feasible",
+                        format!(
+                            "the projection of random point {s} violates {}: {which} give g = {gmin:.6e} < −{:.1e}",
+                            self.where_(i),
+                            self.tol
+                        ),
+                    );
+                }
+            }
+            let Projected { u: w2, extras: wv2, .. } = project_euclidean(&self.rows, &w, &wv).map_err(|e| {
+                KitFailure { check: "projection", message: format!("re-projecting random point {s}: {e}") }
+            })?;
+            let moved = max_abs(w2.iter().zip(&w).chain(wv2.iter().zip(&wv)).map(|(a, b)| a - b)).0;
+            let size = max_abs(w.iter().chain(&wv).copied()).0 + self.scale;
+            if !le(moved, 1e-9 * size) {
+                return fail(
+                    "projection_idempotent",
+                    format!(
+                        "projecting the projection of random point {s} again moves it by {moved:.3e} (size {size:.3e})"
+                    ),
+                );
+            }
+            points.push(([z, zv].concat(), [w, wv].concat()));
+        }
+        for (a, (z, p)) in points.iter().enumerate() {
+            let r: Vec<f64> = z.iter().zip(p).map(|(x, y)| x - y).collect();
+            for (b, (_, w)) in points.iter().enumerate().filter(|(b, _)| *b != a) {
+                let d: Vec<f64> = w.iter().zip(p).map(|(x, y)| x - y).collect();
+                let vi = dot(&r, &d);
+                let tol = 1e-9 * dot(&r, &r).sqrt() * dot(&d, &d).sqrt();
+                if !le(vi, tol) {
+                    return fail(
+                        "projection_vi",
+                        format!(
+                            "(z − Pz)·(w − Pz) = {vi:.3e} > {tol:.1e} for z = random point {a} and the feasible w = P(point {b}): \
+                             Pz is not the closest point of K_h"
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Structure of the rows against the mesh, the dofs and the extra unknowns.
+fn shape(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    rows: &ConstraintRows,
+) -> Result<(), KitFailure> {
+    let n = rows.n_rows();
+    let names = k.extra_names();
+    let problem = if n == 0 {
+        Some("discretise returned no rows; the kit needs a mesh on which the obstacle has at least one row".to_string())
+    } else if rows.n_extras != names.len() {
+        Some(format!("the rows have {} extra columns (H), but extra_names() gives {names:?}", rows.n_extras))
+    } else if rows.row_ptr.len() != n + 1
+        || rows.row_ptr[0] != 0
+        || rows.row_ptr.windows(2).any(|w| w[1] < w[0])
+        || rows.row_ptr[n] != rows.col.len()
+        || rows.col.len() != rows.val.len()
+    {
+        Some(format!(
+            "malformed CSR: {} rows, {} row pointers ending at {:?}, {} columns, {} values",
+            n,
+            rows.row_ptr.len(),
+            rows.row_ptr.last(),
+            rows.col.len(),
+            rows.val.len()
+        ))
+    } else if rows.extra.len() != n * rows.n_extras {
+        Some(format!("H has {} entries for {n} rows × {} extras", rows.extra.len(), rows.n_extras))
+    } else if rows.node.len() != n {
+        Some(format!("{} row nodes for {n} rows", rows.node.len()))
+    } else if let Some(&j) = rows.col.iter().find(|&&j| j >= dofs.n_free) {
+        Some(format!("a row refers to dof {j}, but there are {} free dofs", dofs.n_free))
+    } else {
+        rows.node
+            .iter()
+            .find(|&&v| v >= mesh.n_nodes())
+            .map(|v| format!("a row belongs to node {v}, but the mesh has {} nodes", mesh.n_nodes()))
+    };
+    match problem {
+        Some(message) => fail("rows", message),
+        None => Ok(()),
+    }
+}
+
+/// Every entry finite, no row identically zero in u and V.
+fn entries(rows: &ConstraintRows) -> Result<(), KitFailure> {
+    for i in 0..rows.n_rows() {
+        let (cols, vals) = rows.row(i);
+        let h = rows.extra_row(i);
+        let c = rows.offset[i];
+        if vals.iter().chain(h).chain([&c]).any(|v| !v.is_finite()) {
+            return fail(
+                "rows",
+                format!("row {i} (node {}) has a non-finite entry: G {vals:?}, H {h:?}, c = {c}", rows.node[i]),
+            );
+        }
+        // sum duplicate columns before deciding that the u part vanishes
+        let mut g: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
+        g.sort_by_key(|e| e.0);
+        let mut u_part = false;
+        for run in g.chunk_by(|a, b| a.0 == b.0) {
+            u_part |= run.iter().map(|e| e.1).sum::<f64>() != 0.0;
+        }
+        if !u_part && h.iter().all(|v| *v == 0.0) {
+            return fail(
+                "rows",
+                format!(
+                    "row {i} (node {}) is identically zero in u and V: the constant constraint c = {c} ≥ 0",
+                    rows.node[i]
+                ),
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,126 @@
+//! The candidate contact zone Γ₀ on a mesh (SPEC §1, §3): which boundary nodes carry a contact
+//! row, and where the contact set meets the rim of the zone. Shared by every node-based
+//! obstacle (the punches of this crate, and plugins: see the crate docs).
+
+use saddle_core::error::join;
+use saddle_core::{ConstraintRows, DofMap, Region, SceneError, TetMesh};
+
+/// The contact nodes selected by a zone, with what the user should know about the selection.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CandidateNodes {
+    /// Boundary nodes of the zone whose u₃ is free, sorted: one contact row each (SPEC §3).
+    pub nodes: Vec<usize>,
+    /// Nodes dropped because a Dirichlet condition fixes their u₃, a non-planar zone, ...
+    pub warnings: Vec<String>,
+}
+
+/// The contact nodes x_i ∈ Γ₀ of `zone` (SPEC §3). `path` is the obstacle's table; errors and
+/// warnings name `{path}.zone`.
+///
+/// Errors ([`SceneError::Region`]): a zone naming a facet group the mesh lacks (the message
+/// lists the mesh's groups), a zone selecting no boundary node, and a zone whose every node has
+/// u₃ fixed. Nodes with u₃ fixed by a Dirichlet condition cannot be contact nodes — Γ₀ must lie
+/// strictly inside Γ₁ (SPEC §1) — so they are dropped with a warning. A zone whose nodes do not
+/// share one x₃ level gets a warning: the gap u₃ + φ − U measures vertical distance from a flat
+/// contact face (SPEC §1: Γ₁ lies in a plane).
+pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<CandidateNodes, SceneError> {
+    let field = join(path, "zone");
+    let missing = zone.missing_groups(mesh);
+    if !missing.is_empty() {
+        return Err(SceneError::Region {
+            field,
+            message: format!("no facet group named {:?}; the mesh has {:?}", missing, mesh.group_names()),
+        });
+    }
+    let selected = zone.nodes(mesh);
+    if selected.is_empty() {
+        return Err(SceneError::Region {
+            field,
+            message: "selects no boundary node: there is no candidate contact node".into(),
+        });
+    }
+    let (nodes, fixed): (Vec<usize>, Vec<usize>) = selected.iter().partition(|&&n| dofs.free(n, 2).is_some());
+    let mut warnings = Vec::new();
+    if !fixed.is_empty() {
+        let x = mesh.nodes[fixed[0]];
+        let what = format!(
+            "{} of its {} nodes (e.g. node {} at ({}, {}, {})) have u₃ fixed by a Dirichlet condition",
+            fixed.len(),
+            selected.len(),
+            fixed[0],
+            x[0],
+            x[1],
+            x[2]
+        );
+        if nodes.is_empty() {
+            return Err(SceneError::Region {
+                field,
+                message: format!("all {what}; no contact node is left (Γ₀ must lie strictly inside Γ₁, SPEC §1)"),
+            });
+        }
+        warnings.push(format!(
+            "{field}: {what} and were dropped: clamped nodes cannot be contact nodes (Γ₀ must lie strictly inside Γ₁, SPEC §1); \
+             {} contact nodes remain",
+            nodes.len()
+        ));
+    }
+    let (lo, hi) = nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &n| (lo.min(mesh.nodes[n][2]), hi.max(mesh.nodes[n][2])));
+    if hi - lo > 1e-9 * mesh.diameter() {
+        warnings.push(format!(
+            "{field}: the contact nodes span x₃ ∈ [{lo}, {hi}]; the gap u₃ + φ − U assumes a flat contact face \
+             (SPEC §1: Γ₁ lies in a plane), so the zone should select one horizontal face"
+        ));
+    }
+    Ok(CandidateNodes { nodes, warnings })
+}
+
+/// The rows of `contact` (row indices) whose node lies on the rim of the candidate zone: it
+/// shares a boundary facet facing the punch (outward normal with n₃ < 0) with a boundary node
+/// that carries no row. Contact there means the contact set was clipped by the zone (or by the
+/// clamped boundary next to it) and the zone should be enlarged. Facets not facing the punch
+/// (the sides of the body) do not count, so a zone covering a whole face has no rim.
+pub fn rim_rows(mesh: &TetMesh, rows: &ConstraintRows, contact: &[usize]) -> Vec<usize> {
+    let mut in_zone = vec![false; mesh.n_nodes()];
+    for &n in &rows.node {
+        in_zone[n] = true;
+    }
+    let mut on_rim = vec![false; mesh.n_nodes()];
+    for f in &mesh.boundary {
+        let [a, b, c] = f.map(|i| mesh.nodes[i]);
+        let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+        let n3 = u[0] * v[1] - u[1] * v[0];
+        let area2 = tri_area2(a, b, c);
+        if n3 < -1e-8 * area2 && f.iter().any(|&n| !in_zone[n]) {
+            for &n in f {
+                on_rim[n] = true;
+            }
+        }
+    }
+    contact.iter().copied().filter(|&i| on_rim[rows.node[i]]).collect()
+}
+
+/// |(b − a) × (c − a)|: twice the area of a triangle.
+fn tri_area2(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+    (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+}
+
+/// The warning for contact rows on the rim (see [`rim_rows`]); `None` when there are none.
+pub fn rim_warning(path: &str, mesh: &TetMesh, rows: &ConstraintRows, rim: &[usize]) -> Option<String> {
+    let &first = rim.first()?;
+    let n = rows.node[first];
+    let x = mesh.nodes[n];
+    let zone = join(path, "zone");
+    Some(format!(
+        "the contact set reaches the rim of {zone} at {} node(s) (e.g. node {n} at ({}, {}, {})): the candidate contact \
+         zone is too small and the contact pressure is clipped there; enlarge {zone}",
+        rim.len(),
+        x[0],
+        x[1],
+        x[2]
+    ))
+}

@@ -1,0 +1,469 @@
+//! Von Mises with linear isotropic hardening (SPEC §1–§2): D = {(σ, ξ) : |dev σ| ≤ k₀ + ξ},
+//! hardening metric ξη/h.
+//!
+//! In the energy metric `Aσ:τ + ξη/h` the volumetric part of σ is orthogonal to everything D
+//! constrains, and on deviators A is 1/(2G). With the scaled coordinates `x = s/√(2G)`,
+//! `y = (k₀ + ξ)/√h`, D becomes the second-order cone `{|x| ≤ √(h/2G) y}` and the metric becomes
+//! Euclidean, so the projection is the classical projection onto a cone. Written back in
+//! (s, ξ): with `r = |dev σ|`, `t₀ = k₀ + ξ`, the KKT conditions of
+//! `min |s' − s|²/(4G) + (ξ' − ξ)²/(2h)` s.t. `|s'| ≤ k₀ + ξ'` give `s' = s − 2Gλ n`,
+//! `ξ' = ξ + hλ` with `n = s/r` and `λ = (r − t₀)/(2G + h) ≥ 0`, hence
+//!
+//! * inside when `r ≤ t₀`;
+//! * on the cone when `t = (2G t₀ + h r)/(2G + h) > 0`: `s' = s t/r`, `ξ' = t − k₀`;
+//! * at the apex (`s' = 0`, `ξ' = −k₀`) when `2G t₀ + h r ≤ 0`, i.e. `t₀ ≤ −h r/(2G)`.
+//!
+//! For ξ = 0 (the local law) `t₀ = k₀ ≥ 0`, the apex is never reached and
+//! `t = (h r + 2G k₀)/(h + 2G)` is exactly SPEC §2.
+
+use saddle_core::elasticity::Elasticity;
+use saddle_core::error::{ParameterError, check};
+use saddle_core::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
+use saddle_core::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+use serde::{Deserialize, Serialize};
+
+/// Von Mises yield with linear isotropic hardening (SPEC §1): `D = {|dev σ| ≤ k₀ + ξ}`,
+/// `[σ̂, τ̂] = Aσ:τ + ξη/h`. Scene table: `type = "von_mises"`, `k0`, `h`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VonMises {
+    /// Initial yield radius k₀ ≥ 0 of |dev σ| (`k₀ = √(2/3) σ_y`; the paper scales k₀ = 1).
+    pub k0: f64,
+    /// Hardening modulus h ≥ 0 of the metric ξη/h (`H = 3h/2` in `σ_eq = σ_y + H ε̄_p`);
+    /// h = 0 is perfect plasticity.
+    pub h: f64,
+}
+
+impl VonMises {
+    /// Von Mises with yield radius `k0` and hardening modulus `h` (not validated).
+    pub fn new(k0: f64, h: f64) -> Self {
+        Self { k0, h }
+    }
+
+    /// The orthonormal basis of the deviatoric subspace of Mandel space used by [`Self::cone`]:
+    /// five unit vectors orthogonal to each other and to I, so `Σ_k (e_k·σ)² = |dev σ|²`.
+    pub fn deviatoric_basis() -> [Sym; 5] {
+        let a = std::f64::consts::FRAC_1_SQRT_2;
+        let b = 1.0 / 6.0f64.sqrt();
+        [
+            Sym::new(a, -a, 0.0, 0.0, 0.0, 0.0),
+            Sym::new(b, b, -2.0 * b, 0.0, 0.0, 0.0),
+            Sym::new(0.0, 0.0, 0.0, 1.0, 0.0, 0.0),
+            Sym::new(0.0, 0.0, 0.0, 0.0, 1.0, 0.0),
+            Sym::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        ]
+    }
+}
+
+#[typetag::serde(name = "von_mises")]
+impl AdmissibleStresses for VonMises {
+    /// k₀ and h finite and ≥ 0 (fields `{path}.k0`, `{path}.h`).
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        check::non_negative(path, "k0", self.k0)?;
+        check::non_negative(path, "h", self.h)?;
+        Ok(())
+    }
+
+    /// One hardening variable, ξ.
+    fn hardening_dim(&self) -> usize {
+        1
+    }
+
+    /// ξη/h (SPEC §1). For h = 0 the metric is infinite in ξ: 0 when ξη = 0, else ±∞ with
+    /// the sign of ξη.
+    fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+        let p = q[0] * r[0];
+        if self.h > 0.0 {
+            p / self.h
+        } else if p == 0.0 {
+            0.0
+        } else {
+            p * f64::INFINITY
+        }
+    }
+
+    /// `|dev σ| ≤ k₀ + ξ + tol · max(k₀, |σ|, |ξ|)`: the tolerance is relative to the largest
+    /// stress magnitude involved (the size of the rounding errors of dev σ and of k₀ + ξ),
+    /// floored at the smallest positive normal number.
+    fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+        let xi = q[0];
+        let scale = self.k0.max(sigma.norm()).max(xi.abs()).max(f64::MIN_POSITIVE);
+        deviator(sigma).norm() <= self.k0 + xi + tol * scale
+    }
+
+    /// Projection onto D in the energy metric (SPEC §2), for a general point (σ, ξ) — see the
+    /// module docs for the derivation. The volumetric part is unchanged. For h = 0 ξ is frozen
+    /// (infinite metric) and s is returned radially to |s| = k₀ + ξ; if k₀ + ξ < 0 the slice of
+    /// D is empty and the point goes to the apex (s = 0, ξ = −k₀), the limit h → 0.
+    fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+        let s = deviator(sigma);
+        let r = s.norm();
+        let t0 = self.k0 + q[0];
+        if r <= t0 {
+            return false;
+        }
+        let m = trace(sigma) / 3.0;
+        let g2 = 2.0 * law.shear_modulus();
+        let t = if self.h > 0.0 { (g2 * t0 + self.h * r) / (g2 + self.h) } else { t0 };
+        if t <= 0.0 {
+            // apex: 2G t₀ + h r ≤ 0 (h = 0: k₀ + ξ ≤ 0)
+            *sigma = identity() * m;
+            q[0] = -self.k0;
+        } else {
+            *sigma = identity() * m + s * (t / r);
+            if self.h > 0.0 {
+                q[0] = t - self.k0;
+            }
+        }
+        true
+    }
+
+    /// SPEC §2 in closed form: σ̂ = P_D(Cε, 0) and the consistent tangent
+    /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + h/(h+2G) n⊗n]` when plastic, C when elastic.
+    fn local_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
+        let g2 = 2.0 * law.shear_modulus();
+        let kb = law.bulk_modulus();
+        let s_tr = deviator(eps) * g2;
+        let r = s_tr.norm();
+        let p = kb * trace(eps);
+        if r <= self.k0 {
+            *sigma = s_tr + identity() * p;
+            q[0] = 0.0;
+            if let Some(c) = tangent {
+                *c = law.stiffness_matrix();
+            }
+            return false;
+        }
+        let t = (self.h * r + g2 * self.k0) / (self.h + g2);
+        *sigma = s_tr * (t / r) + identity() * p;
+        q[0] = t - self.k0;
+        if let Some(c) = tangent {
+            let n = s_tr / r;
+            let nn = n * n.transpose();
+            *c = volumetric_projector() * (3.0 * kb)
+                + (deviatoric_projector() - nn) * (g2 * t / r)
+                + nn * (g2 * self.h / (self.h + g2));
+        }
+        true
+    }
+
+    /// `ψ(ε) = ½Cε:ε − (2G|dev ε| − k₀)₊² / (2(2G + h))` (SPEC §2).
+    fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+        let g2 = 2.0 * law.shear_modulus();
+        let over = (g2 * deviator(eps).norm() - self.k0).max(0.0);
+        0.5 * eps.dot(&law.stress(eps)) - over * over / (2.0 * (g2 + self.h))
+    }
+
+    /// One second-order cone of dimension 6 (SPEC §3): `t = k₀ + ξ`, `x = (e_k·σ)_{k=1..5}`
+    /// in the orthonormal deviatoric basis [`VonMises::deviatoric_basis`], so `|x| = |dev σ|`.
+    /// The map is 6 × 7 row-major on (σ Mandel, ξ).
+    fn cone(&self) -> Option<ConeDescription> {
+        let mut offset = vec![0.0; 6];
+        offset[0] = self.k0;
+        let mut map = vec![0.0; 6 * 7];
+        map[6] = 1.0;
+        for (k, e) in Self::deviatoric_basis().iter().enumerate() {
+            for j in 0..6 {
+                map[(k + 1) * 7 + j] = e[j];
+            }
+        }
+        Some(ConeDescription { blocks: vec![SocBlock { dim: 6, offset, map }] })
+    }
+
+    /// h = 0 (perfect plasticity): the solution need not be unique (SPEC §1, Theorem 1).
+    fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.h == 0.0 {
+            w.push(format!(
+                "yield.h = 0 (perfect plasticity): the solution need not be unique and displacements may be \
+                 discontinuous (SPEC §1, Theorem 1); stresses are still determined{}",
+                if self.k0 == 0.0 { ", but with k0 = 0 the deviatoric stress vanishes identically" } else { "" }
+            ));
+        }
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::conformance::{self, KitConfig};
+
+    fn law() -> Elasticity {
+        Elasticity::new(100.0, 0.3).unwrap()
+    }
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
+    }
+
+    #[test]
+    fn local_law_matches_spec_closed_form_for_a_uniaxial_trial() {
+        // E = 100, ν = 0.3: G = 100/2.6, K_b = 100/1.2; trial ε = (0.03, −0.01, −0.01, 0, 0, 0)
+        let law = law();
+        let vm = VonMises::new(1.0, 5.0);
+        let g = 100.0 / 2.6;
+        let kb = 100.0 / 1.2;
+        assert!(close(law.shear_modulus(), g, 1e-15));
+        let eps = Sym::new(0.03, -0.01, -0.01, 0.0, 0.0, 0.0);
+        // dev ε = (0.08/3)(1, −½, −½): |dev ε| = (0.08/3)√(3/2)
+        let dev_norm = 0.08 / 3.0 * 1.5f64.sqrt();
+        let r = 2.0 * g * dev_norm;
+        assert!(r > 1.0);
+        let t = (5.0 * r + 2.0 * g) / (5.0 + 2.0 * g);
+        let xi = t - 1.0;
+        let p_norm = (r - 1.0) / (5.0 + 2.0 * g);
+        let (mut s, mut q) = (Sym::zeros(), [0.0]);
+        assert!(vm.local_law(&law, &eps, &mut s, &mut q, None));
+        // the numbers themselves (computed independently): r = 2.51230, ξ = 0.09230
+        assert!(close(r, 2.512_297_172_085_31, 1e-13), "r = {r}");
+        assert!(close(q[0], 0.092_299_827_404_267_7, 1e-12), "ξ = {}", q[0]);
+        assert!(close(q[0], xi, 1e-13));
+        assert!(close(q[0], 5.0 * p_norm, 1e-13), "ξ = h|p|");
+        assert!(close(deviator(&s).norm(), 1.0 + q[0], 1e-13), "|s| = k0 + ξ");
+        assert!(close(trace(&s), 3.0 * kb * 0.01, 1e-13), "tr σ = tr σ_tr");
+        // s parallel to s_tr: s = (2/3, −1/3, −1/3)·|s|·√(3/2)
+        let c = deviator(&s).norm() * (2.0f64 / 3.0).sqrt();
+        assert!(close(deviator(&s)[0], c, 1e-13) && close(deviator(&s)[1], -0.5 * c, 1e-13));
+        // plastic strain p = (s_tr − s)/(2G) has |p| = (r − k0)/(h + 2G)
+        let s_tr = deviator(&eps) * (2.0 * g);
+        assert!(close(((s_tr - deviator(&s)) / (2.0 * g)).norm(), p_norm, 1e-12));
+        // the strain stays elastic below r = k0
+        let small = eps * (0.9 / r);
+        assert!(!vm.local_law(&law, &small, &mut s, &mut q, None));
+        assert!((s - law.stress(&small)).norm() < 1e-15 && q[0] == 0.0);
+    }
+
+    #[test]
+    fn energy_equals_primal_minimum_over_plastic_strains() {
+        // ψ(ε) = min_p ½C(ε−p):(ε−p) + k0|p| + ½h|p|², p deviatoric, minimised numerically.
+        let law = law();
+        let cmat = law.stiffness_matrix();
+        for &(k0, h) in &[(1.0, 5.0), (1.0, 0.0), (0.3, 40.0), (0.0, 2.0)] {
+            let vm = VonMises::new(k0, h);
+            for eps in [
+                Sym::new(0.03, -0.01, -0.01, 0.0, 0.0, 0.0),
+                Sym::new(0.004, 0.001, -0.002, 0.01, -0.003, 0.002),
+                Sym::new(0.001, 0.0, 0.0, 0.0, 0.0, 0.0),
+            ] {
+                let primal = |p: &Sym| {
+                    let e = eps - p;
+                    0.5 * e.dot(&(cmat * e)) + k0 * p.norm() + 0.5 * h * p.norm_squared()
+                };
+                let d = deviator(&eps);
+                let n = d / d.norm();
+                // golden-section search over p = α n, α ∈ [0, |dev ε|]
+                let (mut a, mut b) = (0.0, d.norm());
+                let phi = (5.0f64.sqrt() - 1.0) / 2.0;
+                for _ in 0..200 {
+                    let (c, dd) = (b - phi * (b - a), a + phi * (b - a));
+                    if primal(&(n * c)) < primal(&(n * dd)) {
+                        b = dd;
+                    } else {
+                        a = c;
+                    }
+                }
+                let alpha = 0.5 * (a + b);
+                let best = primal(&(n * alpha));
+                let psi = vm.energy(&law, &eps);
+                assert!(close(psi, best, 1e-12), "k0={k0} h={h}: closed form {psi} vs primal {best}");
+                // α is the plastic strain magnitude |p| = (r − k0)₊/(h + 2G) of SPEC §2
+                let r = 2.0 * law.shear_modulus() * d.norm();
+                let expected = (r - k0).max(0.0) / (h + 2.0 * law.shear_modulus());
+                assert!((alpha - expected).abs() < 1e-7 * d.norm(), "α = {alpha}, expected {expected}");
+                // other deviatoric directions do not do better
+                for dir in [Sym::new(1.0, -1.0, 0.0, 0.0, 0.0, 0.0), Sym::new(0.0, 0.0, 0.0, 1.0, 1.0, -1.0)] {
+                    let dir = deviator(&dir) * (1e-3 * d.norm());
+                    assert!(primal(&(n * alpha + dir)) >= best - 1e-12 * best.abs());
+                }
+                // and ψ = ε:σ − ½[σ̂, σ̂]
+                let (mut s, mut q) = (Sym::zeros(), [0.0]);
+                vm.local_law(&law, &eps, &mut s, &mut q, None);
+                let dual = eps.dot(&s) - 0.5 * (law.compliance(&s).dot(&s) + vm.hardening_inner(&q, &q));
+                assert!(close(psi, dual, 1e-12), "{psi} vs {dual}");
+            }
+        }
+    }
+
+    #[test]
+    fn projection_of_general_points() {
+        let law = law();
+        let g2 = 2.0 * law.shear_modulus();
+        let vm = VonMises::new(1.0, 5.0);
+        let dir = deviator(&Sym::new(1.0, 0.2, -0.5, 0.3, 0.0, -0.4));
+        let dir = dir / dir.norm();
+        let vol = identity() * 0.7;
+
+        // inside: unchanged, false
+        let (mut s, mut q) = (vol + dir * 1.2, [0.5]);
+        assert!(!vm.project(&law, &mut s, &mut q));
+        assert_eq!((s, q[0]), (vol + dir * 1.2, 0.5));
+
+        // onto the cone with ξ ≠ 0: r = 3, t0 = k0 + ξ = 1.5
+        let (mut s, mut q) = (vol + dir * 3.0, [0.5]);
+        assert!(vm.project(&law, &mut s, &mut q));
+        let t = (g2 * 1.5 + 5.0 * 3.0) / (g2 + 5.0);
+        assert!(close(deviator(&s).norm(), t, 1e-14) && close(q[0], t - 1.0, 1e-14));
+        assert!(close(deviator(&s).norm(), 1.0 + q[0], 1e-14), "on the boundary");
+        assert!((deviator(&s) / t - dir).norm() < 1e-14, "radial");
+        assert!(close(trace(&s), 2.1, 1e-14), "volumetric part unchanged");
+        // λ equal in both parts: (r − |s'|)/(2G) = (ξ' − ξ)/h
+        assert!(close((3.0 - t) / g2, (q[0] - 0.5) / 5.0, 1e-12));
+
+        // ξ < −k0 but still on the cone: t0 = −0.05 > −h r/(2G) = −5·3/76.9
+        let (mut s, mut q) = (vol + dir * 3.0, [-1.05]);
+        assert!(vm.project(&law, &mut s, &mut q));
+        let t = (g2 * -0.05 + 15.0) / (g2 + 5.0);
+        assert!(t > 0.0 && close(deviator(&s).norm(), t, 1e-13) && close(q[0], t - 1.0, 1e-13));
+
+        // apex: t0 = −0.5 ≤ −h r/(2G) ≈ −0.195
+        let (mut s, mut q) = (vol + dir * 3.0, [-1.5]);
+        assert!(vm.project(&law, &mut s, &mut q));
+        assert_eq!(deviator(&s).norm(), 0.0);
+        assert_eq!(q[0], -1.0);
+        assert!(close(trace(&s), 2.1, 1e-14));
+        // the apex is the nearest point: the segment to any point of D makes an obtuse angle
+        let y = (dir * 0.4, 0.0); // |s| = 0.4 ≤ k0 + 0, no volumetric part
+        let ip = law.compliance(&(vol + dir * 3.0 - s)).dot(&(y.0 - s)) + (-1.5 - q[0]) * (y.1 - q[0]) / 5.0;
+        assert!(ip <= 0.0, "{ip}");
+
+        // h = 0: ξ frozen, radial return to k0 + ξ; apex when k0 + ξ < 0
+        let pp = VonMises::new(1.0, 0.0);
+        let (mut s, mut q) = (vol + dir * 3.0, [0.25]);
+        assert!(pp.project(&law, &mut s, &mut q));
+        assert!(close(deviator(&s).norm(), 1.25, 1e-14) && q[0] == 0.25);
+        let (mut s, mut q) = (vol + dir * 3.0, [-1.25]);
+        assert!(pp.project(&law, &mut s, &mut q));
+        assert!(deviator(&s).norm() == 0.0 && q[0] == -1.0);
+        let (mut s, mut q) = (vol + dir * 1.1, [0.25]);
+        assert!(!pp.project(&law, &mut s, &mut q));
+        assert!(pp.hardening_inner(&[0.0], &[3.0]) == 0.0 && pp.hardening_inner(&[2.0], &[3.0]) == f64::INFINITY);
+        assert!(vm.hardening_inner(&[2.0], &[3.0]) == 1.2);
+    }
+
+    #[test]
+    fn projection_with_zero_xi_is_the_local_law() {
+        let law = law();
+        let vm = VonMises::new(1.0, 5.0);
+        let eps = Sym::new(0.02, -0.005, 0.001, 0.004, -0.002, 0.003);
+        let (mut s1, mut q1) = (Sym::zeros(), [0.0]);
+        let plastic = vm.local_law(&law, &eps, &mut s1, &mut q1, None);
+        let (mut s2, mut q2) = (law.stress(&eps), [0.0]);
+        assert!(plastic && vm.project(&law, &mut s2, &mut q2));
+        assert!((s1 - s2).norm() < 1e-13 * s1.norm() && (q1[0] - q2[0]).abs() < 1e-14);
+        assert!(q1[0] > 0.02, "clearly plastic: ξ = {}", q1[0]);
+    }
+
+    #[test]
+    fn tangent_is_c_when_elastic_and_hardening_modulus_along_n() {
+        let law = law();
+        let g2 = 2.0 * law.shear_modulus();
+        let vm = VonMises::new(1.0, 5.0);
+        let eps = Sym::new(0.03, -0.01, -0.01, 0.0, 0.0, 0.0);
+        let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
+        vm.local_law(&law, &eps, &mut s, &mut q, Some(&mut c));
+        let n = deviator(&eps) / deviator(&eps).norm();
+        // along n the deviatoric stiffness is 2G h/(h + 2G); on I it is 3K_b
+        assert!(close(n.dot(&(c * n)), g2 * 5.0 / (5.0 + g2), 1e-13));
+        assert!(close(identity().dot(&(c * identity())) / 3.0, 3.0 * law.bulk_modulus(), 1e-13));
+        let m = deviator(&Sym::new(0.0, 1.0, -1.0, 0.0, 0.0, 0.0));
+        let m = m / m.norm();
+        assert!(m.dot(&n).abs() < 1e-15);
+        let r = g2 * deviator(&eps).norm();
+        let t = (5.0 * r + g2) / (5.0 + g2);
+        assert!(close(m.dot(&(c * m)), g2 * t / r, 1e-13));
+        assert!((c - c.transpose()).norm() < 1e-12);
+        vm.local_law(&law, &(eps * 0.1), &mut s, &mut q, Some(&mut c));
+        assert_eq!(c, law.stiffness_matrix());
+    }
+
+    #[test]
+    fn cone_block_measures_the_deviator() {
+        let vm = VonMises::new(1.5, 5.0);
+        let cone = vm.cone().unwrap();
+        assert_eq!(cone.blocks.len(), 1);
+        let b = &cone.blocks[0];
+        assert_eq!((b.dim, b.offset.len(), b.map.len()), (6, 6, 42));
+        let basis = VonMises::deviatoric_basis();
+        for (i, a) in basis.iter().enumerate() {
+            assert!(a.dot(&identity()).abs() < 1e-15);
+            for (j, c) in basis.iter().enumerate() {
+                assert!((a.dot(c) - if i == j { 1.0 } else { 0.0 }).abs() < 1e-15);
+            }
+        }
+        let sigma = Sym::new(3.0, -1.0, 0.5, 0.7, -0.2, 0.9);
+        let xi = 0.25;
+        let z: Vec<f64> = sigma.iter().copied().chain([xi]).collect();
+        let v: Vec<f64> = (0..6).map(|i| b.offset[i] + (0..7).map(|j| b.map[i * 7 + j] * z[j]).sum::<f64>()).collect();
+        assert!((v[0] - 1.75).abs() < 1e-15);
+        let x = (v[1..].iter().map(|x| x * x).sum::<f64>()).sqrt();
+        assert!((x - deviator(&sigma).norm()).abs() < 1e-14);
+    }
+
+    #[test]
+    fn validation_names_the_field_and_value() {
+        let ok = VonMises::new(1.0, 5.0);
+        assert!(ok.validate("yield").is_ok() && ok.warnings().is_empty());
+        let e = VonMises::new(-1.0, 5.0).validate("yield").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.k0", "-1"));
+        let e = VonMises::new(1.0, -0.5).validate("yield").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.h", "-0.5"));
+        assert!(e.to_string().contains(">= 0"), "{e}");
+        let e = VonMises::new(f64::NAN, 5.0).validate("yield").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.k0", "NaN"));
+        assert!(e.to_string().contains("finite"), "{e}");
+        let e = VonMises::new(1.0, f64::INFINITY).validate("yield").unwrap_err();
+        assert_eq!(e.field, "yield.h");
+        // h = 0 is legal but warns about uniqueness
+        let pp = VonMises::new(1.0, 0.0);
+        assert!(pp.validate("yield").is_ok());
+        let w = pp.warnings();
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("unique") && w[0].contains("Theorem 1"), "{}", w[0]);
+    }
+
+    #[test]
+    fn toml_round_trip_and_unknown_fields() {
+        let p: Box<dyn AdmissibleStresses> = toml::from_str("type = \"von_mises\"\nk0 = 1.0\nh = 5.0").unwrap();
+        assert_eq!(p.name(), "von_mises");
+        assert_eq!(p.hardening_dim(), 1);
+        assert!(p.hardening_inner(&[1.0], &[1.0]) == 0.2, "h = 5 read back");
+        assert!(p.contains(&Sym::new(0.0, 0.0, 0.0, 1.0, 0.0, 0.0), &[0.0], 0.0));
+        assert!(!p.contains(&Sym::new(0.0, 0.0, 0.0, 1.01, 0.0, 0.0), &[0.0], 0.0), "k0 = 1 read back");
+        let text = toml::to_string(&p).unwrap();
+        let back: Box<dyn AdmissibleStresses> = toml::from_str(&text).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{p:?}"));
+        let err = toml::from_str::<Box<dyn AdmissibleStresses>>("type = \"von_mises\"\nk0 = 1.0\nh = 5.0\nH = 2.0")
+            .unwrap_err();
+        assert!(err.to_string().contains("unknown field"), "{err}");
+        assert!(err.to_string().contains('H'), "{err}");
+        assert!(
+            toml::from_str::<Box<dyn AdmissibleStresses>>("type = \"von_mises\"\nk0 = 1.0").is_err(),
+            "h is required"
+        );
+        let bad: Box<dyn AdmissibleStresses> = toml::from_str("type = \"von_mises\"\nk0 = -2.0\nh = 5.0").unwrap();
+        let e = bad.validate("yield").unwrap_err();
+        assert_eq!(e.to_string(), "yield.k0 = -2: must be >= 0");
+    }
+
+    #[test]
+    fn kit_passes_for_several_parameter_sets() {
+        for &(k0, h) in &[(1.0f64, 5.0), (1.0, 1e-4), (0.5, 2000.0), (0.0, 3.0), (1.0, 0.0)] {
+            let cfg = KitConfig::new(law(), k0.max(0.1)).with_samples(150).with_seed(7);
+            let vm = VonMises::new(k0, h);
+            if let Err(e) = conformance::check_all(&vm, &cfg) {
+                panic!("k0 = {k0}, h = {h}: {e}");
+            }
+        }
+        // another elasticity, nearly incompressible, and a high-strength scale
+        let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
+        conformance::check_all(&VonMises::new(300.0, 1e3), &cfg).unwrap();
+    }
+}

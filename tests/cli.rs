@@ -1,0 +1,69 @@
+//! `saddle run` end to end: exit status, summary.json keys, solution.vtu.
+
+mod common;
+use common::*;
+use std::process::Command;
+
+#[test]
+fn run_writes_summary_and_vtu() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("hom");
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["run", repo("examples/homogeneous.toml").to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("plastic elements") && stdout.contains("KKT residual"), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "solver",
+        "converged",
+        "iterations",
+        "wall_s",
+        "U",
+        "force",
+        "contact_nodes",
+        "plastic_elements",
+        "J",
+        "kkt_residual",
+        "dofs",
+        "elements",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+    assert_eq!(summary["solver"], "uzawa");
+    assert_eq!(summary["converged"], true);
+    // F = 2 on the unit square: U = F/E + plastic part (SPEC §7), force = F
+    assert!((summary["force"].as_f64().unwrap() - 2.0).abs() < 1e-9);
+    assert!(summary["kkt_residual"].as_f64().unwrap() <= 1e-10);
+    assert_eq!(summary["plastic_elements"], summary["elements"]);
+    let vtu = std::fs::read(out.join("solution.vtu")).unwrap();
+    let head = String::from_utf8_lossy(&vtu[..vtu.len().min(3000)]);
+    for name in ["displacement", "contact_force", "stress", "von_mises", "xi", "plastic", "NumberOfCells=\"162\""] {
+        assert!(head.contains(name), "solution.vtu lacks {name}");
+    }
+}
+
+#[test]
+fn a_run_out_of_iterations_is_flagged_and_exits_non_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = small_johnson();
+    set(&mut t, "solver.max_iter", toml::Value::Integer(3));
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, toml::to_string(&t).unwrap()).unwrap();
+    let out = dir.path().join("o");
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["run", scene.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["converged"], false);
+    assert_eq!(summary["stop_reason"], "max_iterations");
+    assert!(summary["kkt_residual"].as_f64().unwrap() > 1e-8);
+}

@@ -1,0 +1,46 @@
+//! Helpers shared by the integration tests: scenes from the examples with edits.
+#![allow(dead_code)]
+
+use saddle::core::{P1P0Lagrangian, Scene, Solver};
+use std::path::{Path, PathBuf};
+
+/// Path of a file in the repository.
+pub fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// The TOML of an example scene as a table, to edit.
+pub fn example(name: &str) -> toml::Table {
+    let text = std::fs::read_to_string(repo(&format!("examples/{name}"))).unwrap();
+    toml::from_str(&text).unwrap()
+}
+
+/// Sets `table.path = value` for a dotted path (`"mesh.cells"`).
+pub fn set(t: &mut toml::Table, path: &str, value: toml::Value) {
+    let mut keys: Vec<&str> = path.split('.').collect();
+    let last = keys.pop().unwrap();
+    let mut cur = t;
+    for k in keys {
+        cur = cur.get_mut(k).and_then(|v| v.as_table_mut()).unwrap_or_else(|| panic!("no table {k}"));
+    }
+    cur.insert(last.to_string(), value);
+}
+
+/// Assembles a scene table.
+pub fn build(t: &toml::Table) -> (P1P0Lagrangian, Option<Box<dyn Solver>>) {
+    let scene = Scene::from_toml(&toml::to_string(t).unwrap(), Path::new("test.toml")).unwrap();
+    scene.into_problem().unwrap()
+}
+
+/// A small version of the default scene that runs in a second or two.
+pub fn small_johnson() -> toml::Table {
+    let mut t = example("johnson.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([12, 12, 6]).unwrap());
+    set(&mut t, "mesh.grading.ratio", toml::Value::Float(3.0));
+    t
+}
+
+/// A solver from TOML text.
+pub fn solver(text: &str) -> Box<dyn Solver> {
+    toml::from_str(text).unwrap()
+}
