@@ -26,6 +26,8 @@ pub struct MetricProjection {
     qp: DenseQp,
     /// Metric weights of the extras (0: eliminated exactly).
     m: Vec<f64>,
+    /// ρ f: the load's step on the extras.
+    step_load: Vec<f64>,
     q: DVector<f64>,
     /// Scratch: the trial extras with the eliminated ones zeroed, and M⁻¹Gᵀμ when Y is not kept.
     zv: Vec<f64>,
@@ -103,7 +105,24 @@ impl MetricProjection {
         let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);
         let qp = DenseQp::new(s, e_mat, e_rhs).map_err(qp_error)?;
         let gtmu = if keep { vec![] } else { vec![0.0; n] };
-        Ok(Self { n, y, qp, m, q: DVector::zeros(nr), zv: vec![0.0; ne], gtmu, gv: vec![0.0; ne], setup_solves })
+        let step_load = f.iter().map(|fk| rho * fk).collect();
+        Ok(Self {
+            n,
+            y,
+            qp,
+            m,
+            step_load,
+            q: DVector::zeros(nr),
+            zv: vec![0.0; ne],
+            gtmu,
+            gv: vec![0.0; ne],
+            setup_solves,
+        })
+    }
+
+    /// The metric weights m of the extra unknowns (0: eliminated).
+    pub fn extra_weights(&self) -> &[f64] {
+        &self.m
     }
 
     /// True when M⁻¹Gᵀ is kept and a projection costs no triangular solve.
@@ -116,9 +135,9 @@ impl MetricProjection {
         (self.qp.last_steps, self.qp.factorisations)
     }
 
-    /// Projects the trial (z, Z) onto K_h: on return `w` holds the new u, `v` the new V and
-    /// `mu` the row multipliers (ρ times the contact forces). `v` holds Z on entry for the
-    /// extras with m > 0 (the others are ignored). Returns the solves spent (0 or 1).
+    /// Step (ii) from the trial z = uⁿ − ρM⁻¹Bᵀσⁿ⁺¹ and `v` = Vⁿ: on return `w` holds uⁿ⁺¹,
+    /// `v` holds Vⁿ⁺¹ and `mu` the row multipliers (ρ times the contact forces). Returns the
+    /// triangular solves spent (0 or 1).
     pub fn project(
         &mut self,
         rows: &ConstraintRows,
@@ -134,8 +153,9 @@ impl MetricProjection {
             return Ok(0);
         }
         // q = G z + H₊ Z₊ + c
+        // the extras' trial Z₊ = V₊ⁿ + ρ f₊ / m₊ (the eliminated ones enter through the equality)
         for (k, m) in self.m.iter().enumerate() {
-            self.zv[k] = if *m == 0.0 { 0.0 } else { v[k] };
+            self.zv[k] = if *m == 0.0 { 0.0 } else { v[k] + self.step_load[k] / m };
         }
         rows.gap(z, &self.zv, self.q.as_mut_slice());
         let sol = self.qp.solve(&self.q).map_err(qp_error)?;
@@ -146,7 +166,7 @@ impl MetricProjection {
         for (k, (vk, &mk)) in v.iter_mut().zip(&self.m).enumerate() {
             if mk > 0.0 {
                 let htmu: f64 = (0..nr).map(|i| rows.extra_row(i)[k] * mu[i]).sum();
-                *vk += htmu / mk;
+                *vk = self.zv[k] + htmu / mk;
             } else {
                 *vk = y[r];
                 r += 1;

@@ -110,10 +110,18 @@ impl Solver for Uzawa {
         let mut stress = StressField::new(l.n_points(), l.hardening_dim());
         let mut history = Vec::new();
         let mut solves = 0usize;
+        // Divergence: for ρ < 2 the iteration map is averaged in diag(M, m), so the step length
+        // δₙ = ‖xⁿ⁺¹ − xⁿ‖ never increases; above the bound it grows like |1 − ρ|ⁿ. (The relative
+        // KKT residual cannot tell: it saturates near 1 when the iterate blows up.)
         let mut best = (f64::INFINITY, 0usize);
+        let mut smallest_step = f64::INFINITY;
+        let mut first_step = 0.0;
+        let (mut u_prev, mut v_prev) = (vec![0.0; n], vec![0.0; ne]);
+        let mut scratch_v = vec![0.0; ne];
         let plastic = l.plasticity().is_some();
         monitor.phase("iterations");
         let mut it = 0;
+        let mut last_step = 0.0;
         let (stop, kkt) = loop {
             // (i) σ̂ⁿ⁺¹ = P_D(Cε(uⁿ), 0); the KKT residual of the iterate (uⁿ, Vⁿ, σ̂ⁿ⁺¹, λⁿ)
             timer.time("local law", || {
@@ -140,7 +148,7 @@ impl Solver for Uzawa {
             if r < best.0 {
                 best = (r, it);
             }
-            if it >= 10 && r > 1e3 * best.0 {
+            if it >= 3 && smallest_step < f64::INFINITY && last_step > 10.0 * smallest_step.max(1e-12 * first_step) {
                 return Err(SolveError::Diverged {
                     solver: "uzawa".into(),
                     iteration: it,
@@ -165,7 +173,21 @@ impl Solver for Uzawa {
                 }
             });
             solves += 1;
+            u_prev.clone_from(&u);
+            v_prev.clone_from(&v);
             solves += timer.time("projection", || proj.project(rows, &mut chol, &z, &mut v, &mut u, &mut mu))?;
+            // δₙ² = Δuᵀ M Δu + Σ m ΔV², with M Δu = Gᵀμ − ρ Bᵀσ (z is free again: it takes Gᵀμ)
+            z.iter_mut().for_each(|x| *x = 0.0);
+            rows.add_transpose(&mu, &mut z, &mut scratch_v);
+            let du_m_du: f64 = (0..n).map(|j| (u[j] - u_prev[j]) * (z[j] - rho * ws.force[j])).sum();
+            let dv_m_dv: f64 =
+                proj.extra_weights().iter().zip(v.iter().zip(&v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
+            last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
+            if it == 0 {
+                first_step = last_step;
+            } else {
+                smallest_step = smallest_step.min(last_step);
+            }
             for (l, m) in lambda.iter_mut().zip(&mu) {
                 *l = m / rho;
             }

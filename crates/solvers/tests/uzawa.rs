@@ -1,0 +1,115 @@
+//! The paper's Uzawa method: the metric and the extras' weight change the path, not the answer;
+//! a step above the stable bound is detected early and named; elastic problems run no return
+//! mapping.
+
+use saddle_contact::{Paraboloid, RigidPunch};
+use saddle_core::{
+    BoxMesh, Dirichlet, Elasticity, Lagrangian, P1P0Lagrangian, Region, Silent, SolveError, Solver, StopReason,
+    Workspace,
+};
+use saddle_solvers::{Uzawa, UzawaMetric};
+use saddle_yield::VonMises;
+
+/// The default scene of SPEC §6 on a coarse graded mesh.
+fn johnson(plastic: bool) -> P1P0Lagrangian {
+    let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [10, 10, 5]).graded([0.0; 3], 3.0).mesh().unwrap();
+    let gamma1 = Region::All(vec![
+        Region::Group("zmin".into()),
+        Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
+    ]);
+    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
+    let p: Option<Box<dyn saddle_core::AdmissibleStresses>> =
+        if plastic { Some(Box::new(VonMises::new(1.0, 5.0))) } else { None };
+    P1P0Lagrangian::new(
+        mesh,
+        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
+        Elasticity::new(100.0, 0.3).unwrap(),
+        p,
+        Some(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
+    )
+    .unwrap()
+}
+
+fn uzawa() -> Uzawa {
+    Uzawa { tol: 1e-10, ..Uzawa::default() }
+}
+
+#[test]
+fn metric_and_extra_weight_change_the_path_not_the_solution() {
+    let l = johnson(true);
+    let reference = uzawa().solve(&l, &mut Silent).unwrap();
+    assert!(reference.report.converged);
+    assert!(reference.stress.n_plastic() > 0);
+    let variants = [
+        Uzawa { metric: UzawaMetric::Strain, rho: 1.5, max_iter: 100_000, ..uzawa() },
+        Uzawa { extra_metric: 1.0, ..uzawa() },
+    ];
+    for v in variants {
+        let sol = v.solve(&l, &mut Silent).unwrap();
+        assert!(sol.report.converged, "{v:?}: {:?}", sol.report.stop_reason);
+        let (u0, u1) = (reference.extras[0], sol.extras[0]);
+        assert!((u0 - u1).abs() <= 1e-7 * u0, "{v:?}: U = {u1} vs {u0}");
+        assert_eq!(sol.stress.n_plastic(), reference.stress.n_plastic());
+        // the independently recomputed residual meets the tolerance
+        assert!(l.kkt(&sol.iterate(), &mut Workspace::new(&l)).max() <= v.tol);
+        // the paper's metric is the slow one: more iterations than the energy metric
+        if v.metric == UzawaMetric::Strain {
+            assert!(sol.report.iterations > reference.report.iterations);
+        }
+    }
+}
+
+#[test]
+fn a_step_above_the_stable_bound_is_detected_early_and_named() {
+    let l = johnson(true);
+    match (Uzawa { rho: 2.5, ..uzawa() }).solve(&l, &mut Silent) {
+        Err(SolveError::Diverged { iteration, hint, .. }) => {
+            assert!(iteration < 40, "detected late: {iteration}");
+            assert!(hint.contains("solver.rho = 2.5") && hint.contains("bound 2"), "{hint}");
+        }
+        Err(e) => panic!("expected divergence, got {e}"),
+        Ok(s) => panic!("expected divergence, got {:?} after {} iterations", s.report.stop_reason, s.report.iterations),
+    }
+    // just below the bound it still converges
+    let sol = Uzawa { rho: 1.9, ..uzawa() }.solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged);
+}
+
+#[test]
+fn elastic_problems_run_no_return_mapping() {
+    let l = johnson(false);
+    let sol = uzawa().solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged);
+    assert_eq!(sol.report.counters["return_mappings"], 0.0);
+    assert_eq!(sol.stress.n_plastic(), 0);
+    // one factorisation; one solve pair per iteration once the contact rows are set up
+    assert_eq!(sol.report.counters["factorisations"], 1.0);
+    assert_eq!(sol.report.counters["triangular_solve_pairs"], sol.report.iterations as f64);
+    // with plasticity the return mapping runs at every point in every iteration
+    let lp = johnson(true);
+    let sp = uzawa().solve(&lp, &mut Silent).unwrap();
+    assert_eq!(sp.report.counters["return_mappings"], ((sp.report.iterations + 1) * lp.n_points()) as f64);
+}
+
+#[test]
+fn the_iteration_budget_is_reported_not_hidden() {
+    let l = johnson(true);
+    let sol = Uzawa { max_iter: 2, ..uzawa() }.solve(&l, &mut Silent).unwrap();
+    assert!(!sol.report.converged);
+    assert_eq!(sol.report.stop_reason, StopReason::MaxIterations);
+    assert!(sol.report.kkt.max() > 1e-10);
+    assert_eq!(sol.report.residual_history.len(), 3);
+}
+
+#[test]
+fn invalid_parameters_name_the_field() {
+    let l = johnson(false);
+    for (u, field) in [
+        (Uzawa { rho: -1.0, ..uzawa() }, "solver.rho"),
+        (Uzawa { tol: 0.0, ..uzawa() }, "solver.tol"),
+        (Uzawa { extra_metric: f64::NAN, ..uzawa() }, "solver.extra_metric"),
+    ] {
+        let e = u.solve(&l, &mut Silent).expect_err("invalid parameters are an error");
+        assert!(e.to_string().contains(field), "{e}");
+    }
+}
