@@ -169,6 +169,10 @@ pub trait Lagrangian: Sync {
     fn strain(&self, u: &[f64], eps: &mut [Sym]);
     /// f = Σ_T w_T B_Tᵀ σ_T: the internal forces of a stress field (Bᵀ of SPEC §3).
     fn divergence(&self, sigma: &[Sym], f: &mut [f64]);
+    /// The strain operator B as explicit entries `(point, component, dof, value)`:
+    /// ε_T[c] = Σ value · u[dof] (Mandel components), for solvers that need B as a matrix
+    /// (conic formulations).
+    fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)>;
     /// Sparsity pattern of assembled matrices (lower triangle).
     fn pattern(&self) -> &SymmetricPattern;
     /// values = Σ_T w_T B_Tᵀ C_T B_T on [`Lagrangian::pattern`].

@@ -339,6 +339,20 @@ impl Lagrangian for P1P0Lagrangian {
         });
     }
 
+    fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)> {
+        let mut out = Vec::with_capacity(self.mesh.n_elements() * 36);
+        for (e, t) in self.mesh.tets.iter().enumerate() {
+            for (a, &n) in t.iter().enumerate() {
+                for c in 0..3 {
+                    let Some(j) = self.dofs.free(n, c) else { continue };
+                    let col = strain_of_unit(&self.grads[e][a], c);
+                    out.extend((0..6).filter(|&k| col[k] != 0.0).map(|k| (e, k, j, col[k])));
+                }
+            }
+        }
+        out
+    }
+
     fn pattern(&self) -> &SymmetricPattern {
         &self.pattern
     }
@@ -397,6 +411,21 @@ mod tests {
         l.divergence(&sigma, &mut f);
         let rhs: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
         assert!((lhs - rhs).abs() < 1e-12 * lhs.abs().max(1.0), "{lhs} vs {rhs}");
+    }
+
+    #[test]
+    fn strain_entries_reproduce_the_strain() {
+        let l = problem();
+        let mut rng = StdRng::seed_from_u64(9);
+        let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut eps = vec![Sym::zeros(); l.n_points()];
+        l.strain(&u, &mut eps);
+        let mut from_entries = vec![Sym::zeros(); l.n_points()];
+        for (p, c, j, v) in l.strain_entries() {
+            from_entries[p][c] += v * u[j];
+        }
+        let err = eps.iter().zip(&from_entries).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+        assert!(err < 1e-13, "{err}");
     }
 
     #[test]

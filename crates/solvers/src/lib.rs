@@ -3,9 +3,22 @@
 //! Interchangeable solvers of the discrete saddle problem of SPEC §3, all consuming the
 //! Lagrangian trait of `saddle-core` and none knowing which yield surface or obstacle it holds:
 //!
-//! * [`Uzawa`] (`type = "uzawa"`) — the paper's Uzawa / Arrow–Hurwicz method (SPEC §4).
+//! * [`Uzawa`] (`type = "uzawa"`) — the paper's Uzawa / Arrow–Hurwicz method (SPEC §4);
+//! * [`Newton`] (`type = "newton"`) — semismooth Newton with a primal–dual active set;
+//! * [`Penalty`] (`type = "penalty"`) — the regularised Lagrangian of the existence proof;
+//! * `Socp` (`type = "socp"`, cargo feature `socp`, on by default) — the cone form handed to
+//!   Clarabel, polished by active-set Newton.
 
+pub mod active_set;
 pub mod kh_projection;
+pub mod newton;
+pub mod penalty;
+#[cfg(feature = "socp")]
+pub mod socp;
 pub mod uzawa;
 
+pub use newton::{Newton, Start};
+pub use penalty::Penalty;
+#[cfg(feature = "socp")]
+pub use socp::Socp;
 pub use uzawa::{Uzawa, UzawaMetric};

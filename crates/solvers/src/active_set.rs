@@ -1,0 +1,226 @@
+//! The linearised problem of active-set Newton methods (SPEC §3–§4): for a set A of active
+//! contact rows, solve
+//!
+//! ```text
+//! K du − G_Aᵀ λ_A = −∇E(u)          (equilibrium, linearised)
+//!      − H_Aᵀ λ_A = f               (load on the extra unknowns)
+//! G_A du + H_A dV = −g_A(u, V)      (the active rows touch after the step)
+//! ```
+//!
+//! Each contact row acts on one displacement dof s (node-to-rigid-obstacle along an axis), so an
+//! active row fixes du_s in terms of dV. The fixed dofs are imposed on the *fixed* sparsity
+//! pattern of L by identity rows and columns (the diagonal kept for scaling), so the symbolic
+//! Cholesky analysis is done once; du depends affinely on dV, `du = du⁰ + W dV`, from one solve
+//! with 1 + n_extras right-hand sides, and dV follows from an n_extras × n_extras system. The
+//! contact forces are the reactions at the fixed dofs.
+
+use nalgebra::{DMatrix, DVector};
+use saddle_core::{ConstraintRows, Lagrangian, SolveError, SparseCholesky, SymmetricPattern};
+
+/// The slave dof and coefficient of each contact row.
+#[derive(Clone, Debug)]
+pub struct SlaveRows {
+    /// dof s_i of row i.
+    pub dof: Vec<usize>,
+    /// G_{i s_i}.
+    pub coef: Vec<f64>,
+}
+
+impl SlaveRows {
+    /// Checks that each row acts on exactly one dof and no two rows share one.
+    pub fn new(rows: &ConstraintRows, n_dofs: usize, solver: &str) -> Result<Self, SolveError> {
+        let mut taken = vec![false; n_dofs];
+        let mut dof = Vec::with_capacity(rows.n_rows());
+        let mut coef = Vec::with_capacity(rows.n_rows());
+        for i in 0..rows.n_rows() {
+            let (cols, vals) = rows.row(i);
+            let nz: Vec<(usize, f64)> =
+                cols.iter().zip(vals).filter(|(_, v)| **v != 0.0).map(|(c, v)| (*c, *v)).collect();
+            if nz.len() != 1 || taken[nz[0].0] {
+                return Err(SolveError::Unsupported {
+                    solver: solver.into(),
+                    message: format!(
+                        "contact row {i} (node {}) acts on {} displacement dofs{}; this solver needs each row to act on one dof \
+                         of its own (node-to-rigid-obstacle contact along an axis)",
+                        rows.node[i],
+                        nz.len(),
+                        if nz.len() == 1 { " already used by another row" } else { "" }
+                    ),
+                });
+            }
+            taken[nz[0].0] = true;
+            dof.push(nz[0].0);
+            coef.push(nz[0].1);
+        }
+        Ok(Self { dof, coef })
+    }
+}
+
+/// Positions of the entries of each row i in the columns j < i of a lower-triangular pattern,
+/// to zero a row as well as a column.
+#[derive(Clone, Debug)]
+struct TransposeIndex {
+    ptr: Vec<usize>,
+    pos: Vec<usize>,
+}
+
+impl TransposeIndex {
+    fn new(p: &SymmetricPattern) -> Self {
+        let (cp, ri) = (p.col_ptr(), p.row_idx());
+        let mut ptr = vec![0usize; p.n() + 1];
+        for j in 0..p.n() {
+            for &i in &ri[cp[j] + 1..cp[j + 1]] {
+                ptr[i + 1] += 1;
+            }
+        }
+        for i in 0..p.n() {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut fill = ptr.clone();
+        let mut pos = vec![0usize; ptr[p.n()]];
+        for j in 0..p.n() {
+            for (k, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j] + 1) {
+                pos[fill[i]] = k;
+                fill[i] += 1;
+            }
+        }
+        Self { ptr, pos }
+    }
+}
+
+/// The step of one active-set Newton iteration.
+#[derive(Clone, Debug)]
+pub struct Step {
+    /// du.
+    pub du: Vec<f64>,
+    /// dV.
+    pub dv: Vec<f64>,
+    /// Contact forces after the step (zero on inactive rows).
+    pub lambda: Vec<f64>,
+}
+
+/// The factorised linearised problem for one active set.
+pub struct ActiveSetSystem {
+    slaves: SlaveRows,
+    transpose: TransposeIndex,
+    chol: SparseCholesky,
+    work: Vec<f64>,
+    /// Numeric factorisations so far.
+    pub factorisations: usize,
+    /// Triangular solve pairs so far.
+    pub solves: usize,
+}
+
+impl ActiveSetSystem {
+    /// Symbolic analysis of L's pattern, once.
+    pub fn new(l: &dyn Lagrangian, solver: &str) -> Result<Self, SolveError> {
+        let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
+        Ok(Self {
+            slaves,
+            transpose: TransposeIndex::new(l.pattern()),
+            chol: SparseCholesky::analyse(l.pattern(), "tangent stiffness")?,
+            work: vec![0.0; l.pattern().nnz()],
+            factorisations: 0,
+            solves: 0,
+        })
+    }
+
+    /// The slave dofs of the rows.
+    pub fn slaves(&self) -> &SlaveRows {
+        &self.slaves
+    }
+
+    /// The step for active set `active`, tangent `k` (values on L's pattern), internal force
+    /// `grad` = ∇E(u) and current gaps `gap`. The extras' system must be regular: every extra
+    /// with a load needs an active row.
+    pub fn step(
+        &mut self,
+        l: &dyn Lagrangian,
+        k: &[f64],
+        active: &[bool],
+        grad: &[f64],
+        gap: &[f64],
+    ) -> Result<Step, SolveError> {
+        let p = l.pattern();
+        let rows = l.constraints();
+        let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
+        let cp = p.col_ptr();
+        // K with the active slave dofs fixed: identity rows and columns, diagonal kept
+        self.work.copy_from_slice(k);
+        for i in (0..nr).filter(|&i| active[i]) {
+            let s = self.slaves.dof[i];
+            self.work[cp[s] + 1..cp[s + 1]].iter_mut().for_each(|v| *v = 0.0);
+            for &q in &self.transpose.pos[self.transpose.ptr[s]..self.transpose.ptr[s + 1]] {
+                self.work[q] = 0.0;
+            }
+        }
+        self.chol.factorise(p, &self.work)?;
+        self.factorisations += 1;
+        // prescribed values δ at the fixed dofs: column 0 for the gaps, column 1 + k for dV_k
+        let nc = 1 + ne;
+        let mut delta = vec![0.0; n * nc];
+        for i in (0..nr).filter(|&i| active[i]) {
+            let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
+            delta[s] = -gap[i] / a;
+            for (kx, h) in rows.extra_row(i).iter().enumerate() {
+                delta[(1 + kx) * n + s] = -h / a;
+            }
+        }
+        // right-hand sides: −∇E − K δ (column 0), −K δ (others), then δ·diag at the fixed dofs
+        let mut x = vec![0.0; n * nc];
+        for c in 0..nc {
+            let (dcol, xcol) = (&delta[c * n..(c + 1) * n], &mut x[c * n..(c + 1) * n]);
+            p.matvec(k, dcol, xcol);
+            for j in 0..n {
+                xcol[j] = -xcol[j] - if c == 0 { grad[j] } else { 0.0 };
+            }
+            for i in (0..nr).filter(|&i| active[i]) {
+                let s = self.slaves.dof[i];
+                xcol[s] = self.work[cp[s]] * dcol[s];
+            }
+        }
+        self.chol.solve_columns(&mut x, nc);
+        self.solves += nc;
+        // reactions at the fixed dofs: λ = (∇E + K du)_s / a, affine in dV
+        let mut kx = vec![0.0; n];
+        let mut lam0 = vec![0.0; nr];
+        let mut lam_v = DMatrix::zeros(nr, ne);
+        for c in 0..nc {
+            p.matvec(k, &x[c * n..(c + 1) * n], &mut kx);
+            for i in (0..nr).filter(|&i| active[i]) {
+                let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
+                if c == 0 {
+                    lam0[i] = (grad[s] + kx[s]) / a;
+                } else {
+                    lam_v[(i, c - 1)] = kx[s] / a;
+                }
+            }
+        }
+        // the extras: −H_Aᵀ(λ⁰ + Λ dV) = f
+        let mut dv = vec![0.0; ne];
+        if ne > 0 {
+            let h = DMatrix::from_fn(nr, ne, |i, kx| if active[i] { rows.extra_row(i)[kx] } else { 0.0 });
+            let s = h.transpose() * &lam_v;
+            let rhs = -DVector::from_column_slice(l.load()) - h.transpose() * DVector::from_column_slice(&lam0);
+            let sol = s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| {
+                SolveError::Unsupported {
+                    solver: "newton".into(),
+                    message: "an extra unknown with a load has no active contact row (the obstacle does not touch)"
+                        .into(),
+                }
+            })?;
+            dv.copy_from_slice(sol.as_slice());
+        }
+        let mut du = x[..n].to_vec();
+        for (kx, d) in dv.iter().enumerate() {
+            for (u, w) in du.iter_mut().zip(&x[(1 + kx) * n..(2 + kx) * n]) {
+                *u += d * w;
+            }
+        }
+        let mut lambda = vec![0.0; nr];
+        for i in (0..nr).filter(|&i| active[i]) {
+            lambda[i] = lam0[i] + (0..ne).map(|kx| lam_v[(i, kx)] * dv[kx]).sum::<f64>();
+        }
+        Ok(Step { du, dv, lambda })
+    }
+}

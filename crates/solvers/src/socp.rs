@@ -1,0 +1,5 @@
+//! Placeholder: the SOCP solver (being written).
+
+/// `type = "socp"` (being written).
+#[derive(Clone, Debug, Default)]
+pub struct Socp;
