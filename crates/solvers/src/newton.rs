@@ -110,7 +110,8 @@ impl Newton {
         let mut it = 0;
         let c_elastic = l.elasticity().stiffness_matrix();
         let mut elastic_phase = start_is_cold && l.plasticity().is_some();
-        let mut elastic_grad = vec![0.0; n];
+        let (mut elastic_grad, mut grad) = (vec![0.0; n], vec![0.0; n]);
+        let mut elastic_sigma = vec![saddle_core::Sym::zeros(); if elastic_phase { l.n_points() } else { 0 }];
         let (stop, kkt) = loop {
             // 1. local law with tangents; the residual of the iterate
             timer.time("local law", || {
@@ -144,8 +145,10 @@ impl Newton {
             timer.time("assembly", || {
                 if elastic_phase {
                     l.assemble(Material::Uniform(&c_elastic), &mut k);
-                    let sigma: Vec<_> = ws.eps.iter().map(|e| c_elastic * e).collect();
-                    l.divergence(&sigma, &mut elastic_grad);
+                    for (s, e) in elastic_sigma.iter_mut().zip(&ws.eps) {
+                        *s = c_elastic * e;
+                    }
+                    l.divergence(&elastic_sigma, &mut elastic_grad);
                 } else {
                     l.assemble(Material::PerPoint(&tangents), &mut k);
                 }
@@ -166,16 +169,17 @@ impl Newton {
             // an extra with a load needs a touching row: the one with the smallest gap
             for (kx, f) in l.load().iter().enumerate() {
                 let touching = (0..nr).filter(|&i| rows.extra_row(i)[kx] != 0.0);
-                if *f != 0.0 && !touching.clone().any(|i| active[i]) {
-                    if let Some(i) = touching.min_by(|&a, &b| gap[a].total_cmp(&gap[b])) {
-                        active[i] = true;
-                        changed += 1;
-                    }
+                if *f != 0.0
+                    && !touching.clone().any(|i| active[i])
+                    && let Some(i) = touching.min_by(|&a, &b| gap[a].total_cmp(&gap[b]))
+                {
+                    active[i] = true;
+                    changed += 1;
                 }
             }
             active_changes += changed;
             // 3. the Newton step for this active set
-            let grad = if elastic_phase { elastic_grad.clone() } else { ws.force.clone() };
+            grad.copy_from_slice(if elastic_phase { &elastic_grad } else { &ws.force });
             let step = timer.time("factorisation and solves", || system.step(l, &k, &active, &grad, &gap))?;
             if step.du.iter().chain(&step.dv).chain(&step.lambda).any(|x| !x.is_finite()) {
                 return Err(SolveError::NonFinite {
@@ -184,7 +188,7 @@ impl Newton {
                     iteration: it,
                 });
             }
-            // 4. line search on J + ν Σ max(0, −g)
+            // 4. line search on J + ν Σ_A |g_i|
             nu = nu.max(2.0 * max_abs(&step.lambda));
             // ℓ₁ violation of the *active* rows only: rows that a full step drives into the
             // obstacle join the active set at the next iteration (PDAS), they do not block
@@ -201,12 +205,8 @@ impl Newton {
                         return alpha;
                     }
                     for _ in 0..40 {
-                        for j in 0..n {
-                            u_trial[j] = u[j] + alpha * step.du[j];
-                        }
-                        for x in 0..ne {
-                            v_trial[x] = v[x] + alpha * step.dv[x];
-                        }
+                        axpy_into(&mut u_trial, &u, alpha, &step.du);
+                        axpy_into(&mut v_trial, &v, alpha, &step.dv);
                         rows.gap(&u_trial, &v_trial, &mut g_trial);
                         let j = l.energy(&u_trial, &v_trial, &mut ws) + nu * violation(&g_trial);
                         if j <= j0 + 1e-4 * alpha * slope {
@@ -220,12 +220,8 @@ impl Newton {
             } else {
                 1.0
             };
-            for j in 0..n {
-                u[j] += alpha * step.du[j];
-            }
-            for x in 0..ne {
-                v[x] += alpha * step.dv[x];
-            }
+            axpy(&mut u, alpha, &step.du);
+            axpy(&mut v, alpha, &step.dv);
             lambda.copy_from_slice(&step.lambda);
             // the elastic phase ends once its active set has settled: this step solved it
             if elastic_phase && it > 0 && changed == 0 {
@@ -254,5 +250,19 @@ impl Newton {
             counters,
         };
         Ok(Solution { u, extras: v, stress, lambda, report })
+    }
+}
+
+/// out = x + α d.
+fn axpy_into(out: &mut [f64], x: &[f64], alpha: f64, d: &[f64]) {
+    for ((o, a), b) in out.iter_mut().zip(x).zip(d) {
+        *o = a + alpha * b;
+    }
+}
+
+/// x += α d.
+fn axpy(x: &mut [f64], alpha: f64, d: &[f64]) {
+    for (a, b) in x.iter_mut().zip(d) {
+        *a += alpha * b;
     }
 }
