@@ -23,4 +23,5 @@ pub use saddle_core as core;
 pub use saddle_solvers as solvers;
 pub use saddle_yield as yield_surfaces;
 
+pub mod conformance;
 pub mod run;

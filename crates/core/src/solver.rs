@@ -20,6 +20,9 @@ pub enum StopReason {
     MaxIterations,
     /// The residual stopped decreasing (round-off floor above the tolerance).
     Stagnated,
+    /// The solver solved its own approximation of the problem (a penalty, a regularisation)
+    /// to round-off, but that approximation's error is above the tolerance.
+    ApproximationLimit,
 }
 
 /// What a solve reports (SPEC §5).

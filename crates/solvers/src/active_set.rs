@@ -224,3 +224,26 @@ impl ActiveSetSystem {
         Ok(Step { du, dv, lambda })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_on_several_or_shared_dofs_are_refused_with_the_node() {
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(3, 1.0)], &[-1.0], 0.0, 10);
+        rows.push(&[(4, 0.6), (5, 0.8)], &[-1.0], 0.0, 11);
+        let e = SlaveRows::new(&rows, 6, "newton").err().expect("two dofs in one row");
+        assert!(e.to_string().contains("row 1 (node 11) acts on 2 displacement dofs"), "{e}");
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(3, 1.0)], &[-1.0], 0.0, 10);
+        rows.push(&[(3, 1.0)], &[-1.0], 0.0, 12);
+        let e = SlaveRows::new(&rows, 6, "newton").err().expect("shared dof");
+        assert!(e.to_string().contains("already used by another row"), "{e}");
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(3, 2.0)], &[-1.0], 0.0, 10);
+        let s = SlaveRows::new(&rows, 6, "newton").unwrap();
+        assert_eq!((s.dof[0], s.coef[0]), (3, 2.0));
+    }
+}

@@ -1,0 +1,115 @@
+//! Semismooth Newton: exact on homogeneous compression, agrees with Uzawa, converges
+//! quadratically at the end, warm-starts, and refuses rows it cannot handle.
+
+use saddle_contact::{Flat, Paraboloid, RigidPunch};
+use saddle_core::{
+    AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, P1P0Lagrangian, PhaseTimer, Region,
+    Silent, Solver, Workspace,
+};
+use saddle_solvers::{Newton, Start, Uzawa};
+use saddle_yield::VonMises;
+
+fn johnson(h: f64) -> P1P0Lagrangian {
+    let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [10, 10, 5]).graded([0.0; 3], 3.0).mesh().unwrap();
+    let gamma1 = Region::All(vec![
+        Region::Group("zmin".into()),
+        Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
+    ]);
+    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
+    let p: Box<dyn AdmissibleStresses> = Box::new(VonMises::new(1.0, h));
+    P1P0Lagrangian::new(
+        mesh,
+        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
+        Elasticity::new(100.0, 0.3).unwrap(),
+        Some(p),
+        Some(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
+    )
+    .unwrap()
+}
+
+fn homogeneous(f: f64) -> P1P0Lagrangian {
+    let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]).mesh().unwrap();
+    let bc = [
+        Dirichlet::roller(Region::Group("xmin".into()), Component::X),
+        Dirichlet::roller(Region::Group("ymin".into()), Component::Y),
+        Dirichlet::roller(Region::Group("zmax".into()), Component::Z),
+    ];
+    let p: Box<dyn AdmissibleStresses> = Box::new(VonMises::new(1.0, 5.0));
+    let punch = RigidPunch::new(f, Region::Group("zmin".into()), Box::new(Flat::default()));
+    P1P0Lagrangian::new(mesh, &bc, Elasticity::new(100.0, 0.3).unwrap(), Some(p), Some(Box::new(punch))).unwrap()
+}
+
+#[test]
+fn homogeneous_compression_is_exact() {
+    for f in [1.0, 2.0] {
+        let l = homogeneous(f);
+        let sol = Newton::default().solve(&l, &mut Silent).unwrap();
+        assert!(sol.report.converged);
+        // SPEC §7: U = F/E + ((|s| − k₀)/h)(2F/3)/|s| above yield
+        let s = (2.0f64 / 3.0).sqrt() * f;
+        let exact = f / 100.0 + if s > 1.0 { (s - 1.0) / 5.0 * (2.0 * f / 3.0) / s } else { 0.0 };
+        assert!((sol.extras[0] - exact).abs() <= 1e-10 * exact, "F = {f}: U = {}, exact {exact}", sol.extras[0]);
+        assert!(sol.stress.sigma.iter().all(|s| (s[2] + f).abs() <= 1e-10 * f && s[0].abs() <= 1e-10 * f));
+    }
+}
+
+#[test]
+fn agrees_with_uzawa_and_converges_quadratically() {
+    let l = johnson(5.0);
+    let newton = Newton { tol: 1e-12, ..Newton::default() }.solve(&l, &mut Silent).unwrap();
+    let uzawa = Uzawa { tol: 1e-11, ..Uzawa::default() }.solve(&l, &mut Silent).unwrap();
+    assert!(newton.report.converged && uzawa.report.converged);
+    assert!(newton.report.iterations <= 15, "{} iterations", newton.report.iterations);
+    assert!((newton.extras[0] - uzawa.extras[0]).abs() <= 1e-9 * newton.extras[0]);
+    assert_eq!(newton.stress.plastic, uzawa.stress.plastic);
+    // the end phase is quadratic: once below 1e-2, each residual is at most ~ the square of the
+    // previous one (a constant of 10 allowed), until round-off
+    let h = &newton.report.residual_history;
+    let tail: Vec<f64> = h.iter().copied().skip_while(|r| *r > 1e-2).collect();
+    assert!(tail.len() >= 2, "{h:?}");
+    for w in tail.windows(2) {
+        assert!(w[1] <= 10.0 * w[0] * w[0] || w[1] < 1e-13, "not quadratic: {h:?}");
+    }
+    assert_eq!(newton.report.counters["symbolic_analyses"], 1.0);
+    // the recomputed residual meets the tolerance
+    assert!(l.kkt(&newton.iterate(), &mut Workspace::new(&l)).max() <= 1e-12);
+}
+
+#[test]
+fn warm_start_from_a_nearby_solution_takes_few_steps() {
+    let l = johnson(5.0);
+    let rough = Uzawa { tol: 1e-5, ..Uzawa::default() }.solve(&l, &mut Silent).unwrap();
+    let start = Start { u: rough.u.clone(), extras: rough.extras.clone(), lambda: rough.lambda.clone() };
+    let sol = Newton::default().solve_from(&l, Some(start), &mut Silent, &mut PhaseTimer::default(), "newton").unwrap();
+    assert!(sol.report.converged);
+    assert!(sol.report.iterations <= 4, "{} iterations from a 1e-5 start", sol.report.iterations);
+    assert_eq!(sol.report.counters["elastic_phase_steps"], 0.0);
+}
+
+#[test]
+fn weak_hardening_converges() {
+    let l = johnson(0.5);
+    let sol = Newton::default().solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged, "{:?}", sol.report.residual_history);
+    assert!(sol.stress.n_plastic() > 0);
+}
+
+#[test]
+fn elastic_problems_need_no_line_search_and_no_return_mapping() {
+    let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [8, 8, 4]).graded([0.0; 3], 3.0).mesh().unwrap();
+    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
+    let l = P1P0Lagrangian::new(
+        mesh,
+        &[Dirichlet::clamped(Region::Group("zmax".into()))],
+        Elasticity::new(100.0, 0.3).unwrap(),
+        None,
+        Some(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
+    )
+    .unwrap();
+    let sol = Newton::default().solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged);
+    assert_eq!(sol.report.counters["return_mappings"], 0.0);
+    assert_eq!(sol.report.counters["line_search_backtracks"], 0.0);
+    let uz = Uzawa { tol: 1e-12, ..Uzawa::default() }.solve(&l, &mut Silent).unwrap();
+    assert!((sol.extras[0] - uz.extras[0]).abs() <= 1e-10 * uz.extras[0]);
+}
