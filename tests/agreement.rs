@@ -39,3 +39,16 @@ fn the_kit_catches_a_solver_that_stops_early() {
     let e = check_solver(&Uzawa { tol: 1e-4, ..Uzawa::default() }, &reference(), &Tolerances::default()).unwrap_err();
     assert!(matches!(e.check, "U" | "stress" | "closed form" | "contact set" | "plastic set"), "{e}");
 }
+
+#[test]
+fn penalty_conforms() {
+    let r = check_solver(&saddle::solvers::Penalty::default(), &reference(), &Tolerances::default()).unwrap();
+    report("penalty", &r);
+}
+
+#[cfg(feature = "socp")]
+#[test]
+fn socp_conforms() {
+    let r = check_solver(&saddle::solvers::Socp::default(), &reference(), &Tolerances::default()).unwrap();
+    report("socp", &r);
+}

@@ -75,6 +75,7 @@ impl Summary {
         let j = l.energy(&sol.u, &sol.extras, &mut ws);
         let contact = l.contact_report(sol);
         let mut warnings = l.warnings();
+        warnings.extend(sol.report.warnings.iter().cloned());
         if let Some(c) = &contact {
             warnings.extend(c.warnings.iter().cloned());
         }

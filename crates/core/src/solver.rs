@@ -46,6 +46,8 @@ pub struct SolveReport {
     pub phases: Vec<(String, f64)>,
     /// Solver-specific numbers: step sizes, factorisations, triangular solves, duality gap, ...
     pub counters: BTreeMap<String, f64>,
+    /// Things the user should know about this solve (an interior point that ended early, ...).
+    pub warnings: Vec<String>,
 }
 
 impl SolveReport {

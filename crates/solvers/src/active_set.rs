@@ -234,12 +234,12 @@ mod tests {
         let mut rows = ConstraintRows::new(1);
         rows.push(&[(3, 1.0)], &[-1.0], 0.0, 10);
         rows.push(&[(4, 0.6), (5, 0.8)], &[-1.0], 0.0, 11);
-        let e = SlaveRows::new(&rows, 6, "newton").err().expect("two dofs in one row");
+        let e = SlaveRows::new(&rows, 6, "newton").expect_err("two dofs in one row");
         assert!(e.to_string().contains("row 1 (node 11) acts on 2 displacement dofs"), "{e}");
         let mut rows = ConstraintRows::new(1);
         rows.push(&[(3, 1.0)], &[-1.0], 0.0, 10);
         rows.push(&[(3, 1.0)], &[-1.0], 0.0, 12);
-        let e = SlaveRows::new(&rows, 6, "newton").err().expect("shared dof");
+        let e = SlaveRows::new(&rows, 6, "newton").expect_err("shared dof");
         assert!(e.to_string().contains("already used by another row"), "{e}");
         let mut rows = ConstraintRows::new(1);
         rows.push(&[(3, 2.0)], &[-1.0], 0.0, 10);

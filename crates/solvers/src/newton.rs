@@ -248,6 +248,7 @@ impl Newton {
             residual_history: history,
             phases: std::mem::take(timer).into_phases(),
             counters,
+            warnings: Vec::new(),
         };
         Ok(Solution { u, extras: v, stress, lambda, report })
     }

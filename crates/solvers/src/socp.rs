@@ -1,5 +1,601 @@
-//! Placeholder: the SOCP solver (being written).
+//! The conic solver of SPEC §4: the dual (stress) form 3 of SPEC §3 handed to Clarabel's
+//! interior point method, then polished by active-set Newton.
+//!
+//! **The cone programme** (SPEC §3 form 3). Variables `x = [σ̂_T for every stress point T
+//! (6 Mandel entries of σ_T and the hardening entries q_T), λ_i for every row of K_h]`:
+//!
+//! * objective `½[σ̂, σ̂] + Σ_i λ_i c_i`: P is block diagonal with `w_T A` (A the elastic
+//!   compliance as a 6×6 Mandel matrix) and `w_T H⁻¹` (the hardening metric), upper triangle;
+//! * Clarabel's `A x + s = b, s ∈ cone`, row blocks in this order:
+//!   1. zero cone, one row per free dof j: `Σ_T w_T (B_Tᵀσ_T)_j − (Gᵀλ)_j = 0` (internal forces
+//!      equal the contact forces);
+//!   2. zero cone, one row per extra unknown k: `−(Hᵀλ)_k = f_k` (Σλ = F for the punch);
+//!   3. nonnegative cone: `s = λ ≥ 0`;
+//!   4. one second-order cone per point and per block of `P::cone()`:
+//!      `s = offset + map·(σ_T, q_T)` (SPEC §3: D is a second-order cone in (k₀ + ξ, dev σ)).
+//!
+//!   An elastic problem has no blocks 4: a QP.
+//!
+//! **The primal from the dual.** Clarabel's stationarity is `P x + q + Aᵀz = 0`. In the σ_T
+//! rows of an elastic point it reads `w_T(Aσ_T + B_T z_eq) = 0`, i.e. `Aσ_T = ε_T(−z_eq)`; in
+//! the λ_i rows `c_i − (G z_eq)_i − (H z_load)_i − z_λ,i = 0`, i.e. the multiplier of `λ_i ≥ 0`
+//! is the gap `g_i(−z_eq, −z_load)`. Hence `u = −z_eq` and `V = −z_load`: complementarity
+//! `z_λ · λ = 0` is then exactly `λ_i g_i = 0` (checked against Newton in the tests).
+//!
+//! **Units.** The data are non-dimensionalised before Clarabel sees them (Clarabel's
+//! equilibration stays on as well), so that the iteration does not depend on the units of the
+//! scene: a stress scale S (the largest cone offset — k₀ for von Mises —, else max|f|/L², else
+//! E·10⁻³), a length L = (Σ_T w_T)^{1/3}, the stiffness E (Young's modulus), and derived from
+//! them the displacement `D = S L / E`, the force `S L²` and the energy `S² L³ / E`. Stress
+//! variables are divided by S, contact forces by S L², the equilibrium, load and sign rows by
+//! S L², the cone rows by S, the objective by S² L³ / E; everything is mapped back.
+//!
+//! **Perfect plasticity.** A hardening variable whose metric is infinite
+//! (`hardening_inner(e_k, e_k) = ∞`, von Mises with h = 0) is fixed at 0, as the local law of
+//! SPEC §2 does: it is eliminated from the programme (no column; its entries of the cone maps
+//! are dropped) and returned as 0.
+//!
+//! **Polishing.** The interior point method alone gives stresses to about 10⁻⁵; its (u, V, λ)
+//! start [`Newton::solve_from`], which converges in a few iterations to `tol`.
 
-/// `type = "socp"` (being written).
-#[derive(Clone, Debug, Default)]
-pub struct Socp;
+use crate::newton::{Newton, Start};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT,
+    ZeroConeT,
+};
+use saddle_core::error::{ParameterError, check, join};
+use saddle_core::lagrangian::{Iterate, Lagrangian, StressField, Workspace};
+use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::stresses::{MAX_HARDENING_DIM, SocBlock};
+use saddle_core::tensor::Sym;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The solver's type name.
+const NAME: &str = "socp";
+
+/// `type = "socp"`: the stress form of SPEC §3 as a second-order cone programme solved by
+/// Clarabel (SPEC §4), polished by active-set Newton.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Socp {
+    /// Relative KKT tolerance of the returned solution (after polishing).
+    pub tol: f64,
+    /// Clarabel's duality gap (absolute and relative) and feasibility tolerances.
+    pub ipm_tol: f64,
+    /// Clarabel's iteration budget.
+    pub ipm_max_iter: usize,
+    /// Polish the interior point solution by active-set Newton.
+    pub polish: bool,
+    /// Newton's iteration budget for polishing.
+    pub polish_max_iter: usize,
+    /// Clarabel's threads (0: Clarabel chooses); 1 measured fastest on these problems.
+    pub threads: usize,
+}
+
+impl Default for Socp {
+    fn default() -> Self {
+        Self { tol: 1e-10, ipm_tol: 1e-8, ipm_max_iter: 200, polish: true, polish_max_iter: 20, threads: 1 }
+    }
+}
+
+#[typetag::serde(name = "socp")]
+impl Solver for Socp {
+    /// `tol` and `ipm_tol` in (0, 1); `ipm_max_iter` and `polish_max_iter` ≥ 1; all counts fit
+    /// Clarabel's u32. Errors name `{path}.<field>` and the value.
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
+        check::open_interval(path, "ipm_tol", self.ipm_tol, 0.0, 1.0)?;
+        let count = |field: &str, v: usize, lo: usize| {
+            if v < lo || v > u32::MAX as usize {
+                Err(ParameterError::new(join(path, field), v, format!("must lie in [{lo}, {}]", u32::MAX)))
+            } else {
+                Ok(())
+            }
+        };
+        count("ipm_max_iter", self.ipm_max_iter, 1)?;
+        count("polish_max_iter", self.polish_max_iter, 1)?;
+        count("threads", self.threads, 0)?;
+        Ok(())
+    }
+
+    /// The relative KKT tolerance of the returned solution.
+    fn tolerance(&self) -> f64 {
+        self.tol
+    }
+
+    /// Builds the cone programme, runs Clarabel, recovers (u, V, σ̂, λ) and polishes them.
+    fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        self.validate("solver")?;
+        let mut timer = PhaseTimer::default();
+        monitor.phase("cone programme");
+        let prog = timer.time("cone programme", || ConeProgramme::build(l))?;
+        monitor.phase("interior point");
+        let ipm = timer.time("interior point", || prog.solve(self))?;
+        if ipm.x.iter().chain(&ipm.z).any(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                solver: NAME.into(),
+                what: format!("the interior point solution (Clarabel status {:?})", ipm.status),
+                iteration: ipm.iterations,
+            });
+        }
+        let (u, extras, mut stress, lambda) = prog.recover(l, &ipm);
+        let mut ws = Workspace::new(l);
+        let kkt = timer
+            .time("residual", || l.kkt(&Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws));
+        stress.plastic.clone_from(&ws.stress.plastic);
+        let r_ipm = kkt.max();
+        monitor.iteration(ipm.iterations, r_ipm, self.tol);
+        if !r_ipm.is_finite() {
+            return Err(SolveError::NonFinite {
+                solver: NAME.into(),
+                what: "the KKT residual of the interior point solution".into(),
+                iteration: ipm.iterations,
+            });
+        }
+        let mut counters = prog.counters();
+        counters.insert("ipm_iterations".into(), ipm.iterations as f64);
+        counters.insert("ipm_duality_gap".into(), ipm.gap_abs * prog.scales.energy());
+        counters.insert("ipm_relative_gap".into(), ipm.gap_rel);
+        counters.insert("ipm_objective".into(), ipm.objective * prog.scales.energy());
+        counters.insert("ipm_primal_residual".into(), ipm.r_prim);
+        counters.insert("ipm_dual_residual".into(), ipm.r_dual);
+        counters.insert("ipm_kkt_residual".into(), r_ipm);
+        counters.insert("ipm_status".into(), ipm.status as u32 as f64);
+        let mut warnings = Vec::new();
+        if ipm.status != SolverStatus::Solved {
+            warnings.push(format!("the interior point method ended {:?} (status {})", ipm.status, ipm.status as u32));
+        }
+        if !self.polish {
+            counters.insert("polish_iterations".into(), 0.0);
+            let converged = r_ipm <= self.tol;
+            let stop_reason = match (converged, ipm.status) {
+                (true, _) => StopReason::Converged,
+                (false, SolverStatus::MaxIterations) => StopReason::MaxIterations,
+                (false, _) => StopReason::Stagnated,
+            };
+            let report = SolveReport {
+                solver: NAME.into(),
+                converged,
+                stop_reason,
+                iterations: ipm.iterations,
+                tolerance: self.tol,
+                kkt,
+                residual_history: vec![r_ipm],
+                phases: timer.into_phases(),
+                counters,
+                warnings,
+            };
+            return Ok(Solution { u, extras, stress, lambda, report });
+        }
+        let newton = Newton { tol: self.tol, max_iter: self.polish_max_iter, line_search: true };
+        let mut sol = newton.solve_from(l, Some(Start { u, extras, lambda }), monitor, &mut timer, NAME)?;
+        let report = &mut sol.report;
+        counters.insert("polish_iterations".into(), report.iterations as f64);
+        counters.append(&mut report.counters);
+        report.counters = counters;
+        report.residual_history.insert(0, r_ipm);
+        warnings.append(&mut report.warnings);
+        report.warnings = warnings;
+        report.iterations += ipm.iterations;
+        Ok(sol)
+    }
+}
+
+/// The scales of the non-dimensionalisation (module docs): stress S, length L, stiffness E.
+#[derive(Clone, Copy, Debug)]
+struct Scales {
+    /// S.
+    stress: f64,
+    /// L = (Σ_T w_T)^{1/3}.
+    length: f64,
+    /// E.
+    stiffness: f64,
+}
+
+impl Scales {
+    /// D = S L / E.
+    fn displacement(&self) -> f64 {
+        self.stress * self.length / self.stiffness
+    }
+
+    /// S L².
+    fn force(&self) -> f64 {
+        self.stress * self.length * self.length
+    }
+
+    /// S² L³ / E = force × displacement.
+    fn energy(&self) -> f64 {
+        self.force() * self.displacement()
+    }
+}
+
+/// Where the unknowns of SPEC §3 form 3 sit in Clarabel's x and z.
+#[derive(Clone, Debug)]
+struct Layout {
+    /// Stress points.
+    n_points: usize,
+    /// Hardening variables per point in the Lagrangian.
+    q_dim: usize,
+    /// The hardening variables kept (finite metric); the others are fixed at 0.
+    free_q: Vec<usize>,
+    /// Free displacement dofs (equilibrium rows).
+    n_dofs: usize,
+    /// Extra unknowns (load rows).
+    n_extras: usize,
+    /// Rows of K_h (λ columns, sign rows).
+    n_rows: usize,
+    /// Second-order cones.
+    n_soc: usize,
+}
+
+impl Layout {
+    /// Columns per point: σ (6) and the kept q.
+    fn stride(&self) -> usize {
+        6 + self.free_q.len()
+    }
+
+    /// Column of entry `c` of (σ, kept q) at point `t`.
+    fn point_col(&self, t: usize, c: usize) -> usize {
+        t * self.stride() + c
+    }
+
+    /// Column of λ_i.
+    fn lambda_col(&self, i: usize) -> usize {
+        self.n_points * self.stride() + i
+    }
+
+    /// Number of variables.
+    fn n_vars(&self) -> usize {
+        self.n_points * self.stride() + self.n_rows
+    }
+}
+
+/// The non-dimensional cone programme in Clarabel's standard form (module docs).
+struct ConeProgramme {
+    /// P, upper triangle.
+    p: CscMatrix<f64>,
+    /// Linear term of the objective.
+    q: Vec<f64>,
+    /// Constraint matrix.
+    a: CscMatrix<f64>,
+    /// Right-hand side.
+    b: Vec<f64>,
+    /// Cones of the row blocks.
+    cones: Vec<SupportedConeT<f64>>,
+    /// Units.
+    scales: Scales,
+    /// Positions of the unknowns.
+    layout: Layout,
+}
+
+/// What Clarabel returned, still non-dimensional.
+struct IpmResult {
+    /// Termination status.
+    status: SolverStatus,
+    /// Iterations.
+    iterations: usize,
+    /// Absolute duality gap.
+    gap_abs: f64,
+    /// Relative duality gap.
+    gap_rel: f64,
+    /// Primal objective.
+    objective: f64,
+    /// Clarabel's relative primal residual.
+    r_prim: f64,
+    /// Clarabel's relative dual residual.
+    r_dual: f64,
+    /// Primal solution.
+    x: Vec<f64>,
+    /// Dual solution.
+    z: Vec<f64>,
+}
+
+/// The unsupported-problem error of this solver.
+fn unsupported(message: String) -> SolveError {
+    SolveError::Unsupported { solver: NAME.into(), message }
+}
+
+/// A unit vector of length `n` in direction `k`.
+fn unit(n: usize, k: usize) -> [f64; MAX_HARDENING_DIM] {
+    let mut e = [0.0; MAX_HARDENING_DIM];
+    if k < n {
+        e[k] = 1.0;
+    }
+    e
+}
+
+/// Checks a cone block's sizes against the point's (σ, q) dimension `width`.
+fn check_block(name: &str, k: usize, blk: &SocBlock, width: usize) -> Result<(), SolveError> {
+    if blk.dim == 0 || blk.offset.len() != blk.dim || blk.map.len() != blk.dim * width {
+        return Err(unsupported(format!(
+            "cone block {k} of the yield surface `{name}` is malformed: dim {}, {} offsets, {} map entries \
+             (expected dim ≥ 1, dim offsets and dim × {width} map entries)",
+            blk.dim,
+            blk.offset.len(),
+            blk.map.len()
+        )));
+    }
+    if blk.offset.iter().chain(&blk.map).any(|v| !v.is_finite()) {
+        return Err(unsupported(format!("cone block {k} of the yield surface `{name}` has non-finite entries")));
+    }
+    Ok(())
+}
+
+impl ConeProgramme {
+    /// Builds the programme of SPEC §3 form 3 for `l`, non-dimensionalised.
+    fn build(l: &dyn Lagrangian) -> Result<Self, SolveError> {
+        let plasticity = l.plasticity();
+        let cone = match plasticity {
+            Some(p) => Some(p.cone().ok_or_else(|| {
+                unsupported(format!(
+                    "the yield surface `{}` has no second-order-cone description (AdmissibleStresses::cone); \
+                     use another solver",
+                    p.name()
+                ))
+            })?),
+            None => None,
+        };
+        let blocks: &[SocBlock] = cone.as_ref().map_or(&[], |c| &c.blocks);
+        let q_dim = l.hardening_dim();
+        let width = 6 + q_dim;
+        let yield_name = plasticity.map_or("", |p| p.name());
+        for (k, blk) in blocks.iter().enumerate() {
+            check_block(yield_name, k, blk, width)?;
+        }
+        // the hardening metric H⁻¹ on the kept variables; an infinite metric fixes q_k = 0
+        let mut free_q = Vec::with_capacity(q_dim);
+        if let Some(p) = plasticity {
+            for k in 0..q_dim {
+                let e = unit(q_dim, k);
+                let d = p.hardening_inner(&e[..q_dim], &e[..q_dim]);
+                if d == f64::INFINITY {
+                    continue;
+                }
+                if !(d.is_finite() && d > 0.0) {
+                    return Err(unsupported(format!(
+                        "the hardening metric of `{}` is {d} on variable {k}: it must be positive (or +∞ to fix it)",
+                        p.name()
+                    )));
+                }
+                free_q.push(k);
+            }
+        }
+        let hinv: Vec<f64> = match plasticity {
+            Some(p) => free_q
+                .iter()
+                .flat_map(|&a| {
+                    free_q.iter().map(move |&b| p.hardening_inner(&unit(q_dim, a)[..q_dim], &unit(q_dim, b)[..q_dim]))
+                })
+                .collect(),
+            None => vec![],
+        };
+        let rows = l.constraints();
+        let layout = Layout {
+            n_points: l.n_points(),
+            q_dim,
+            free_q,
+            n_dofs: l.n_dofs(),
+            n_extras: l.n_extras(),
+            n_rows: rows.n_rows(),
+            n_soc: l.n_points() * blocks.len(),
+        };
+        let nq = layout.free_q.len();
+
+        // units
+        let law = *l.elasticity();
+        let w = l.weights();
+        let volume: f64 = w.iter().sum();
+        if !(volume.is_finite() && volume > 0.0) {
+            return Err(unsupported(format!("the total weight of the stress points is {volume}: nothing to solve")));
+        }
+        let length = volume.cbrt();
+        let offsets = blocks.iter().flat_map(|b| b.offset.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+        let fmax = l.load().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let stress = if offsets > 0.0 {
+            offsets
+        } else if fmax > 0.0 {
+            fmax / (length * length)
+        } else {
+            1e-3 * law.young
+        };
+        let scales = Scales { stress, length, stiffness: law.young };
+        let (s_f, s_d) = (scales.force(), scales.displacement());
+
+        // P: per point (w/L³)·E·A on σ and (w/L³)·E·H⁻¹ on the kept q, upper triangle
+        // E·A on the unit vectors: columns of a symmetric matrix, so also its rows
+        let compliance: [Sym; 6] = std::array::from_fn(|j| {
+            let mut e = Sym::zeros();
+            e[j] = 1.0;
+            law.compliance(&e) * law.young
+        });
+        let n_vars = layout.n_vars();
+        let per_point = 21 + nq * (nq + 1) / 2;
+        let (mut pi, mut pj, mut pv) = (
+            Vec::with_capacity(layout.n_points * per_point),
+            Vec::with_capacity(layout.n_points * per_point),
+            Vec::with_capacity(layout.n_points * per_point),
+        );
+        let vol_scale = length * length * length;
+        for (t, wt) in w.iter().enumerate() {
+            let wt = wt / vol_scale;
+            for (a, row) in compliance.iter().enumerate() {
+                for (b, e_ab) in row.iter().enumerate().skip(a) {
+                    let v = wt * e_ab;
+                    if v != 0.0 {
+                        pi.push(layout.point_col(t, a));
+                        pj.push(layout.point_col(t, b));
+                        pv.push(v);
+                    }
+                }
+            }
+            for a in 0..nq {
+                for b in a..nq {
+                    let v = wt * law.young * hinv[a * nq + b];
+                    if v != 0.0 {
+                        pi.push(layout.point_col(t, 6 + a));
+                        pj.push(layout.point_col(t, 6 + b));
+                        pv.push(v);
+                    }
+                }
+            }
+        }
+        let p = CscMatrix::new_from_triplets(n_vars, n_vars, pi, pj, pv);
+        let mut q = vec![0.0; n_vars];
+        for (i, c) in rows.offset.iter().enumerate() {
+            q[layout.lambda_col(i)] = c / s_d;
+        }
+
+        // the cone maps on the kept columns, negated (s = b − A x): (row, local column, value)
+        let mut local_col = [usize::MAX; 6 + MAX_HARDENING_DIM];
+        for (c, lc) in local_col.iter_mut().enumerate().take(6) {
+            *lc = c;
+        }
+        for (kk, &k) in layout.free_q.iter().enumerate() {
+            local_col[6 + k] = 6 + kk;
+        }
+        let mut block_entries: Vec<(usize, usize, f64)> = Vec::new();
+        let mut block_rows = 0;
+        for blk in blocks {
+            for (r, map_row) in blk.map.chunks_exact(width).enumerate() {
+                for (&v, &c) in map_row.iter().zip(&local_col) {
+                    if v != 0.0 && c != usize::MAX {
+                        block_entries.push((block_rows + r, c, -v));
+                    }
+                }
+            }
+            block_rows += blk.dim;
+        }
+
+        // A: equilibrium, load, sign and cone rows
+        let entries = l.strain_entries();
+        let (n, ne, nr) = (layout.n_dofs, layout.n_extras, layout.n_rows);
+        let n_cone_rows = layout.n_points * block_rows;
+        let m = n + ne + nr + n_cone_rows;
+        let nnz = entries.len() + rows.val.len() + nr * ne + nr + layout.n_points * block_entries.len();
+        let (mut ai, mut aj, mut av) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+        let len2 = length * length;
+        for &(t, c, j, v) in &entries {
+            ai.push(j);
+            aj.push(layout.point_col(t, c));
+            av.push(w[t] * v / len2);
+        }
+        drop(entries);
+        for i in 0..nr {
+            let (cols, vals) = rows.row(i);
+            for (&j, &g) in cols.iter().zip(vals) {
+                ai.push(j);
+                aj.push(layout.lambda_col(i));
+                av.push(-g);
+            }
+            for (k, &h) in rows.extra_row(i).iter().enumerate() {
+                if h != 0.0 {
+                    ai.push(n + k);
+                    aj.push(layout.lambda_col(i));
+                    av.push(-h);
+                }
+            }
+            ai.push(n + ne + i);
+            aj.push(layout.lambda_col(i));
+            av.push(-1.0);
+        }
+        let mut b = vec![0.0; m];
+        for (k, f) in l.load().iter().enumerate() {
+            b[n + k] = f / s_f;
+        }
+        let cone_row0 = n + ne + nr;
+        for t in 0..layout.n_points {
+            let row0 = cone_row0 + t * block_rows;
+            for &(r, c, v) in &block_entries {
+                ai.push(row0 + r);
+                aj.push(layout.point_col(t, c));
+                av.push(v);
+            }
+            let mut r0 = row0;
+            for blk in blocks {
+                for (bi, o) in b[r0..r0 + blk.dim].iter_mut().zip(&blk.offset) {
+                    *bi = o / stress;
+                }
+                r0 += blk.dim;
+            }
+        }
+        let a = CscMatrix::new_from_triplets(m, n_vars, ai, aj, av);
+        let mut cones = Vec::with_capacity(2 + layout.n_soc);
+        if n + ne > 0 {
+            cones.push(ZeroConeT(n + ne));
+        }
+        if nr > 0 {
+            cones.push(NonnegativeConeT(nr));
+        }
+        for _ in 0..layout.n_points {
+            cones.extend(blocks.iter().map(|blk| SecondOrderConeT(blk.dim)));
+        }
+        Ok(Self { p, q, a, b, cones, scales, layout })
+    }
+
+    /// Runs Clarabel with the settings of `s`.
+    fn solve(&self, s: &Socp) -> Result<IpmResult, SolveError> {
+        let settings = DefaultSettingsBuilder::default()
+            .direct_solve_method("faer".to_owned())
+            .max_threads(s.threads as u32)
+            .verbose(false)
+            .equilibrate_enable(true)
+            .tol_gap_abs(s.ipm_tol)
+            .tol_gap_rel(s.ipm_tol)
+            .tol_feas(s.ipm_tol)
+            .max_iter(s.ipm_max_iter as u32)
+            .build()
+            .map_err(|e| unsupported(format!("Clarabel settings rejected: {e}")))?;
+        let mut solver = DefaultSolver::new(&self.p, &self.q, &self.a, &self.b, &self.cones, settings)
+            .map_err(|e| unsupported(format!("Clarabel rejected the cone programme: {e}")))?;
+        solver.solve();
+        let sol = &solver.solution;
+        Ok(IpmResult {
+            status: sol.status,
+            iterations: sol.iterations as usize,
+            gap_abs: solver.info.gap_abs,
+            gap_rel: solver.info.gap_rel,
+            objective: sol.obj_val,
+            r_prim: sol.r_prim,
+            r_dual: sol.r_dual,
+            x: sol.x.clone(),
+            z: sol.z.clone(),
+        })
+    }
+
+    /// (u, V, σ̂, λ) in the units of `l` from Clarabel's x and z: σ̂ and λ from x, u = −z_eq and
+    /// V = −z_load (module docs). The plastic flags are left false.
+    fn recover(&self, l: &dyn Lagrangian, r: &IpmResult) -> (Vec<f64>, Vec<f64>, StressField, Vec<f64>) {
+        let lay = &self.layout;
+        let (s, d, f) = (self.scales.stress, self.scales.displacement(), self.scales.force());
+        let u: Vec<f64> = r.z[..lay.n_dofs].iter().map(|z| -d * z).collect();
+        let extras: Vec<f64> = r.z[lay.n_dofs..lay.n_dofs + lay.n_extras].iter().map(|z| -d * z).collect();
+        let lambda: Vec<f64> = (0..lay.n_rows).map(|i| f * r.x[lay.lambda_col(i)]).collect();
+        let mut stress = StressField::new(l.n_points(), lay.q_dim);
+        let stride = stress.stride();
+        for t in 0..lay.n_points {
+            for c in 0..6 {
+                stress.sigma[t][c] = s * r.x[lay.point_col(t, c)];
+            }
+            for (kk, &k) in lay.free_q.iter().enumerate() {
+                stress.q[t * stride + k] = s * r.x[lay.point_col(t, 6 + kk)];
+            }
+        }
+        (u, extras, stress, lambda)
+    }
+
+    /// Sizes and scales of the programme, for the report.
+    fn counters(&self) -> BTreeMap<String, f64> {
+        let lay = &self.layout;
+        let mut c = BTreeMap::new();
+        c.insert("ipm_variables".into(), lay.n_vars() as f64);
+        c.insert("ipm_constraints".into(), self.b.len() as f64);
+        c.insert("ipm_soc_cones".into(), lay.n_soc as f64);
+        c.insert("ipm_fixed_hardening_variables".into(), (lay.q_dim - lay.free_q.len()) as f64);
+        c.insert("scale_stress".into(), self.scales.stress);
+        c.insert("scale_length".into(), self.scales.length);
+        c.insert("scale_displacement".into(), self.scales.displacement());
+        c
+    }
+}

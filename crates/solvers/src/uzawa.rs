@@ -212,6 +212,7 @@ impl Solver for Uzawa {
             residual_history: history,
             phases: timer.into_phases(),
             counters,
+            warnings: Vec::new(),
         };
         Ok(Solution { u, extras: v, stress, lambda, report })
     }
