@@ -4,16 +4,18 @@
 //! Newton on the primal form min J(u, V) = Σ_T |T| ψ(ε_T(u)) − f·V over K_h (SPEC §3 form 1):
 //!
 //! 0. from a cold start, first the *elastic* contact problem, by full active-set steps with the
-//!    elastic tangent until the active set settles (a point load at the first touching node
-//!    would otherwise drive the whole body plastic); then plasticity is switched on;
+//!    elastic tangent from every candidate row active (the punch imprints its shape; tensile rows
+//!    are released) until the active set settles; then plasticity is switched on. (Plastic steps
+//!    from the first touching node alone push it through the body and drive everything plastic.)
 //! 1. the local law with its consistent tangent at every element (SPEC §2);
-//! 2. the active set A = {i : λ_i − c_i g_i > 0} (c_i: the tangent's diagonal at the row's dof,
+//! 2. the active set A = {i : λ_i − c_i g_i > 0} (c_i: the elastic stiffness at the row's dof,
 //!    so that forces and gaps are compared in the units of the problem);
 //! 3. the linearised problem for A ([`ActiveSetSystem`]): one numeric factorisation on the
 //!    pattern analysed once, one solve with 1 + n_extras right-hand sides;
-//! 4. a backtracking (Armijo) line search on J plus the exact ℓ₁ penalty ν Σ max(0, −g_i) of
-//!    violated rows — which vanishes once the iterate is feasible, so that near the solution it
-//!    is a line search on J alone.
+//! 4. a backtracking (Armijo) line search on J plus ν Σ_{i∈A} |g_i|, the violation of the active
+//!    rows that the Newton step removes; rows that a step drives into the obstacle join A at the
+//!    next iteration instead of blocking the step. Once the active rows touch, it is a line
+//!    search on J alone.
 //!
 //! It stops on the relative KKT residual of the iterate. Once the active set and the plastic
 //! set settle, convergence is quadratic. [`Newton::solve_from`] starts from another solver's
@@ -109,6 +111,11 @@ impl Newton {
         monitor.phase("iterations");
         let mut it = 0;
         let c_elastic = l.elasticity().stiffness_matrix();
+        // PDAS compares forces with gaps through each row's elastic stiffness (units force/length)
+        let row_stiffness: Vec<f64> = {
+            let diag = l.pattern().diagonal(&l.stiffness(Material::Uniform(&c_elastic)));
+            system.slaves().dof.iter().map(|&s| diag[s]).collect()
+        };
         let mut elastic_phase = start_is_cold && l.plasticity().is_some();
         let (mut elastic_grad, mut grad) = (vec![0.0; n], vec![0.0; n]);
         let mut elastic_sigma = vec![saddle_core::Sym::zeros(); if elastic_phase { l.n_points() } else { 0 }];
@@ -141,28 +148,14 @@ impl Newton {
             if it >= self.max_iter {
                 break (StopReason::MaxIterations, kkt);
             }
-            // 2. tangent and active set (elastic ones in the elastic phase)
-            timer.time("assembly", || {
-                if elastic_phase {
-                    l.assemble(Material::Uniform(&c_elastic), &mut k);
-                    for (s, e) in elastic_sigma.iter_mut().zip(&ws.eps) {
-                        *s = c_elastic * e;
-                    }
-                    l.divergence(&elastic_sigma, &mut elastic_grad);
-                } else {
-                    l.assemble(Material::PerPoint(&tangents), &mut k);
-                }
-            });
+            // 2. active set, scaled by the (fixed) elastic stiffness of each row's dof
             rows.gap(&u, &v, &mut gap);
-            let cp = l.pattern().col_ptr();
-            let slaves = system.slaves();
             let mut changed = 0;
             // cold start: every candidate row active (the punch imprints its shape), tensile
             // rows are released at the next iteration
             let cold = start_is_cold && it == 0;
             for i in 0..nr {
-                let c = k[cp[slaves.dof[i]]].abs();
-                let a = cold || lambda[i] - c * gap[i] > 0.0;
+                let a = cold || lambda[i] - row_stiffness[i] * gap[i] > 0.0;
                 changed += (a != active[i]) as usize;
                 active[i] = a;
             }
@@ -177,6 +170,23 @@ impl Newton {
                     changed += 1;
                 }
             }
+            // the elastic phase ends once its active set has settled: the last step solved it
+            if elastic_phase && it > 0 && changed == 0 {
+                elastic_phase = false;
+                elastic_steps = it;
+            }
+            // the tangent (the elastic one in the elastic phase)
+            timer.time("assembly", || {
+                if elastic_phase {
+                    l.assemble(Material::Uniform(&c_elastic), &mut k);
+                    for (s, e) in elastic_sigma.iter_mut().zip(&ws.eps) {
+                        *s = c_elastic * e;
+                    }
+                    l.divergence(&elastic_sigma, &mut elastic_grad);
+                } else {
+                    l.assemble(Material::PerPoint(&tangents), &mut k);
+                }
+            });
             active_changes += changed;
             // 3. the Newton step for this active set
             grad.copy_from_slice(if elastic_phase { &elastic_grad } else { &ws.force });
@@ -223,11 +233,6 @@ impl Newton {
             axpy(&mut u, alpha, &step.du);
             axpy(&mut v, alpha, &step.dv);
             lambda.copy_from_slice(&step.lambda);
-            // the elastic phase ends once its active set has settled: this step solved it
-            if elastic_phase && it > 0 && changed == 0 {
-                elastic_phase = false;
-                elastic_steps = it + 1;
-            }
             it += 1;
         };
         counters.insert("factorisations".into(), system.factorisations as f64);
