@@ -151,7 +151,7 @@ pub fn scenes() -> Vec<KitScene> {
         },
         KitScene {
             name: "Hertz, elastic",
-            problem: scene_with(HERTZ, &[("mesh.cells", cells([12, 12, 6])), ("mesh.grading.ratio", float(4.0))]),
+            problem: scene_with(HERTZ, &[("mesh.cells", cells([8, 8, 8])), ("mesh.grading.ratio", float(20.0))]),
             exact_u: None,
         },
         KitScene { name: "Johnson (SPEC §6)", problem: small_johnson(&[]), exact_u: None },

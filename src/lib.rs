@@ -5,8 +5,9 @@
 //! unknowns) and the saddle **Lagrangian L** coupling them drive interchangeable solvers. The
 //! elasto-plastic contact problem of C. Johnson (1977) is one assembled configuration.
 //!
-//! This facade re-exports the workspace crates and runs scene files ([`run`]); the `saddle`
-//! binary is its command line.
+//! This facade re-exports the workspace crates, runs scene files ([`run`]) and measures the
+//! accuracy and cost of the solvers and the mesh convergence of a scene ([`report`]); the
+//! `saddle` binary is its command line.
 //!
 //! ```no_run
 //! use saddle::core::{Lagrangian, Scene, Silent};
@@ -24,4 +25,5 @@ pub use saddle_solvers as solvers;
 pub use saddle_yield as yield_surfaces;
 
 pub mod conformance;
+pub mod report;
 pub mod run;

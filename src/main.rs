@@ -1,12 +1,14 @@
-//! The `saddle` command line: `saddle run SCENE.toml [--out DIR] [--solver TYPE]`.
+//! The `saddle` command line: `saddle run SCENE.toml [--out DIR] [--solver TYPE]` and
+//! `saddle report SCENE.toml --out DIR [--quick]`.
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use saddle::report::{self, Progress, ReportOptions};
 use saddle::run::{self, RunError};
 use saddle_core::{Lagrangian, Monitor, Summary};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 #[command(
@@ -32,6 +34,22 @@ enum Command {
         /// Use this solver type with its default parameters instead of the scene's.
         #[arg(long)]
         solver: Option<String>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Accuracy and cost: every solver along a ladder of settings against a tight reference
+    /// (work–precision), and the mesh convergence of the scene's box mesh. Writes DIR/
+    /// work_precision.{csv,png,svg}, convergence.{csv,png,svg} and report.md.
+    Report {
+        /// The scene file (TOML); its [solver] table is ignored.
+        scene: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Fewer settings and mesh levels (tests, CI).
+        #[arg(long)]
+        quick: bool,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -66,6 +84,58 @@ impl Monitor for Bar {
             self.bar.set_position((1000.0 * frac) as u64);
         }
         self.bar.set_message(format!("iteration {it}: KKT {residual:.2e} (target {tolerance:.0e})"));
+    }
+}
+
+/// A progress bar over the runs of a report; the message follows the current solve.
+struct RunsBar {
+    bar: ProgressBar,
+    label: String,
+    started: Instant,
+    quiet: bool,
+}
+
+impl RunsBar {
+    fn new(quiet: bool) -> Self {
+        let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} runs  {msg}").unwrap(),
+        );
+        bar.enable_steady_tick(Duration::from_millis(200));
+        Self { bar, label: String::new(), started: Instant::now(), quiet }
+    }
+}
+
+impl Monitor for RunsBar {
+    fn phase(&mut self, name: &str) {
+        self.bar.set_message(format!("{}: {name}", self.label));
+    }
+
+    fn iteration(&mut self, it: usize, residual: f64, _tolerance: f64) {
+        self.bar.set_message(format!("{}: iteration {it}, KKT {residual:.1e}", self.label));
+    }
+}
+
+impl Progress for RunsBar {
+    fn plan(&mut self, runs: usize) {
+        self.bar.set_length(runs as u64);
+    }
+
+    fn start(&mut self, _index: usize, label: &str) {
+        self.label = label.to_string();
+        self.started = Instant::now();
+        self.bar.set_message(label.to_string());
+    }
+
+    fn finish(&mut self, _index: usize, label: &str, status: &str) {
+        let line = format!("  {label}: {status} ({:.1} s)", self.started.elapsed().as_secs_f64());
+        if !self.quiet && self.bar.is_hidden() {
+            // not a terminal: a log line per run instead of the bar
+            eprintln!("{line}");
+        } else {
+            self.bar.println(line);
+        }
+        self.bar.inc(1);
     }
 }
 
@@ -116,10 +186,39 @@ fn run(scene: PathBuf, out: Option<PathBuf>, solver: Option<String>, quiet: bool
     Ok(if outcome.summary.converged { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
 
+fn report(scene: PathBuf, out: PathBuf, quick: bool, quiet: bool) -> Result<ExitCode, report::ReportError> {
+    if !quiet {
+        eprintln!("{}: report into {}{}", scene.display(), out.display(), if quick { " (quick)" } else { "" });
+    }
+    let mut bar = RunsBar::new(quiet);
+    let result = report::generate(&scene, &out, &ReportOptions { quick }, &mut bar);
+    bar.bar.finish_and_clear();
+    let r = result?;
+    println!("  {} ({} dofs): {} runs in {:.0} s", r.title, r.dofs, r.runs.len(), r.total_s);
+    for t in report::tables::tightest(&r.runs) {
+        let e = t.errors.expect("tightest runs have errors");
+        println!(
+            "  {:<8} {:<44} σ̂ error {:.2e}  U error {:.2e}  {:.1} s",
+            t.solver, t.setting, e.stress_rel, e.u_rel, t.wall_s
+        );
+    }
+    match &r.convergence {
+        Ok(study) => println!(
+            "  mesh convergence: {} levels, fitted σ̂ rate {} (Theorem 2: at least 0.5)",
+            study.levels.len(),
+            study.stress_rate_fit.map_or("-".into(), |x| format!("{x:.2}"))
+        ),
+        Err(why) => println!("  mesh convergence skipped: {why}"),
+    }
+    println!("  wrote {}/report.md, work_precision.*, convergence.*", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet),
+        Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet).map_err(|e| e.to_string()),
+        Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
     };
     result.unwrap_or_else(|e| {
         eprintln!("error: {e}");

@@ -20,6 +20,10 @@ pub struct BoxMesh {
     /// Optional geometric grading toward a point.
     #[serde(default)]
     pub grading: Option<Grading>,
+    /// Coordinates, per axis, that must be grid lines: the nearest node is moved there (for
+    /// boundaries of regions such as Γ₁, so that they are resolved alike on every mesh).
+    #[serde(default)]
+    pub align: [Vec<f64>; 3],
 }
 
 /// Geometric grading: along each axis the cells grow geometrically away from the coordinate of
@@ -36,7 +40,7 @@ pub struct Grading {
 impl BoxMesh {
     /// An ungraded box.
     pub fn new(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> Self {
-        Self { min, max, cells, grading: None }
+        Self { min, max, cells, grading: None, align: Default::default() }
     }
 
     /// The same box graded toward `toward` with size ratio `ratio`.
@@ -45,13 +49,30 @@ impl BoxMesh {
         self
     }
 
+    /// The same box with grid lines at `coords` along axis `axis`.
+    pub fn aligned(mut self, axis: usize, coords: &[f64]) -> Self {
+        self.align[axis] = coords.to_vec();
+        self
+    }
+
     /// The node coordinates along axis `k`.
     pub fn axis_nodes(&self, k: usize) -> Vec<f64> {
         let (a, b, n) = (self.min[k], self.max[k], self.cells[k]);
-        match &self.grading {
+        let mut xs = match &self.grading {
             None => (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect(),
             Some(g) => graded_axis(a, b, n, g.toward[k].clamp(a, b), g.ratio),
+        };
+        // the nearest interior node moves onto each aligned coordinate; it stays between its
+        // neighbours because it was the nearest one
+        for &c in &self.align[k] {
+            if c > a && c < b {
+                let i = (1..n).min_by(|&i, &j| (xs[i] - c).abs().total_cmp(&(xs[j] - c).abs())).unwrap_or(0);
+                if i > 0 {
+                    xs[i] = c;
+                }
+            }
         }
+        xs
     }
 
     /// Builds the mesh (infallible for validated parameters).
@@ -154,6 +175,21 @@ impl MeshSource for BoxMesh {
                 return Err(ParameterError::new(join(path, &format!("cells[{k}]")), 0, "must be >= 1"));
             }
         }
+        for (k, coords) in self.align.iter().enumerate() {
+            check::finite_all(path, &format!("align[{k}]"), coords)?;
+            let xs = self.axis_nodes(k);
+            for &c in coords.iter().filter(|c| **c > self.min[k] && **c < self.max[k]) {
+                if !xs.contains(&c) {
+                    return Err(ParameterError::new(
+                        join(path, &format!("align[{k}]")),
+                        format!("{coords:?}"),
+                        format!(
+                            "{c} cannot be a grid line: two aligned coordinates share the nearest node; use more cells"
+                        ),
+                    ));
+                }
+            }
+        }
         if let Some(g) = &self.grading {
             let p = join(path, "grading");
             check::finite_all(&p, "toward", &g.toward)?;
@@ -188,6 +224,24 @@ mod tests {
         for &f in &m.groups["zmin"] {
             assert!(m.facet_centroid(f)[2].abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn aligned_coordinates_become_grid_lines() {
+        let b = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [32, 32, 16])
+            .graded([0.0; 3], 4.0)
+            .aligned(0, &[-0.75, 0.75])
+            .aligned(1, &[-0.75, 0.75]);
+        b.validate("mesh").unwrap();
+        for k in 0..2 {
+            let x = b.axis_nodes(k);
+            assert!(x.contains(&-0.75) && x.contains(&0.75) && x.windows(2).all(|w| w[1] > w[0]));
+        }
+        // without alignment the graded grid misses ±0.75
+        assert!(!BoxMesh::new([-1.0; 3], [1.0; 3], [32, 32, 16]).graded([0.0; 3], 4.0).axis_nodes(0).contains(&0.75));
+        // two coordinates competing for one node are an error naming the field
+        let e = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).aligned(2, &[0.4, 0.6]).validate("mesh").unwrap_err();
+        assert_eq!(e.field, "mesh.align[2]");
     }
 
     #[test]

@@ -22,6 +22,8 @@ pub mod displacements;
 pub mod dofs;
 pub mod elasticity;
 pub mod error;
+#[cfg(feature = "gmsh")]
+pub mod gmsh;
 pub mod inline_mesh;
 pub mod lagrangian;
 pub mod linalg;
@@ -40,6 +42,8 @@ pub use displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, 
 pub use dofs::{Component, Dirichlet, DofMap};
 pub use elasticity::Elasticity;
 pub use error::{LinalgError, MeshError, ParameterError, SceneError};
+#[cfg(feature = "gmsh")]
+pub use gmsh::{GmshImport, GmshMesh, PhysicalGroup};
 pub use inline_mesh::InlineMesh;
 pub use lagrangian::{Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace};
 pub use linalg::{SparseCholesky, SymmetricPattern};

@@ -3,7 +3,7 @@
 //!
 //! ```toml
 //! title = "Johnson 1977: elasto-plastic punch"
-//! [mesh]                       # MeshSource: "box", ...
+//! [mesh]                       # MeshSource: "box", "inline", "gmsh" (feature `gmsh`)
 //! type = "box"
 //! min = [-1.0, -1.0, 0.0]
 //! max = [1.0, 1.0, 1.0]

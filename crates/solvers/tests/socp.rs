@@ -1,3 +1,4 @@
+#![cfg(feature = "socp")]
 //! The conic solver (SPEC §3 form 3, §4): the closed form of SPEC §7, agreement with Newton on
 //! the default scene, the QP of an elastic problem, the signs of the displacements read from
 //! the equality duals, invariance to units, perfect plasticity, and parameter errors.

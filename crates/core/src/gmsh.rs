@@ -1,0 +1,831 @@
+//! `type = "gmsh"`: a tetrahedral mesh T_h (SPEC §3) read from a Gmsh MSH 4.1 file, ASCII or
+//! binary (cargo feature `gmsh`, on by default).
+//!
+//! ```toml
+//! [mesh]
+//! type = "gmsh"
+//! file = "punch.msh"   # relative to the scene file's folder
+//! scale = 1.0          # optional: multiplies every coordinate (e.g. 1e-3 for a mesh in mm)
+//! ```
+//!
+//! What is read:
+//!
+//! * **Tetrahedra**: every 4-node tetrahedron (element type 4) of the file is an element of the
+//!   body, whatever volume it belongs to. Other volume elements (hexahedra, prisms, pyramids) and
+//!   second-order elements (10-node tetrahedra, 6-node triangles, …) are errors: mesh with
+//!   order 1 (`Mesh.ElementOrder = 1`).
+//! * **Facet groups**: the 3-node triangles (element type 2) of each *physical surface* form a
+//!   named facet group: the group's name from `$PhysicalNames`, or `physical_<tag>` when the
+//!   group is unnamed. A scene selects them with `{ group = "name" }` (see [`Region`]); every such
+//!   triangle must be a boundary face of the tetrahedra. Physical points, curves and volumes are
+//!   ignored (they are listed in [`GmshImport::ignored_groups`]); triangles outside any physical
+//!   surface are ignored.
+//! * **Nodes**: Gmsh's node tags become dense indices in increasing tag order; nodes on no
+//!   tetrahedron are dropped. [`GmshImport::node_tags`] and [`GmshImport::element_tags`] map back.
+//!
+//! The node rules of the scene apply to groups as to any region: a node belongs to every group
+//! one of whose facets it lies on, so the nodes on the rim between two physical surfaces belong
+//! to both. A Dirichlet condition fixes the closure of its facets (SPEC §3: nodes on the closure
+//! of Γ₂ are clamped), so a node shared by `clamped` and `free` is clamped; a contact zone
+//! `{ group = "contact" }` holds its rim nodes shared with `free` (and drops with a warning any
+//! node whose u₃ is clamped).
+//!
+//! `mshio` parses the file; it ignores `$PhysicalNames`, which is text even in binary files
+//! (the format marks its fields "ASCII"), so that section is read here from the raw bytes. When
+//! the node tags form one dense range mshio drops them; they are then read here from the raw
+//! `$Nodes` section, so a dense but permuted numbering is still mapped correctly.
+//!
+//! [`Region`]: crate::region::Region
+
+use crate::error::{MeshError, ParameterError, check, join};
+use crate::mesh::{MeshSource, TetMesh};
+use mshio::{ElementType, MshHeader};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+/// `type = "gmsh"`: a Gmsh MSH 4.1 file (ASCII or binary).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GmshMesh {
+    /// The `.msh` file; a relative path is resolved against the scene file's folder.
+    pub file: PathBuf,
+    /// Factor applied to every coordinate (default 1).
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
+}
+
+fn unit_scale() -> f64 {
+    1.0
+}
+
+impl GmshMesh {
+    /// The file `file` at scale 1.
+    pub fn new(file: impl Into<PathBuf>) -> Self {
+        Self { file: file.into(), scale: 1.0 }
+    }
+
+    /// The file's path: `file` if absolute, else `base_dir/file`.
+    pub fn path(&self, base_dir: &Path) -> PathBuf {
+        if self.file.is_absolute() { self.file.clone() } else { base_dir.join(&self.file) }
+    }
+
+    /// Reads the file with everything the import knows (tags, groups).
+    pub fn read(&self, base_dir: &Path) -> Result<GmshImport, MeshError> {
+        read_msh(&self.path(base_dir), self.scale)
+    }
+}
+
+#[typetag::serde(name = "gmsh")]
+impl MeshSource for GmshMesh {
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        if self.file.as_os_str().is_empty() {
+            return Err(ParameterError::new(join(path, "file"), "\"\"", "must name a Gmsh .msh file"));
+        }
+        check::positive(path, "scale", self.scale)?;
+        Ok(())
+    }
+
+    fn build(&self, base_dir: &Path) -> Result<TetMesh, MeshError> {
+        Ok(self.read(base_dir)?.mesh)
+    }
+}
+
+/// A physical group of the file: its dimension (0 points, 1 curves, 2 surfaces, 3 volumes),
+/// tag, name (`physical_<tag>` when unnamed) and number of elements in the file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PhysicalGroup {
+    /// Dimension of the group's entities.
+    pub dim: i32,
+    /// The physical tag.
+    pub tag: i32,
+    /// From `$PhysicalNames`, or `physical_<tag>`.
+    pub name: String,
+    /// Number of elements of the file in the group's entities (for surfaces: the triangles).
+    pub elements: usize,
+}
+
+/// The result of reading an MSH file: the mesh and the map back to the file's numbering.
+#[derive(Clone, Debug)]
+pub struct GmshImport {
+    /// The validated mesh; its facet groups are the physical surfaces.
+    pub mesh: TetMesh,
+    /// Gmsh node tag of each mesh node (increasing).
+    pub node_tags: Vec<u64>,
+    /// Gmsh element tag of each tetrahedron.
+    pub element_tags: Vec<u64>,
+    /// The physical surfaces, which became the mesh's facet groups.
+    pub surface_groups: Vec<PhysicalGroup>,
+    /// Physical points, curves and volumes: not used.
+    pub ignored_groups: Vec<PhysicalGroup>,
+    /// Nodes of the file that lie on no tetrahedron (dropped).
+    pub unused_nodes: usize,
+}
+
+/// Reads a Gmsh MSH 4.1 file (ASCII or binary), multiplying coordinates by `scale`. Errors are
+/// [`MeshError::File`] naming the file and what is wrong where (element and node tags of the
+/// file).
+pub fn read_msh(path: &Path, scale: f64) -> Result<GmshImport, MeshError> {
+    let bytes = std::fs::read(path).map_err(|e| MeshError::File {
+        path: path.to_path_buf(),
+        message: format!("cannot read the Gmsh mesh file: {e}"),
+    })?;
+    parse_msh(&bytes, scale, path)
+}
+
+/// Reads MSH 4.1 content; `origin` names it in errors.
+pub fn parse_msh(bytes: &[u8], scale: f64, origin: &Path) -> Result<GmshImport, MeshError> {
+    import(bytes, scale).map_err(|message| MeshError::File { path: origin.to_path_buf(), message })
+}
+
+/// Hint appended to "no tetrahedra" errors.
+const SAVE_HINT: &str = "when a model has physical groups Gmsh saves only their elements: put the volume in a \
+                         physical group (e.g. \"body\") or set Mesh.SaveAll = 1";
+
+fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!("scale = {scale}: must be a finite number > 0"));
+    }
+    let binary = check_format(bytes)?;
+    let names = physical_names(bytes)?;
+    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| parse_error(bytes, &e, binary))?;
+    let missing = |section: &str| {
+        let hint = if truncated(bytes) { TRUNCATED } else { "" };
+        format!("the file has no {section} section{hint}")
+    };
+    let nodes_section = msh.data.nodes.as_ref().ok_or_else(|| missing("$Nodes"))?;
+    let elements_section = msh.data.elements.as_ref().ok_or_else(|| missing("$Elements"))?;
+
+    // Physical tags of every entity, by (dim, entity tag).
+    let mut entity_groups: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
+    if let Some(e) = &msh.data.entities {
+        for p in &e.points {
+            entity_groups.insert((0, p.tag), p.physical_tags.clone());
+        }
+        for c in &e.curves {
+            entity_groups.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &e.surfaces {
+            entity_groups.insert((2, s.tag), s.physical_tags.clone());
+        }
+        for v in &e.volumes {
+            entity_groups.insert((3, v.tag), v.physical_tags.clone());
+        }
+    }
+    let mut group_tags: BTreeSet<(i32, i32)> = BTreeSet::new();
+    for (&(dim, _), tags) in &entity_groups {
+        group_tags.extend(tags.iter().map(|&t| (dim, t)));
+    }
+    for ((dim, tag), name) in &names {
+        if !group_tags.contains(&(*dim, *tag)) {
+            return Err(format!(
+                "$PhysicalNames: the name {name:?} (dimension {dim}, physical tag {tag}) refers to nothing: no {} \
+                 of $Entities carries physical tag {tag}",
+                ["point", "curve", "surface", "volume"].get(*dim as usize).unwrap_or(&"entity")
+            ));
+        }
+    }
+    let group_name = |dim: i32, tag: i32| names.get(&(dim, tag)).cloned().unwrap_or_else(|| format!("physical_{tag}"));
+
+    // Nodes: tag → position in file order.
+    let raw_tags = if nodes_section.node_blocks.iter().any(|b| b.node_tags.is_none()) {
+        Some(raw_node_tags(bytes, &msh.header, binary)?)
+    } else {
+        None
+    };
+    let mut coords: Vec<[f64; 3]> = Vec::new();
+    let mut file_tags: Vec<u64> = Vec::new();
+    for (b, block) in nodes_section.node_blocks.iter().enumerate() {
+        let tags: Vec<u64> = match &block.node_tags {
+            Some(map) => {
+                let mut tags = vec![0; block.nodes.len()];
+                for (&tag, &i) in map {
+                    tags[i] = tag;
+                }
+                if map.len() != block.nodes.len() {
+                    return Err(format!(
+                        "$Nodes: node block {} (entity of dimension {}, tag {}) repeats a node tag",
+                        b + 1,
+                        block.entity_dim,
+                        block.entity_tag
+                    ));
+                }
+                tags
+            }
+            None => raw_tags.as_ref().and_then(|r| r.get(b)).cloned().unwrap_or_default(),
+        };
+        if tags.len() != block.nodes.len() {
+            return Err(format!("$Nodes: cannot read the node tags of node block {}", b + 1));
+        }
+        for (tag, n) in tags.into_iter().zip(&block.nodes) {
+            let x = [n.x, n.y, n.z];
+            if x.iter().any(|c| !c.is_finite()) {
+                return Err(format!("node {tag} has a non-finite coordinate ({}, {}, {})", x[0], x[1], x[2]));
+            }
+            coords.push(x.map(|c| c * scale));
+            file_tags.push(tag);
+        }
+    }
+    let mut position: HashMap<u64, usize> = HashMap::with_capacity(file_tags.len());
+    for (i, &tag) in file_tags.iter().enumerate() {
+        if position.insert(tag, i).is_some() {
+            return Err(format!("$Nodes: node tag {tag} appears twice"));
+        }
+    }
+
+    // Elements: tetrahedra, and the triangles of physical surfaces.
+    let mut tets: Vec<(u64, [u64; 4])> = Vec::new();
+    let mut triangles: BTreeMap<i32, Vec<(u64, [u64; 3])>> = BTreeMap::new();
+    let mut group_elements: BTreeMap<(i32, i32), usize> = BTreeMap::new();
+    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    for block in &elements_section.element_blocks {
+        let (dim, entity) = (block.entity_dim, block.entity_tag);
+        let groups = entity_groups.get(&(dim, entity)).map(Vec::as_slice).unwrap_or(&[]);
+        for &g in groups {
+            *group_elements.entry((dim, g)).or_default() += block.elements.len();
+        }
+        let ty = block.element_type;
+        let (shape, nodes) = describe(ty);
+        let where_ =
+            format!("{} {entity}", ["point", "curve", "surface", "volume"].get(dim as usize).unwrap_or(&"entity"));
+        match ty {
+            ElementType::Tet4 => {
+                for e in &block.elements {
+                    tets.push((e.element_tag, [e.nodes[0], e.nodes[1], e.nodes[2], e.nodes[3]]));
+                }
+            }
+            ElementType::Tri3 => {
+                if groups.is_empty() {
+                    *skipped.entry("3-node triangles outside physical surfaces".into()).or_default() +=
+                        block.elements.len();
+                }
+                for &g in groups {
+                    let list = triangles.entry(g).or_default();
+                    list.extend(block.elements.iter().map(|e| (e.element_tag, [e.nodes[0], e.nodes[1], e.nodes[2]])));
+                }
+            }
+            _ if dim >= 2 && higher_order(ty) => {
+                return Err(format!(
+                    "second-order elements are not supported; mesh with order 1 (Gmsh: Mesh.ElementOrder = 1, \
+                     or `gmsh -3 -order 1`): the file has {nodes}-node {shape} (element type {}) in {where_}",
+                    ty as i32
+                ));
+            }
+            _ if dim == 3 => {
+                return Err(format!(
+                    "only 4-node tetrahedra are supported as volume elements: the file has {} {nodes}-node {shape} \
+                     (element type {}) in {where_}",
+                    block.elements.len(),
+                    ty as i32
+                ));
+            }
+            _ if dim == 2 && !groups.is_empty() => {
+                return Err(format!(
+                    "physical surface {:?} has {} {nodes}-node {shape} (element type {}) in {where_}: only 3-node \
+                     triangles can be facets of a tetrahedral mesh",
+                    group_name(2, groups[0]),
+                    block.elements.len(),
+                    ty as i32
+                ));
+            }
+            _ => *skipped.entry(format!("{nodes}-node {shape}")).or_default() += block.elements.len(),
+        }
+    }
+    if tets.is_empty() {
+        let n_triangles: usize = triangles.values().map(Vec::len).sum();
+        let mut found: Vec<String> = skipped.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        if n_triangles > 0 {
+            found.insert(0, format!("{n_triangles} triangle(s) of physical surfaces"));
+        }
+        let found = if found.is_empty() { "no elements".to_string() } else { found.join(", ") };
+        return Err(format!(
+            "the file has no tetrahedra (4-node, element type 4), only {found}; {SAVE_HINT}; a 2D mesh cannot be used"
+        ));
+    }
+
+    // Dense numbering of the nodes of the tetrahedra, in increasing tag order.
+    const NONE: usize = usize::MAX;
+    let mut used = vec![false; file_tags.len()];
+    for (etag, t) in &tets {
+        for n in t {
+            match position.get(n) {
+                Some(&i) => used[i] = true,
+                None => return Err(dangling("tetrahedron", *etag, *n, "")),
+            }
+        }
+    }
+    let mut order: Vec<usize> = (0..file_tags.len()).filter(|&i| used[i]).collect();
+    order.sort_unstable_by_key(|&i| file_tags[i]);
+    let mut dense = vec![NONE; file_tags.len()];
+    for (k, &i) in order.iter().enumerate() {
+        dense[i] = k;
+    }
+    let node_tags: Vec<u64> = order.iter().map(|&i| file_tags[i]).collect();
+    let nodes: Vec<[f64; 3]> = order.iter().map(|&i| coords[i]).collect();
+    let index = |n: &u64| dense[position[n]];
+    let element_tags: Vec<u64> = tets.iter().map(|t| t.0).collect();
+    let tet_nodes: Vec<[usize; 4]> = tets.iter().map(|(_, t)| t.map(|n| index(&n))).collect();
+
+    let mut named: Vec<(String, Vec<[usize; 3]>)> = Vec::new();
+    let mut facet_tags: HashMap<(String, [usize; 3]), u64> = HashMap::new();
+    let mut surface_groups = Vec::new();
+    let surface_tags: BTreeSet<i32> = group_tags.iter().filter(|(d, _)| *d == 2).map(|&(_, t)| t).collect();
+    for &g in &surface_tags {
+        let name = group_name(2, g);
+        let list = triangles.get(&g).map(Vec::as_slice).unwrap_or(&[]);
+        if list.is_empty() {
+            return Err(format!(
+                "physical surface {name:?} (tag {g}) refers to nothing: the file has no triangles in its surfaces"
+            ));
+        }
+        let mut facets = Vec::with_capacity(list.len());
+        for (etag, t) in list {
+            let mut f = [0; 3];
+            for (k, n) in t.iter().enumerate() {
+                let Some(&i) = position.get(n) else {
+                    return Err(dangling("triangle", *etag, *n, &format!(" of physical surface {name:?}")));
+                };
+                if dense[i] == NONE {
+                    return Err(format!(
+                        "triangle {etag} of physical surface {name:?} uses node {n}, which belongs to no tetrahedron: \
+                         the surface is not part of the boundary of the meshed volume (mesh the surfaces and the \
+                         volume together, e.g. after a boolean fragment, so that they share nodes)"
+                    ));
+                }
+                f[k] = dense[i];
+            }
+            let mut key = f;
+            key.sort_unstable();
+            facet_tags.insert((name.clone(), key), *etag);
+            facets.push(f);
+        }
+        surface_groups.push(PhysicalGroup { dim: 2, tag: g, name: name.clone(), elements: list.len() });
+        named.push((name, facets));
+    }
+    let ignored_groups = group_tags
+        .iter()
+        .filter(|(d, _)| *d != 2)
+        .map(|&(dim, tag)| PhysicalGroup {
+            dim,
+            tag,
+            name: group_name(dim, tag),
+            elements: group_elements.get(&(dim, tag)).copied().unwrap_or(0),
+        })
+        .collect();
+
+    let mesh = TetMesh::new(nodes, tet_nodes, named).map_err(|e| {
+        let tags = |t: &[usize]| t.iter().map(|&n| node_tags[n].to_string()).collect::<Vec<_>>().join(", ");
+        match e {
+            MeshError::Inverted { element, nodes, volume } => format!(
+                "tetrahedron {} (nodes {}) is inverted: signed volume {volume:.3e} < 0 (index {element} in the imported \
+                 mesh); MSH tetrahedra must be positively oriented",
+                element_tags[element],
+                tags(&nodes)
+            ),
+            MeshError::Degenerate { element, nodes, volume } => format!(
+                "tetrahedron {} (nodes {}) has zero volume ({volume:.3e}): the mesh is degenerate there (index {element} \
+                 in the imported mesh)",
+                element_tags[element],
+                tags(&nodes)
+            ),
+            MeshError::NotABoundaryFacet { group, facet } => {
+                let mut key = facet;
+                key.sort_unstable();
+                let etag = facet_tags.get(&(group.clone(), key)).map_or("?".into(), u64::to_string);
+                format!(
+                    "triangle {etag} (nodes {}) of physical surface {group:?} is not a boundary face of the \
+                     tetrahedra: a physical surface used as a facet group must lie on the boundary of the meshed \
+                     volume (an interior surface, such as the interface between two volumes of the body, cannot be \
+                     one; and a surface meshed separately from the volume does not share its nodes)",
+                    tags(&facet)
+                )
+            }
+            other => other.to_string(),
+        }
+    })?;
+    Ok(GmshImport {
+        mesh,
+        node_tags,
+        element_tags,
+        surface_groups,
+        ignored_groups,
+        unused_nodes: file_tags.len() - order.len(),
+    })
+}
+
+fn dangling(what: &str, element: u64, node: u64, context: &str) -> String {
+    format!(
+        "{what} {element}{context} refers to node {node}, but no node has tag {node} in $Nodes (element and node \
+         tags of the file)"
+    )
+}
+
+/// The kind of elements of type `ty`, in words, and its number of nodes.
+fn describe(ty: ElementType) -> (&'static str, usize) {
+    let name = format!("{ty:?}");
+    let shape = match name.get(..3) {
+        Some("Lin") => "lines",
+        Some("Tri") => "triangles",
+        Some("Qua") => "quadrangles",
+        Some("Tet") => "tetrahedra",
+        Some("Hex") => "hexahedra",
+        Some("Pri") => "prisms",
+        Some("Pyr") => "pyramids",
+        Some("Pnt") => "points",
+        _ => "elements",
+    };
+    (shape, ty.nodes().unwrap_or(0))
+}
+
+/// True for elements with more nodes than the vertices of their shape (second order and up).
+fn higher_order(ty: ElementType) -> bool {
+    let (shape, nodes) = describe(ty);
+    let vertices = match shape {
+        "lines" => 2,
+        "triangles" => 3,
+        "quadrangles" | "tetrahedra" => 4,
+        "hexahedra" => 8,
+        "prisms" => 6,
+        "pyramids" => 5,
+        _ => return false,
+    };
+    nodes > vertices
+}
+
+/// Checks the `$MeshFormat` header: MSH version 4.1, ASCII (0) or binary (1), size_t of 4 or 8
+/// bytes (mshio panics on other sizes). Returns whether the file is binary.
+fn check_format(bytes: &[u8]) -> Result<bool, String> {
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(200)]);
+    let mut lines = head.lines().map(str::trim).skip_while(|l| l.is_empty());
+    match lines.next() {
+        Some("$MeshFormat") => {}
+        Some(l) if l.starts_with("$NOD") => {
+            return Err("MSH version 1 found; only version 4.1 is read: re-export the mesh as MSH 4.1 \
+                        (Gmsh: Mesh.MshFileVersion = 4.1, or `gmsh -format msh41`)"
+                .into());
+        }
+        _ if bytes.is_empty() => return Err("the file is empty".into()),
+        _ => return Err("not a Gmsh MSH file: it does not begin with $MeshFormat".into()),
+    }
+    let line = lines.next().unwrap_or("");
+    let mut fields = line.split_whitespace();
+    let version = fields.next().unwrap_or("(none)");
+    if version.parse::<f64>() != Ok(4.1) {
+        return Err(format!(
+            "MSH version {version} found; only version 4.1 is read: re-export the mesh as MSH 4.1 \
+             (Gmsh: Mesh.MshFileVersion = 4.1, or `gmsh -format msh41`)"
+        ));
+    }
+    let binary = match fields.next() {
+        Some("0") => false,
+        Some("1") => true,
+        other => return Err(format!("$MeshFormat: file type {other:?}: must be 0 (ASCII) or 1 (binary)")),
+    };
+    match fields.next() {
+        Some("4" | "8") => Ok(binary),
+        other => Err(format!("$MeshFormat: data size {other:?}: must be 4 or 8 (bytes of size_t)")),
+    }
+}
+
+/// Position just after the line `tag` (the whole line, at the start of a line), if any.
+fn find_line(bytes: &[u8], tag: &[u8]) -> Option<usize> {
+    let mut from = 0;
+    while let Some(p) = bytes[from..].windows(tag.len()).position(|w| w == tag) {
+        let start = from + p;
+        let end = start + tag.len();
+        let at_line_start = start == 0 || bytes[start - 1] == b'\n';
+        let rest = &bytes[end..];
+        let eol = if rest.starts_with(b"\n") {
+            Some(1)
+        } else if rest.starts_with(b"\r\n") {
+            Some(2)
+        } else {
+            None
+        };
+        if let (true, Some(n)) = (at_line_start, eol) {
+            return Some(end + n);
+        }
+        from = start + 1;
+    }
+    None
+}
+
+/// The `$PhysicalNames` section: `(dim, tag) → name`. It is ASCII in binary files too.
+fn physical_names(bytes: &[u8]) -> Result<BTreeMap<(i32, i32), String>, String> {
+    let mut names = BTreeMap::new();
+    let Some(start) = find_line(bytes, b"$PhysicalNames") else {
+        return Ok(names);
+    };
+    let Some(len) = find_line(&bytes[start..], b"$EndPhysicalNames").map(|p| {
+        let body = &bytes[start..start + p];
+        body.len() - body.iter().rev().position(|&c| c == b'$').map_or(0, |q| q + 1)
+    }) else {
+        return Err("$PhysicalNames has no $EndPhysicalNames (is the file truncated?)".into());
+    };
+    let text = std::str::from_utf8(&bytes[start..start + len])
+        .map_err(|_| "$PhysicalNames: the section is not text".to_string())?;
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let count: usize = lines
+        .next()
+        .and_then(|l| l.parse().ok())
+        .ok_or_else(|| "$PhysicalNames: the first line must be the number of names".to_string())?;
+    let mut n = 0;
+    for line in lines {
+        let bad = || format!("$PhysicalNames: cannot read {line:?}; expected: dimension tag \"name\"");
+        let quote = line.find('"').ok_or_else(bad)?;
+        let mut it = line[..quote].split_whitespace();
+        let dim: i32 = it.next().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+        let tag: i32 = it.next().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+        let name = line[quote..].trim_end().strip_prefix('"').and_then(|s| s.strip_suffix('"')).ok_or_else(bad)?;
+        if it.next().is_some() {
+            return Err(bad());
+        }
+        if !(0..=3).contains(&dim) {
+            return Err(format!("$PhysicalNames: {line:?}: the dimension must be 0, 1, 2 or 3"));
+        }
+        names.insert((dim, tag), name.to_string());
+        n += 1;
+    }
+    if n != count {
+        return Err(format!("$PhysicalNames announces {count} names but lists {n}"));
+    }
+    Ok(names)
+}
+
+const TRUNCATED: &str = "; the file does not end with an $End… line: it is truncated";
+
+/// True when the file does not end with a section's end line (`$EndElements`, …).
+fn truncated(bytes: &[u8]) -> bool {
+    let end = bytes.iter().rposition(|c| !c.is_ascii_whitespace()).map_or(0, |p| p + 1);
+    let start = bytes[..end].iter().rposition(|&c| c == b'\n').map_or(0, |p| p + 1);
+    !bytes[start..end].starts_with(b"$End")
+}
+
+/// A message for an mshio parse error: what failed, in which section, at which line (ASCII) or
+/// byte (binary). (mshio's own `Display` appends a hex dump of the rest of the file.)
+fn parse_error(bytes: &[u8], e: &mshio::MshParserError<&[u8]>, binary: bool) -> String {
+    let trace = e.filtered_backtrace();
+    let Some((rest, kind)) = trace.first() else {
+        return "cannot parse the file as MSH 4.1 (is it truncated?)".into();
+    };
+    let contexts: Vec<String> =
+        trace[1..].iter().rev().map(|(_, k)| k.context().map_or_else(|| k.to_string(), str::to_string)).collect();
+    let offset = (rest.as_ptr() as usize).wrapping_sub(bytes.as_ptr() as usize).min(bytes.len());
+    let at = if offset >= bytes.len() || bytes[offset..].iter().all(u8::is_ascii_whitespace) {
+        "at the end of the file".to_string()
+    } else if binary {
+        format!("at byte {offset}")
+    } else {
+        format!("at line {}", bytes[..offset].iter().filter(|&&c| c == b'\n').count() + 1)
+    };
+    let hint = if truncated(bytes) { TRUNCATED } else { "" };
+    let kind = kind.to_string();
+    let kind = kind.trim_end_matches('.');
+    let mut chars = kind.chars();
+    let kind: String = chars.next().map(|c| c.to_lowercase().chain(chars).collect()).unwrap_or_default();
+    if contexts.is_empty() {
+        format!("cannot parse the file as MSH 4.1: {kind} {at}{hint}")
+    } else {
+        format!("cannot parse the file as MSH 4.1: {kind} {at} (in {}){hint}", contexts.join(" > "))
+    }
+}
+
+/// The node tags of each node block in file order, from the raw `$Nodes` section (mshio drops
+/// them when they form one dense range, which need not be in file order). mshio has already
+/// parsed the section, so a failure here means an inconsistency.
+fn raw_node_tags(bytes: &[u8], header: &MshHeader, binary: bool) -> Result<Vec<Vec<u64>>, String> {
+    let fail = || "$Nodes: cannot read the node tags".to_string();
+    let start = find_line(bytes, b"$Nodes").ok_or_else(fail)?;
+    let body = &bytes[start..];
+    let mut out = Vec::new();
+    if !binary {
+        let text = std::str::from_utf8(body).ok().and_then(|t| t.split("$EndNodes").next()).ok_or_else(fail)?;
+        let mut tokens = text.split_ascii_whitespace();
+        let int = |t: &mut std::str::SplitAsciiWhitespace<'_>| t.next().and_then(|t| t.parse::<u64>().ok());
+        // numEntityBlocks numNodes minNodeTag maxNodeTag
+        let blocks = int(&mut tokens).ok_or_else(fail)?;
+        (0..3).try_for_each(|_| int(&mut tokens).map(drop)).ok_or_else(fail)?;
+        for _ in 0..blocks {
+            // entityDim entityTag parametric numNodesInBlock, the tags, then x y z per node
+            // (parametric blocks are refused by mshio)
+            (0..3).try_for_each(|_| tokens.next().map(drop)).ok_or_else(fail)?;
+            let n = int(&mut tokens).ok_or_else(fail)?;
+            out.push((0..n).map(|_| int(&mut tokens)).collect::<Option<Vec<u64>>>().ok_or_else(fail)?);
+            (0..3 * n).try_for_each(|_| tokens.next().map(drop)).ok_or_else(fail)?;
+        }
+    } else {
+        // the int 1 after the format line tells the byte order
+        let format = find_line(bytes, b"$MeshFormat").ok_or_else(fail)?;
+        let one = format + bytes[format..].iter().position(|&c| c == b'\n').ok_or_else(fail)? + 1;
+        let little = bytes.get(one..one + 4) == Some(&[1, 0, 0, 0][..]);
+        let mut r = Reader { bytes: body, pos: 0, little };
+        let size = header.size_t_size;
+        let blocks = r.size_t(size).ok_or_else(fail)?;
+        r.skip(3 * size).ok_or_else(fail)?;
+        for _ in 0..blocks {
+            r.skip(12).ok_or_else(fail)?; // entityDim, entityTag, parametric (int)
+            let n = r.size_t(size).ok_or_else(fail)?;
+            out.push((0..n).map(|_| r.size_t(size)).collect::<Option<Vec<u64>>>().ok_or_else(fail)?);
+            r.skip(24usize.checked_mul(n as usize).ok_or_else(fail)?).ok_or_else(fail)?;
+        }
+    }
+    Ok(out)
+}
+
+/// A cursor over binary MSH data.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    little: bool,
+}
+
+impl Reader<'_> {
+    fn skip(&mut self, n: usize) -> Option<()> {
+        let end = self.pos.checked_add(n)?;
+        (end <= self.bytes.len()).then(|| self.pos = end)
+    }
+
+    /// An unsigned integer of `size` (4 or 8) bytes.
+    fn size_t(&mut self, size: usize) -> Option<u64> {
+        let b = self.bytes.get(self.pos..self.pos.checked_add(size)?)?;
+        self.pos += size;
+        let mut v = [0u8; 8];
+        if self.little {
+            v[..size].copy_from_slice(b);
+            Some(u64::from_le_bytes(v))
+        } else {
+            v[8 - size..].copy_from_slice(b);
+            Some(u64::from_be_bytes(v))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two tetrahedra sharing the face (2, 3, 4): nodes 1..5, the triangle (1, 2, 3) on z = 0 in
+    /// the physical surface "bottom", the volume in "body".
+    const TINY: &str = "$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+2
+2 1 \"bottom\"
+3 2 \"body\"
+$EndPhysicalNames
+$Entities
+0 0 1 1
+1 0 0 0 1 1 0 1 1 0
+1 0 0 0 1 1 1 1 2 1 1
+$EndEntities
+$Nodes
+1 5 1 5
+3 1 0 5
+1
+2
+3
+4
+5
+0 0 0
+1 0 0
+0 1 0
+0 0 1
+1 1 1
+$EndNodes
+$Elements
+2 3 1 3
+2 1 2 1
+1 1 2 3
+3 1 4 2
+2 1 2 3 4
+3 2 3 4 5
+$EndElements
+";
+
+    fn read(text: &str) -> Result<GmshImport, String> {
+        parse_msh(text.as_bytes(), 1.0, Path::new("tiny.msh")).map_err(|e| {
+            assert!(matches!(e, MeshError::File { .. }));
+            let m = e.to_string();
+            assert!(m.starts_with("tiny.msh: "), "{m}");
+            m
+        })
+    }
+
+    fn coords_by_tag(imp: &GmshImport) -> BTreeMap<u64, [f64; 3]> {
+        imp.node_tags.iter().zip(&imp.mesh.nodes).map(|(&t, &x)| (t, x)).collect()
+    }
+
+    #[test]
+    fn reads_tets_groups_and_tags() {
+        let imp = read(TINY).unwrap();
+        assert_eq!(imp.mesh.n_nodes(), 5);
+        assert_eq!(imp.mesh.n_elements(), 2);
+        assert_eq!(imp.node_tags, vec![1, 2, 3, 4, 5]);
+        assert_eq!(imp.element_tags, vec![2, 3]);
+        assert_eq!(imp.mesh.group_names(), vec!["bottom"]);
+        let f = imp.mesh.groups["bottom"][0];
+        assert_eq!(imp.mesh.facet_centroid(f)[2], 0.0);
+        assert_eq!(imp.surface_groups, vec![PhysicalGroup { dim: 2, tag: 1, name: "bottom".into(), elements: 1 }]);
+        assert_eq!(imp.ignored_groups, vec![PhysicalGroup { dim: 3, tag: 2, name: "body".into(), elements: 2 }]);
+        assert_eq!(imp.unused_nodes, 0);
+        assert_eq!(coords_by_tag(&imp)[&5], [1.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn dense_permuted_and_sparse_node_tags_map_to_the_same_mesh() {
+        let reference = coords_by_tag(&read(TINY).unwrap());
+        // dense tags 1..5 listed out of order, coordinates with them
+        let permuted = TINY.replace(
+            "1\n2\n3\n4\n5\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n",
+            "3\n1\n5\n2\n4\n0 1 0\n0 0 0\n1 1 1\n1 0 0\n0 0 1\n",
+        );
+        assert_ne!(permuted, TINY);
+        assert_eq!(coords_by_tag(&read(&permuted).unwrap()), reference);
+        // sparse tags: node k is tag 10 k (mshio keeps the tags)
+        let sparse = TINY
+            .replace("1 5 1 5\n", "1 5 10 50\n")
+            .replace("1\n2\n3\n4\n5\n0 0 0", "10\n20\n30\n40\n50\n0 0 0")
+            .replace("1 1 2 3\n", "1 10 20 30\n")
+            .replace("2 1 2 3 4\n3 2 3 4 5\n", "2 10 20 30 40\n3 20 30 40 50\n");
+        let imp = read(&sparse).unwrap();
+        assert_eq!(imp.node_tags, vec![10, 20, 30, 40, 50]);
+        let by_tag: BTreeMap<u64, [f64; 3]> = coords_by_tag(&imp).into_iter().map(|(t, x)| (t / 10, x)).collect();
+        assert_eq!(by_tag, reference);
+        assert_eq!(imp.mesh.groups["bottom"].len(), 1);
+    }
+
+    #[test]
+    fn unnamed_groups_scale_and_crlf() {
+        let unnamed = TINY.replace("2\n2 1 \"bottom\"\n", "1\n");
+        assert_eq!(read(&unnamed).unwrap().mesh.group_names(), vec!["physical_1"]);
+        let imp = parse_msh(TINY.as_bytes(), 2.0, Path::new("x")).unwrap();
+        assert_eq!(coords_by_tag(&imp)[&5], [2.0, 2.0, 2.0]);
+        let crlf = TINY.replace('\n', "\r\n");
+        assert_eq!(read(&crlf).unwrap().mesh.group_names(), vec!["bottom"]);
+        let spaced = TINY.replace("2 1 \"bottom\"", "2  1\t\"the bottom face\"");
+        assert_eq!(read(&spaced).unwrap().mesh.group_names(), vec!["the bottom face"]);
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let cases: Vec<(String, Vec<&str>)> = vec![
+            (TINY.replace("4.1 0 8", "2.2 0 8"), vec!["MSH version 2.2 found", "only version 4.1"]),
+            ("hello".into(), vec!["not a Gmsh MSH file"]),
+            (String::new(), vec!["empty"]),
+            (
+                TINY.replace("2\n2 1 \"bottom\"\n", "3\n2 1 \"bottom\"\n2 7 \"ghost\"\n"),
+                vec!["\"ghost\"", "refers to nothing", "physical tag 7"],
+            ),
+            (TINY.replace("1 1 2 3\n", "1 2 3 4\n"), vec!["triangle 1", "\"bottom\"", "not a boundary face"]),
+            (TINY.replace("3 2 3 4 5\n", "3 2 3 4 9\n"), vec!["tetrahedron 3 refers to node 9"]),
+            (
+                TINY.replace("1 1 2 3\n", "1 1 2 8\n"),
+                vec!["triangle 1 of physical surface \"bottom\" refers to node 8"],
+            ),
+            (TINY.replace("2 1 2 3 4\n", "2 1 3 2 4\n"), vec!["tetrahedron 2 (nodes 1, 3, 2, 4) is inverted"]),
+            (TINY.replace("1 0 0\n0 1 0", "1e999 0 0\n0 1 0"), vec!["node 2 has a non-finite coordinate"]),
+            (
+                TINY.replace("2 3 1 3\n", "1 1 1 1\n").replace("3 1 4 2\n2 1 2 3 4\n3 2 3 4 5\n", ""),
+                vec!["no tetrahedra", "1 triangle(s) of physical surfaces", "Mesh.SaveAll"],
+            ),
+            (
+                TINY.replace("3 1 4 2\n2 1 2 3 4\n3 2 3 4 5\n", "3 1 11 1\n2 1 2 3 4 1 2 3 4 1 2\n")
+                    .replace("2 3 1 3\n", "2 2 1 2\n"),
+                vec!["second-order elements are not supported; mesh with order 1", "10-node tetrahedra"],
+            ),
+            (
+                TINY.replace("3 1 4 2\n2 1 2 3 4\n3 2 3 4 5\n", "3 1 5 1\n2 1 2 3 4 5 1 2 3\n")
+                    .replace("2 3 1 3\n", "2 2 1 2\n"),
+                vec!["only 4-node tetrahedra", "1 8-node hexahedra (element type 5) in volume 1"],
+            ),
+            (
+                TINY.replace("2 1 2 1\n1 1 2 3\n", "2 1 3 1\n1 1 2 3 4\n"),
+                vec!["physical surface \"bottom\" has 1 4-node quadrangles", "only 3-node triangles"],
+            ),
+            (TINY.replace("1 5 1 5\n", "1 5 1 5\n7\n"), vec!["cannot parse the file as MSH 4.1"]),
+            (TINY.replace("2 1 \"bottom\"", "2 1 bottom"), vec!["$PhysicalNames: cannot read \"2 1 bottom\""]),
+            (TINY.replace("$EndPhysicalNames\n", ""), vec!["$PhysicalNames has no $EndPhysicalNames"]),
+            (TINY[..TINY.find("3 2 3 4 5").unwrap()].to_string(), vec!["truncated"]),
+        ];
+        for (text, expected) in cases {
+            let err = read(&text).err().unwrap_or_else(|| panic!("no error for\n{text}"));
+            for e in expected {
+                assert!(err.contains(e), "error {err:?} lacks {e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn missing_file_and_bad_scale() {
+        let e = read_msh(Path::new("/no/such/dir/mesh.msh"), 1.0).unwrap_err().to_string();
+        assert!(e.contains("/no/such/dir/mesh.msh") && e.contains("cannot read"), "{e}");
+        let src = GmshMesh { file: "m.msh".into(), scale: 0.0 };
+        assert!(src.validate("mesh").unwrap_err().to_string().contains("mesh.scale = 0"));
+        assert!(src.validate("mesh").is_err());
+        let src: Box<dyn MeshSource> = toml::from_str("type = \"gmsh\"\nfile = \"m.msh\"").unwrap();
+        assert!(src.validate("mesh").is_ok());
+        let e = toml::from_str::<Box<dyn MeshSource>>("type = \"gmsh\"\nfile = \"m.msh\"\nscal = 2.0").unwrap_err();
+        assert!(e.to_string().contains("scal"), "{e}");
+    }
+}

@@ -1,0 +1,481 @@
+//! `saddle report`: accuracy and cost of the solvers on a scene (SPEC §4, §5) and the mesh
+//! convergence of the discretisation (SPEC §3 Theorem 2, §7).
+//!
+//! [`generate`] writes into a folder:
+//!
+//! * `work_precision.csv`, `work_precision.png`, `work_precision.svg` — every solver along a
+//!   ladder of settings ([`runs::ladder`]), each run's wall time and its errors against a tightly
+//!   converged reference of the same discrete problem (Newton to 1e-13, [`runs::reference_solver`]);
+//! * `convergence.csv`, `convergence.png`, `convergence.svg` — the scene on a sequence of refined
+//!   box meshes ([`convergence`], [`LEVELS`]), each solved by the reference solver; errors against
+//!   the finest level through the transfer of P0 fields ([`transfer`]), observed rates next to
+//!   Theorem 2's guaranteed 1/2, a Richardson extrapolation of U. A scene whose mesh is not a
+//!   `box` gets no study: `convergence.csv` holds its header only and `report.md` says why;
+//! * `report.md` — both tables, the observed σ̂ rate against 1/2, each solver at its tightest
+//!   setting, links to the images.
+//!
+//! The plots need the cargo feature `report` (on by default; [`plot`]); without it the CSV files
+//! and `report.md` are written and `report.md` says that the images were not drawn.
+//!
+//! The parts are public so that tests can check them: the error measures ([`runs::errors`],
+//! [`transfer::field_distance`]), point location ([`transfer::Locator`]), rates and Richardson
+//! ([`convergence`]), the writers ([`tables`]).
+
+pub mod convergence;
+#[cfg(feature = "report")]
+pub mod plot;
+pub mod runs;
+pub mod tables;
+pub mod transfer;
+
+use convergence::{ConvergenceStudy, LevelResult, mesh_size, refinement_levels};
+use runs::{RunRecord, Rung, RungKind, Timed, ladder, record, reference_solver, timed_polish, timed_solve};
+use saddle_core::{Lagrangian, Monitor, P1P0Lagrangian, Scene, SceneError, Silent, Solution, SolveError, Workspace};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use thiserror::Error;
+pub use transfer::OutsideMesh;
+use transfer::{Quadrature, SampleMap};
+
+/// Why a report could not be made.
+#[derive(Debug, Error)]
+pub enum ReportError {
+    /// The scene (or a refined version of it) is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The reference solve failed: no error can be measured.
+    #[error("the reference solve (Newton, tol = 1e-13) failed: {0}")]
+    Reference(SolveError),
+    /// A refined mesh does not cover the same domain.
+    #[error("mesh convergence: {0}")]
+    Transfer(#[from] OutsideMesh),
+    /// A file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A plot could not be drawn.
+    #[error("cannot draw {path}: {message}")]
+    Plot {
+        /// The image.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+/// Progress over the runs of a report (a progress bar); it also follows each solve as its
+/// [`Monitor`].
+pub trait Progress: Monitor {
+    /// The number of runs the report will make.
+    fn plan(&mut self, _runs: usize) {}
+    /// Run `index` (0-based) starts.
+    fn start(&mut self, _index: usize, _label: &str) {}
+    /// Run `index` ended with `status`.
+    fn finish(&mut self, _index: usize, _label: &str, _status: &str) {}
+}
+
+impl Progress for Silent {}
+
+/// Options of a report.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ReportOptions {
+    /// Fewer rungs and levels (tests, CI).
+    pub quick: bool,
+}
+
+/// Refinement factors of the scene's cells: for the default scene (32×32×16) 4, 6, 8, 11, 16
+/// and 22 cells across the half-width — the scene's mesh is one below the finest level. The
+/// finest level costs the most: on the default scene 120k dofs, ~130 s and 2.4 GB for Newton.
+pub const LEVELS: [f64; 6] = [0.25, 0.375, 0.5, 0.6875, 1.0, 1.375];
+/// Refinement factors with `quick` (the scene's mesh is the finest level).
+pub const QUICK_LEVELS: [f64; 3] = [0.5, 0.75, 1.0];
+
+/// A scene file's text, to build the scene and refined versions of it.
+#[derive(Clone, Debug)]
+pub struct SceneSource {
+    /// The file (relative mesh files are resolved against its folder).
+    pub path: PathBuf,
+    /// Its TOML text.
+    pub text: String,
+}
+
+impl SceneSource {
+    /// Reads a scene file.
+    pub fn read(path: &Path) -> Result<Self, ReportError> {
+        let text =
+            std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
+        Ok(Self { path: path.to_path_buf(), text })
+    }
+
+    /// The scene, validated; with `cells`, its box mesh refined to those cells.
+    pub fn scene(&self, cells: Option<[usize; 3]>) -> Result<Scene, ReportError> {
+        let mut scene = match cells {
+            None => Scene::from_toml(&self.text, &self.path)?,
+            Some(c) => {
+                let mut table: toml::Table = toml::from_str(&self.text).map_err(|e| SceneError::Parse {
+                    path: self.path.clone(),
+                    message: e.to_string().trim_end().to_string(),
+                })?;
+                let cells = toml::Value::Array(c.iter().map(|&n| toml::Value::Integer(n as i64)).collect());
+                match table.get_mut("mesh").and_then(|m| m.as_table_mut()) {
+                    Some(mesh) => mesh.insert("cells".into(), cells),
+                    None => {
+                        return Err(
+                            SceneError::Parse { path: self.path.clone(), message: "no [mesh] table".into() }.into()
+                        );
+                    }
+                };
+                let text = toml::to_string(&table).map_err(|e| SceneError::Parse {
+                    path: self.path.clone(),
+                    message: format!("cannot re-serialise the scene: {e}"),
+                })?;
+                Scene::from_toml(&text, &self.path)?
+            }
+        };
+        scene.base_dir = self.path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Ok(scene)
+    }
+
+    /// The assembled problem (with `cells`: on the refined box mesh).
+    pub fn problem(&self, cells: Option<[usize; 3]>) -> Result<P1P0Lagrangian, ReportError> {
+        Ok(self.scene(cells)?.into_problem()?.0)
+    }
+
+    /// The title: the scene's, else the file name.
+    pub fn title(&self) -> String {
+        Scene::from_toml(&self.text, &self.path)
+            .ok()
+            .and_then(|s| s.title)
+            .unwrap_or_else(|| self.path.file_name().map_or("scene".into(), |n| n.to_string_lossy().into_owned()))
+    }
+
+    /// The cells of the scene's box mesh, or why the scene has none (mesh convergence needs a
+    /// `box` mesh).
+    pub fn box_cells(&self) -> Result<[usize; 3], String> {
+        let table: toml::Table = toml::from_str(&self.text).map_err(|e| e.message().to_string())?;
+        let mesh = table.get("mesh").and_then(|m| m.as_table()).ok_or("the scene has no [mesh] table")?;
+        let kind = mesh.get("type").and_then(|t| t.as_str()).unwrap_or("?");
+        if kind != "box" {
+            return Err(format!(
+                "mesh convergence needs a `box` mesh (refined by scaling `mesh.cells`); this scene's mesh is `{kind}`"
+            ));
+        }
+        let cells: Vec<usize> = mesh
+            .get("cells")
+            .and_then(|c| c.as_array())
+            .map(|a| a.iter().filter_map(|v| v.as_integer()).filter(|&v| v > 0).map(|v| v as usize).collect())
+            .unwrap_or_default();
+        <[usize; 3]>::try_from(cells).map_err(|_| "mesh.cells is not three positive integers".to_string())
+    }
+}
+
+/// Everything a report measured.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Its title.
+    pub title: String,
+    /// Free dofs, elements and contact rows of the scene.
+    pub dofs: usize,
+    /// Tetrahedra.
+    pub elements: usize,
+    /// Candidate contact nodes (rows of K_h).
+    pub contact_rows: usize,
+    /// Whether `quick` was set.
+    pub quick: bool,
+    /// Cores available (`std::thread::available_parallelism`).
+    pub cores: usize,
+    /// The work–precision runs, the reference among them.
+    pub runs: Vec<RunRecord>,
+    /// The cells of the scene's box mesh (None for other meshes).
+    pub scene_cells: Option<[usize; 3]>,
+    /// The convergence study, or why there is none.
+    pub convergence: Result<ConvergenceStudy, String>,
+    /// Wall time of the whole report, seconds.
+    pub total_s: f64,
+    /// Whether the images were drawn (feature `report`).
+    pub plots: bool,
+}
+
+impl Report {
+    /// The reference run.
+    pub fn reference(&self) -> Option<&RunRecord> {
+        self.runs.iter().find(|r| r.reference)
+    }
+}
+
+/// Runs the work–precision ladder on `l`: the reference ([`runs::reference_solver`]) first,
+/// then every other rung. Returns the records in ladder order (the [`RungKind::Reference`] rung
+/// reports the reference run), the reference solution and its wall time. `counter` numbers the
+/// runs for `progress`.
+pub fn work_precision(
+    l: &P1P0Lagrangian,
+    rungs: &[Rung],
+    progress: &mut dyn Progress,
+    counter: &mut usize,
+) -> Result<(Vec<RunRecord>, Solution, f64), ReportError> {
+    let reference_rung = rungs
+        .iter()
+        .find(|r| matches!(r.kind, RungKind::Reference))
+        .map(|r| r.label())
+        .unwrap_or_else(|| "newton (reference)".into());
+    progress.start(*counter, &reference_rung);
+    let timed = timed_solve(&reference_solver(), l, progress);
+    let reference_wall = timed.wall_s;
+    let reference = timed.result.map_err(ReportError::Reference)?;
+    progress.finish(*counter, &reference_rung, runs::status_of(reference.report.stop_reason));
+    *counter += 1;
+    let reference_timed = Timed { result: Ok(reference), wall_s: reference_wall };
+    let mut records: Vec<RunRecord> = Vec::with_capacity(rungs.len());
+    // solutions kept for the rungs that a polish starts from
+    let mut kept: Vec<Option<Solution>> = (0..rungs.len()).map(|_| None).collect();
+    let needed: Vec<usize> = rungs
+        .iter()
+        .filter_map(|r| match r.kind {
+            RungKind::Polish { from, .. } => Some(from),
+            _ => None,
+        })
+        .collect();
+    let reference = reference_timed.result.as_ref().expect("checked above");
+    for (i, rung) in rungs.iter().enumerate() {
+        if matches!(rung.kind, RungKind::Reference) {
+            records.push(record(l, rung, &reference_timed, reference));
+            continue;
+        }
+        let label = rung.label();
+        progress.start(*counter, &label);
+        let (timed, start) = match &rung.kind {
+            RungKind::Solve(solver) => (timed_solve(solver.as_ref(), l, progress), None),
+            RungKind::Polish { from, newton } => match kept.get(*from).and_then(|s| s.as_ref()) {
+                Some(start) => (timed_polish(newton, l, start, progress), Some(*from)),
+                None => (
+                    Timed {
+                        result: Err(SolveError::Unsupported {
+                            solver: rung.solver.into(),
+                            message: format!(
+                                "no solution to polish: rung {from} ({}) failed or has not run",
+                                rungs.get(*from).map_or("none".into(), |r| r.label())
+                            ),
+                        }),
+                        wall_s: 0.0,
+                    },
+                    None,
+                ),
+            },
+            RungKind::Reference => unreachable!("handled above"),
+        };
+        let mut rec = record(l, rung, &timed, reference);
+        if let Some(from) = start {
+            runs::add_start_time(&mut rec, &records[from]);
+        }
+        progress.finish(*counter, &label, &rec.status);
+        *counter += 1;
+        records.push(rec);
+        if needed.contains(&i) {
+            kept[i] = timed.result.ok();
+        }
+    }
+    let Timed { result, .. } = reference_timed;
+    Ok((records, result.expect("checked above"), reference_wall))
+}
+
+/// A level whose solve is already known (the work–precision reference on the scene's mesh).
+pub struct KnownLevel {
+    /// Its cells.
+    pub cells: [usize; 3],
+    /// The problem.
+    pub problem: P1P0Lagrangian,
+    /// Its solution by [`runs::reference_solver`].
+    pub solution: Solution,
+    /// The solve's wall time, seconds.
+    pub wall_s: f64,
+}
+
+/// A level's solve and its fields, kept while the next coarser level is compared with it.
+struct Solved {
+    l: P1P0Lagrangian,
+    sol: Solution,
+    strain: Vec<saddle_core::Sym>,
+}
+
+/// The mesh convergence study of `source` on the box meshes `levels` (ascending; the last is
+/// the finest and the reference of the errors). Every level is solved by
+/// [`runs::reference_solver`], except a level given as `known`. Levels are processed from fine
+/// to coarse, so that only the finest and the next finer level are kept in memory.
+pub fn convergence_study(
+    source: &SceneSource,
+    levels: &[[usize; 3]],
+    known: Option<KnownLevel>,
+    progress: &mut dyn Progress,
+    counter: &mut usize,
+) -> Result<ConvergenceStudy, ReportError> {
+    let solver = reference_solver();
+    let mut known = known;
+    let mut solve_level = |cells: [usize; 3], progress: &mut dyn Progress| -> Result<_, ReportError> {
+        if let Some(k) = known.take_if(|k| k.cells == cells) {
+            return Ok((k.problem, Timed { result: Ok(k.solution), wall_s: k.wall_s }));
+        }
+        let l = source.problem(Some(cells))?;
+        let label =
+            format!("convergence: newton on {}x{}x{} cells ({} dofs)", cells[0], cells[1], cells[2], l.n_dofs());
+        progress.start(*counter, &label);
+        let timed = timed_solve(&solver, &l, progress);
+        let status = match &timed.result {
+            Ok(s) => runs::status_of(s.report.stop_reason).to_string(),
+            Err(e) => format!("error: {e}"),
+        };
+        progress.finish(*counter, &label, &status);
+        *counter += 1;
+        Ok((l, timed))
+    };
+    let u_of = |s: &Solution| s.extras.first().copied().unwrap_or(f64::NAN);
+    let level_result = |l: &P1P0Lagrangian, cells: [usize; 3], timed: &Timed| {
+        let (status, converged, iterations, kkt, u) = match &timed.result {
+            Ok(s) => (
+                runs::status_of(s.report.stop_reason).to_string(),
+                s.report.converged,
+                s.report.iterations,
+                l.kkt(&s.iterate(), &mut Workspace::new(l)).max(),
+                u_of(s),
+            ),
+            Err(e) => (format!("error: {e}"), false, 0, f64::NAN, f64::NAN),
+        };
+        LevelResult {
+            cells,
+            dofs: l.n_dofs(),
+            elements: l.n_points(),
+            size: mesh_size(l),
+            wall_s: timed.wall_s,
+            status,
+            converged,
+            iterations,
+            kkt,
+            u,
+            err_u: f64::NAN,
+            err_u_richardson: f64::NAN,
+            err_stress: f64::NAN,
+            err_strain: f64::NAN,
+            diff_stress_next: f64::NAN,
+        }
+    };
+    let Some((&finest_cells, coarser)) = levels.split_last() else {
+        return Ok(ConvergenceStudy::from_levels(vec![]));
+    };
+    let (fl, finest_timed) = solve_level(finest_cells, progress)?;
+    let mut finest_result = level_result(&fl, finest_cells, &finest_timed);
+    let fsol = finest_timed.result.map_err(ReportError::Reference)?;
+    finest_result.err_u = 0.0;
+    finest_result.err_stress = 0.0;
+    finest_result.err_strain = 0.0;
+    let fine_strain = transfer::strains(&fl, &fsol.u);
+    let u_f = u_of(&fsol);
+    let mut results = vec![finest_result];
+    // the next finer level that was solved, for the consecutive differences
+    let mut finer: Option<Solved> = None;
+    for &cells in coarser.iter().rev() {
+        let (l, timed) = solve_level(cells, progress)?;
+        let mut res = level_result(&l, cells, &timed);
+        if let Ok(sol) = timed.result {
+            let strain = transfer::strains(&l, &sol.u);
+            let map = SampleMap::new(l.mesh(), fl.mesh(), Quadrature::default())?;
+            let d = transfer::field_distance(&fl, &fsol.stress, &fine_strain, &sol.stress, &strain, &map);
+            res.err_u = (res.u - u_f).abs() / u_f.abs();
+            res.err_stress = d.stress_energy;
+            res.err_strain = d.strain_l2;
+            res.diff_stress_next = match &finer {
+                None => d.stress_energy,
+                Some(next) => {
+                    let map = SampleMap::new(l.mesh(), next.l.mesh(), Quadrature::default())?;
+                    transfer::field_distance(&next.l, &next.sol.stress, &next.strain, &sol.stress, &strain, &map)
+                        .stress_energy
+                }
+            };
+            finer = Some(Solved { l, sol, strain });
+        }
+        results.push(res);
+    }
+    results.reverse();
+    Ok(ConvergenceStudy::from_levels(results))
+}
+
+/// Makes the report of the scene file `scene` in `out` (module docs).
+pub fn generate(
+    scene: &Path,
+    out: &Path,
+    options: &ReportOptions,
+    progress: &mut dyn Progress,
+) -> Result<Report, ReportError> {
+    let t0 = Instant::now();
+    let source = SceneSource::read(scene)?;
+    let l = source.problem(None)?;
+    let rungs = ladder(options.quick);
+    let base = source.box_cells();
+    let levels: Result<Vec<[usize; 3]>, String> = base.clone().map(|base| {
+        let factors: &[f64] = if options.quick { &QUICK_LEVELS } else { &LEVELS };
+        let mut levels = refinement_levels(base, factors);
+        if !levels.contains(&base) {
+            levels.push(base);
+            levels.sort_by_key(|c| c[0] * c[1] * c[2]);
+        }
+        levels
+    });
+    // the scene's own level is the work–precision reference: not solved again
+    let other_levels = levels.as_ref().map_or(0, |v| v.len().saturating_sub(1));
+    let solves = 1 + rungs.iter().filter(|r| !matches!(r.kind, RungKind::Reference)).count() + other_levels;
+    progress.plan(solves);
+    let mut counter = 0;
+    std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
+    let (runs, reference, reference_wall) = work_precision(&l, &rungs, progress, &mut counter)?;
+    let (dofs, elements, contact_rows) = (l.n_dofs(), l.n_points(), l.constraints().n_rows());
+    let convergence = match levels {
+        Ok(levels) if levels.len() >= 2 => {
+            let cells = *base.as_ref().expect("levels come from the base cells");
+            let known = KnownLevel { cells, problem: l, solution: reference, wall_s: reference_wall };
+            Ok(convergence_study(&source, &levels, Some(known), progress, &mut counter)?)
+        }
+        Ok(_) => Err("the scene's mesh is too coarse to coarsen (fewer than two distinct levels)".to_string()),
+        Err(why) => Err(why),
+    };
+    let mut report = Report {
+        scene: scene.to_path_buf(),
+        title: source.title(),
+        dofs,
+        elements,
+        contact_rows,
+        quick: options.quick,
+        cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        runs,
+        scene_cells: base.ok(),
+        convergence,
+        total_s: 0.0,
+        plots: cfg!(feature = "report"),
+    };
+    write_outputs(&mut report, out, t0)?;
+    Ok(report)
+}
+
+/// Writes the CSV files, the images (feature `report`) and `report.md`; the total time is taken
+/// just before `report.md`.
+fn write_outputs(report: &mut Report, out: &Path, t0: Instant) -> Result<(), ReportError> {
+    let write = |name: &str, text: &str| {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(|source| ReportError::Io { path, source })
+    };
+    write("work_precision.csv", &tables::work_precision_csv(&report.runs))?;
+    write("convergence.csv", &tables::convergence_csv(report.convergence.as_ref().ok()))?;
+    #[cfg(feature = "report")]
+    {
+        plot::work_precision(report, &out.join("work_precision.png"), &out.join("work_precision.svg"))?;
+        if let Ok(study) = &report.convergence {
+            plot::convergence(report, study, &out.join("convergence.png"), &out.join("convergence.svg"))?;
+        }
+    }
+    report.total_s = t0.elapsed().as_secs_f64();
+    write("report.md", &tables::markdown(report))?;
+    Ok(())
+}

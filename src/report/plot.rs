@@ -1,0 +1,478 @@
+//! The report's images (cargo feature `report`): log–log plots drawn by plotters into PNG and
+//! SVG, in pure Rust — the PNG's text is rasterised from an embedded DejaVu Sans (no fontconfig
+//! or freetype), the SVG names the font family.
+//!
+//! * `work_precision.{png,svg}`: error against wall time (SPEC §5), σ̂ in the energy norm and U in
+//!   two panels, one line with markers per solver through its converged runs; runs that stopped
+//!   short are open markers off the line; errors of exactly 0 (the reference) are not drawn.
+//! * `convergence.{png,svg}`: errors against the mesh size h (SPEC §3 Theorem 2) with a reference
+//!   line of slope 1/2.
+//!
+//! The legend is drawn in a strip below the panels, so it never covers data.
+
+use super::Report;
+use super::convergence::ConvergenceStudy;
+use super::runs::RunRecord;
+use plotters::coord::Shift;
+use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+/// The font family every text uses; registered once from the embedded DejaVu Sans.
+const FONT: &str = "sans-serif";
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // the bytes are a valid TrueType font: registration cannot fail
+        let _ = plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+/// Marker shapes, one per series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Marker {
+    Circle,
+    Triangle,
+    Square,
+    Cross,
+}
+
+/// One line of a panel.
+#[derive(Clone, Debug)]
+struct Series {
+    name: String,
+    color: RGBColor,
+    marker: Marker,
+    /// Points joined by the line (filled markers).
+    line: Vec<(f64, f64)>,
+    /// Points drawn alone with open markers (runs that stopped short).
+    open: Vec<(f64, f64)>,
+    /// A dashed reference line without markers.
+    dashed: bool,
+}
+
+/// One panel: a log–log chart.
+#[derive(Clone, Debug)]
+struct Panel {
+    caption: String,
+    x_desc: String,
+    y_desc: String,
+    series: Vec<Series>,
+}
+
+/// A figure: a title, panels side by side, a legend strip.
+#[derive(Clone, Debug)]
+struct Figure {
+    title: String,
+    panels: Vec<Panel>,
+    /// Series shown in the legend (by name, first occurrence).
+    legend: Vec<Series>,
+    /// An extra legend line (what open markers mean).
+    legend_note: Option<String>,
+    /// Draw an open marker before the note.
+    note_marker: bool,
+    size: (u32, u32),
+}
+
+const COLORS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+const MARKERS: [Marker; 4] = [Marker::Circle, Marker::Triangle, Marker::Square, Marker::Cross];
+const GREY: RGBColor = RGBColor(110, 110, 110);
+
+/// Errors below this are not drawn (exactly 0 is the reference itself).
+const ERROR_FLOOR: f64 = 1e-300;
+
+fn plot_error(path: &Path, e: impl std::fmt::Display) -> super::ReportError {
+    super::ReportError::Plot { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// Draws `fig` into a PNG and an SVG file.
+fn render(fig: &Figure, png: &Path, svg: &Path) -> Result<(), super::ReportError> {
+    register_font();
+    {
+        let root = BitMapBackend::new(png, fig.size).into_drawing_area();
+        draw(fig, &root).map_err(|e| plot_error(png, e))?;
+        root.present().map_err(|e| plot_error(png, e))?;
+    }
+    let root = SVGBackend::new(svg, fig.size).into_drawing_area();
+    draw(fig, &root).map_err(|e| plot_error(svg, e))?;
+    root.present().map_err(|e| plot_error(svg, e))?;
+    Ok(())
+}
+
+/// A label of a log axis: only at mantissas 1, 2 and 5 (the other grid lines stay
+/// unlabelled), plain decimals between 0.01 and 10⁴, else `1e-5`.
+fn log_label(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || !a.is_finite() {
+        return String::new();
+    }
+    let m = a / 10f64.powf(a.log10().floor());
+    if ![1.0, 2.0, 5.0, 10.0].iter().any(|k| (m - k).abs() < 1e-6 * k) {
+        return String::new();
+    }
+    if (1e-2..1e4).contains(&a) {
+        let s = format!("{x:.2}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        let s = format!("{x:.0e}");
+        s.replace("e-0", "e-").replace("e0", "e")
+    }
+}
+
+/// The grid of a log axis from `lo` to `hi`: 1…9 × 10^k when it spans at most 4 decades,
+/// the decades alone otherwise ([`log_label`] labels 1, 2 and 5 of them).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let fine = (hi / lo).log10() <= 4.0;
+    let mut ticks = Vec::new();
+    for k in (lo.log10().floor() as i32)..=(hi.log10().ceil() as i32) {
+        for m in 1..=9 {
+            let v = f64::from(m) * 10f64.powi(k);
+            if (fine || m == 1) && v >= lo * (1.0 - 1e-12) && v <= hi * (1.0 + 1e-12) {
+                ticks.push(v);
+            }
+        }
+    }
+    ticks
+}
+
+/// A log range around `values`: padded by the factor `pad` on each side, at least a decade.
+fn padded(values: impl Iterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite() && *v > 0.0) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.1, 10.0);
+    }
+    let (lo, hi) = (lo / pad, hi * pad);
+    if hi / lo < 10.0 {
+        let mid = (lo * hi).sqrt();
+        (mid / 10f64.sqrt(), mid * 10f64.sqrt())
+    } else {
+        (lo, hi)
+    }
+}
+
+/// Legend entry positions (left end of the sample line, text baseline row) in a strip of
+/// width `w`, and the strip's height.
+fn legend_layout<DB: DrawingBackend>(
+    fig: &Figure,
+    area: &DrawingArea<DB, Shift>,
+    w: u32,
+) -> Result<(Vec<(i32, i32)>, u32), String> {
+    let s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let font: TextStyle = (FONT, 17).into_text_style(area);
+    let (mut x, mut y) = (LEGEND_X, 16i32);
+    let mut at = Vec::new();
+    for se in &fig.legend {
+        let (tw, _) = area.estimate_text_size(&se.name, &font).map_err(s)?;
+        let entry_w = 44 + tw as i32 + 30;
+        if x + entry_w > w as i32 && x > LEGEND_X {
+            x = LEGEND_X;
+            y += LEGEND_ROW;
+        }
+        at.push((x, y));
+        x += entry_w;
+    }
+    if fig.legend_note.is_some() {
+        y += LEGEND_ROW;
+    }
+    Ok((at, (y + 18) as u32))
+}
+
+const LEGEND_X: i32 = 70;
+const LEGEND_ROW: i32 = 28;
+
+fn draw<DB: DrawingBackend>(fig: &Figure, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+    let s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(s)?;
+    let body = root.titled(&fig.title, (FONT, 26)).map_err(s)?;
+    let (w, h) = body.dim_in_pixel();
+    let (at, legend_h) = legend_layout(fig, &body, w)?;
+    let (charts, legend) = body.split_vertically(h.saturating_sub(legend_h));
+    let areas = charts.split_evenly((1, fig.panels.len().max(1)));
+    for (panel, area) in fig.panels.iter().zip(&areas) {
+        draw_panel(panel, area)?;
+    }
+    draw_legend(fig, &legend, &at)
+}
+
+fn draw_panel<DB: DrawingBackend>(panel: &Panel, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
+    let s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let xs = panel.series.iter().flat_map(|se| se.line.iter().chain(&se.open).map(|p| p.0));
+    let ys = panel.series.iter().filter(|se| !se.dashed).flat_map(|se| se.line.iter().chain(&se.open).map(|p| p.1));
+    let (x0, x1) = padded(xs, 1.3);
+    let (y0, y1) = padded(ys, 2.0);
+    let x_axis = (x0..x1).log_scale().with_key_points(log_ticks(x0, x1));
+    let y_axis = (y0..y1).log_scale().with_key_points(log_ticks(y0, y1));
+    let mut chart = ChartBuilder::on(area)
+        .caption(&panel.caption, (FONT, 20))
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d(x_axis, y_axis)
+        .map_err(s)?;
+    chart
+        .configure_mesh()
+        .x_desc(&panel.x_desc)
+        .y_desc(&panel.y_desc)
+        .x_label_formatter(&|x| log_label(*x))
+        .y_label_formatter(&|y| log_label(*y))
+        .label_style((FONT, 15))
+        .axis_desc_style((FONT, 17))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(225, 225, 225))
+        .draw()
+        .map_err(s)?;
+    let inside = |p: &&(f64, f64)| p.0 >= x0 && p.0 <= x1 && p.1 >= y0 && p.1 <= y1;
+    for se in &panel.series {
+        let style = ShapeStyle { color: se.color.to_rgba(), filled: true, stroke_width: 2 };
+        if se.dashed {
+            let pts: Vec<(f64, f64)> = se.line.clone();
+            chart.draw_series(DashedLineSeries::new(pts, 8, 6, ShapeStyle { filled: false, ..style })).map_err(s)?;
+            continue;
+        }
+        chart.draw_series(LineSeries::new(se.line.iter().copied(), style)).map_err(s)?;
+        let filled: Vec<(f64, f64)> = se.line.iter().filter(inside).copied().collect();
+        draw_markers(&mut chart, &filled, se.marker, style).map_err(s)?;
+        let open: Vec<(f64, f64)> = se.open.iter().filter(inside).copied().collect();
+        draw_markers(&mut chart, &open, se.marker, ShapeStyle { filled: false, ..style }).map_err(s)?;
+    }
+    Ok(())
+}
+
+type LogAxis = WithKeyPoints<LogCoord<f64>>;
+type LogChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>;
+
+fn draw_markers<DB: DrawingBackend>(
+    chart: &mut LogChart<'_, DB>,
+    pts: &[(f64, f64)],
+    marker: Marker,
+    style: ShapeStyle,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    match marker {
+        Marker::Circle => chart.draw_series(pts.iter().map(|p| Circle::new(*p, 5, style)))?,
+        Marker::Triangle => chart.draw_series(pts.iter().map(|p| TriangleMarker::new(*p, 7, style)))?,
+        Marker::Square => {
+            chart.draw_series(pts.iter().map(|p| EmptyElement::at(*p) + Rectangle::new([(-5, -5), (5, 5)], style)))?
+        }
+        Marker::Cross => chart.draw_series(pts.iter().map(|p| Cross::new(*p, 6, style)))?,
+    };
+    Ok(())
+}
+
+fn draw_legend<DB: DrawingBackend>(
+    fig: &Figure,
+    area: &DrawingArea<DB, Shift>,
+    at: &[(i32, i32)],
+) -> Result<(), String> {
+    let s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let font: TextStyle = (FONT, 17).into_text_style(area);
+    for (se, &(x, y)) in fig.legend.iter().zip(at) {
+        let style = ShapeStyle { color: se.color.to_rgba(), filled: true, stroke_width: 2 };
+        if se.dashed {
+            area.draw(&DashedPathElement::new(vec![(x, y), (x + 34, y)], 6, 4, ShapeStyle { filled: false, ..style }))
+                .map_err(s)?;
+        } else {
+            area.draw(&PathElement::new(vec![(x, y), (x + 34, y)], style)).map_err(s)?;
+            let c = (x + 17, y);
+            match se.marker {
+                Marker::Circle => area.draw(&Circle::new(c, 5, style)),
+                Marker::Triangle => area.draw(&TriangleMarker::new(c, 7, style)),
+                Marker::Square => area.draw(&Rectangle::new([(c.0 - 5, c.1 - 5), (c.0 + 5, c.1 + 5)], style)),
+                Marker::Cross => area.draw(&Cross::new(c, 6, style)),
+            }
+            .map_err(s)?;
+        }
+        area.draw(&Text::new(se.name.clone(), (x + 44, y - 9), font.clone())).map_err(s)?;
+    }
+    if let Some(note) = &fig.legend_note {
+        let y = at.iter().map(|p| p.1).max().unwrap_or(16) + LEGEND_ROW;
+        if fig.note_marker {
+            let open = ShapeStyle { color: GREY.to_rgba(), filled: false, stroke_width: 2 };
+            area.draw(&Circle::new((LEGEND_X + 17, y), 5, open)).map_err(s)?;
+        }
+        area.draw(&Text::new(note.clone(), (LEGEND_X + 44, y - 9), font)).map_err(s)?;
+    }
+    Ok(())
+}
+
+/// The solvers in ladder order.
+fn solvers(runs: &[RunRecord]) -> Vec<&str> {
+    let mut out: Vec<&str> = Vec::new();
+    for r in runs {
+        if !out.contains(&r.solver.as_str()) {
+            out.push(&r.solver);
+        }
+    }
+    out
+}
+
+/// `work_precision.png` and `.svg` (module docs).
+pub fn work_precision(report: &Report, png: &Path, svg: &Path) -> Result<(), super::ReportError> {
+    let names = solvers(&report.runs);
+    let panel = |caption: &str, err: fn(&super::runs::Errors) -> f64| Panel {
+        caption: caption.into(),
+        x_desc: "wall time (s)".into(),
+        y_desc: "relative error".into(),
+        series: names
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let pts = |converged: bool| {
+                    let v: Vec<(f64, f64)> = report
+                        .runs
+                        .iter()
+                        .filter(|r| r.solver == *name && r.converged == converged)
+                        .filter_map(|r| r.errors.map(|e| (r.wall_s, err(&e))))
+                        .filter(|p| p.0 > 0.0 && p.1 > ERROR_FLOOR && p.1.is_finite())
+                        .collect();
+                    // in ladder order: loose to tight settings
+                    v
+                };
+                Series {
+                    name: name.to_string(),
+                    color: COLORS[i % COLORS.len()],
+                    marker: MARKERS[i % MARKERS.len()],
+                    line: pts(true),
+                    open: pts(false),
+                    dashed: false,
+                }
+            })
+            .collect(),
+    };
+    let panels = vec![
+        panel("stress (σ, ξ) in the energy norm, relative to the reference", |e| e.stress_rel),
+        panel("punch displacement U, relative to the reference", |e| e.u_rel),
+    ];
+    let legend = panels[0].series.clone();
+    let reference = report.reference().map(|r| {
+        let setting = r.setting.trim_end_matches(" (reference)");
+        format!("; the reference ({} {setting}, {:.1} s) has error 0 and is not drawn", r.solver, r.wall_s)
+    });
+    let any_open = panels[0].series.iter().any(|s| !s.open.is_empty());
+    let note = format!(
+        "{}{}",
+        if any_open {
+            "open markers: runs that stopped short of their tolerance"
+        } else {
+            "filled markers: converged runs"
+        },
+        reference.unwrap_or_default()
+    );
+    let fig = Figure {
+        title: format!("Work–precision: {} ({} dofs, {} cores)", report.title, report.dofs, report.cores),
+        panels,
+        legend,
+        legend_note: Some(note),
+        note_marker: any_open,
+        size: (1500, 680),
+    };
+    render(&fig, png, svg)
+}
+
+/// `convergence.png` and `.svg` (module docs).
+pub fn convergence(
+    report: &Report,
+    study: &ConvergenceStudy,
+    png: &Path,
+    svg: &Path,
+) -> Result<(), super::ReportError> {
+    let below = study.levels.len().saturating_sub(1);
+    let levels = &study.levels[..below];
+    let pts = |f: fn(&super::convergence::LevelResult) -> f64| -> Vec<(f64, f64)> {
+        levels.iter().map(|l| (l.size.h(), f(l))).filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite()).collect()
+    };
+    let mut series = vec![
+        Series {
+            name: "stress (σ, ξ), energy norm, vs finest".into(),
+            color: COLORS[0],
+            marker: Marker::Circle,
+            line: pts(|l| l.err_stress),
+            open: vec![],
+            dashed: false,
+        },
+        Series {
+            name: "stress (σ, ξ), difference to the next level".into(),
+            color: COLORS[3],
+            marker: Marker::Cross,
+            line: pts(|l| l.diff_stress_next),
+            open: vec![],
+            dashed: false,
+        },
+        Series {
+            name: "strain ε(u), L², vs finest".into(),
+            color: COLORS[2],
+            marker: Marker::Square,
+            line: pts(|l| l.err_strain),
+            open: vec![],
+            dashed: false,
+        },
+    ];
+    if study.richardson.is_some() {
+        series.push(Series {
+            name: "U vs Richardson extrapolation".into(),
+            color: COLORS[1],
+            marker: Marker::Triangle,
+            line: study
+                .levels
+                .iter()
+                .map(|l| (l.size.h(), l.err_u_richardson))
+                .filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite())
+                .collect(),
+            open: vec![],
+            dashed: false,
+        });
+    } else {
+        series.push(Series {
+            name: "U vs finest".into(),
+            color: COLORS[1],
+            marker: Marker::Triangle,
+            line: pts(|l| l.err_u),
+            open: vec![],
+            dashed: false,
+        });
+    }
+    // slope 1/2 through the coarsest σ̂ error (Theorem 2's guarantee)
+    if let (Some(first), Some(h_min)) =
+        (series[0].line.first().copied(), study.levels.iter().map(|l| l.size.h()).reduce(f64::min))
+    {
+        let (h0, e0) = first;
+        series.push(Series {
+            name: "slope 1/2 (Theorem 2)".into(),
+            color: GREY,
+            marker: Marker::Circle,
+            line: vec![(h0, e0), (h_min, e0 * (h_min / h0).sqrt())],
+            open: vec![],
+            dashed: true,
+        });
+    }
+    let x_desc = "h: mean element size (|Ω|/elements)^(1/3), length units";
+    let panel = Panel {
+        caption: "relative errors against the finest level".into(),
+        x_desc: x_desc.into(),
+        y_desc: "relative error".into(),
+        series,
+    };
+    let legend = panel.series.clone();
+    let fig = Figure {
+        title: format!("Mesh convergence: {}", report.title),
+        panels: vec![panel],
+        legend,
+        legend_note: None,
+        note_marker: false,
+        size: (1000, 760),
+    };
+    render(&fig, png, svg)
+}

@@ -1,0 +1,330 @@
+//! Gmsh MSH 4.1 meshes (`type = "gmsh"`): the committed mesh of the default scene made by the
+//! real Gmsh (tests/data/make_punch_mesh.py), its physical groups, the node rules on the rims
+//! between groups, the contact problem solved on it, malformed files and `saddle run`.
+#![cfg(feature = "gmsh")]
+
+mod common;
+use common::*;
+use saddle::core::gmsh::{GmshImport, read_msh};
+use saddle::core::{Lagrangian, Region, Scene, Silent, TetMesh};
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::Command;
+
+/// U of the default scene on the fine box mesh (examples/johnson.toml, 98 304 tetrahedra,
+/// Newton to 7e-15; README).
+const U_BOX: f64 = 8.291994493108e-3;
+
+fn punch() -> GmshImport {
+    read_msh(&repo("tests/data/punch.msh"), 1.0).unwrap()
+}
+
+/// Area of boundary facet `f`.
+fn area(m: &TetMesh, f: usize) -> f64 {
+    let [a, b, c] = m.boundary[f].map(|i| m.nodes[i]);
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+    0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+}
+
+/// The nodes of a facet group.
+fn group_nodes(m: &TetMesh, g: &str) -> BTreeSet<usize> {
+    m.groups[g].iter().flat_map(|&f| m.boundary[f]).collect()
+}
+
+#[test]
+fn ascii_and_binary_files_hold_the_same_mesh() {
+    let a = punch();
+    let b = read_msh(&repo("tests/data/punch_binary.msh"), 1.0).unwrap();
+    assert_eq!(a.node_tags, b.node_tags);
+    assert_eq!(a.element_tags, b.element_tags);
+    assert_eq!(a.mesh.tets, b.mesh.tets);
+    assert_eq!(a.mesh.boundary, b.mesh.boundary);
+    assert_eq!(a.mesh.groups, b.mesh.groups);
+    assert_eq!(a.surface_groups, b.surface_groups);
+    assert_eq!(a.ignored_groups, b.ignored_groups);
+    // Gmsh prints ASCII coordinates with 16 significant digits: equal to the binary doubles
+    // within a unit in the 16th digit
+    let worst = a
+        .mesh
+        .nodes
+        .iter()
+        .zip(&b.mesh.nodes)
+        .flat_map(|(x, y)| (0..3).map(move |k| (x[k] - y[k]).abs()))
+        .fold(0.0, f64::max);
+    println!("largest coordinate difference ASCII − binary: {worst:e}");
+    assert!(worst <= 1e-15, "largest coordinate difference {worst:e}");
+}
+
+#[test]
+fn physical_surfaces_become_facet_groups() {
+    let imp = punch();
+    let m = &imp.mesh;
+    println!(
+        "punch.msh: {} nodes, {} tetrahedra, {} boundary facets; groups {:?}; ignored {:?}",
+        m.n_nodes(),
+        m.n_elements(),
+        m.boundary.len(),
+        imp.surface_groups.iter().map(|g| (g.name.as_str(), g.tag, g.elements)).collect::<Vec<_>>(),
+        imp.ignored_groups
+    );
+    assert_eq!(m.group_names(), vec!["clamped", "contact", "free"]);
+    assert!(imp.ignored_groups.iter().any(|g| g.dim == 3 && g.name == "body" && g.elements == m.n_elements()));
+    assert_eq!(imp.unused_nodes, 0);
+    assert!((1000..=5000).contains(&m.n_elements()), "a few thousand tetrahedra: {}", m.n_elements());
+    let vol: f64 = (0..m.n_elements()).map(|e| m.volume(e)).sum();
+    assert!((vol - 4.0).abs() < 1e-9, "volume {vol}");
+
+    // every boundary facet in exactly one group
+    let mut count = vec![0; m.boundary.len()];
+    for fs in m.groups.values() {
+        for &f in fs {
+            count[f] += 1;
+        }
+    }
+    assert!(count.iter().all(|&c| c == 1), "the three groups partition the boundary");
+
+    // plausible sizes: the areas of the three surfaces (the disc is a polygon inscribed in
+    // its circle) and about 0.06 × 0.06 · √3/4 per facet on the disc
+    let group_area = |g: &str| m.groups[g].iter().map(|&f| area(m, f)).sum::<f64>();
+    let disc = std::f64::consts::PI * 0.25;
+    assert!(group_area("contact") < disc && group_area("contact") > 0.995 * disc, "{}", group_area("contact"));
+    assert!((group_area("contact") + group_area("free") - 2.25).abs() < 1e-9);
+    assert!((group_area("clamped") - (4.0 - 2.25 + 8.0 + 4.0)).abs() < 1e-9);
+    let n_contact = m.groups["contact"].len();
+    assert!((200..=2000).contains(&n_contact), "{n_contact} facets on the contact disc");
+    assert!(m.groups["free"].len() >= 100 && m.groups["clamped"].len() >= 100);
+
+    // the contact facets lie on the disc r ≤ 0.5 of x₃ = 0, the free ones on the rest of the square
+    for &f in &m.groups["contact"] {
+        let c = m.facet_centroid(f);
+        assert!(c[2].abs() < 1e-12 && c[0].hypot(c[1]) <= 0.5 + 1e-9, "contact facet at {c:?}");
+    }
+    for &f in &m.groups["free"] {
+        let c = m.facet_centroid(f);
+        assert!(c[2].abs() < 1e-12 && c[0].hypot(c[1]) > 0.45 && c[0].abs().max(c[1].abs()) < 0.75, "{c:?}");
+    }
+    // the mesh resolves the contact zone (SPEC §6: at least 8 elements across it)
+    let h = m.groups["contact"]
+        .iter()
+        .flat_map(|&f| {
+            let [a, b, c] = m.boundary[f].map(|i| m.nodes[i]);
+            [(a, b), (b, c), (c, a)]
+        })
+        .map(|(p, q)| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    assert!(h < 0.1, "longest edge on the contact disc {h}");
+}
+
+#[test]
+fn node_rules_on_the_rims_between_groups() {
+    let scene = Scene::from_file(&repo("examples/gmsh_punch.toml")).unwrap();
+    let (l, _) = scene.into_problem().unwrap();
+    assert!(l.warnings().is_empty(), "{:?}", l.warnings());
+    let m = l.mesh();
+    let (contact, free, clamped) = (group_nodes(m, "contact"), group_nodes(m, "free"), group_nodes(m, "clamped"));
+    let disc_rim: Vec<usize> = contact.intersection(&free).copied().collect();
+    let square_rim: Vec<usize> = free.intersection(&clamped).copied().collect();
+    println!(
+        "nodes: {} contact, {} free, {} clamped; {} on the disc's rim, {} on the square's rim",
+        contact.len(),
+        free.len(),
+        clamped.len(),
+        disc_rim.len(),
+        square_rim.len()
+    );
+    assert!(disc_rim.len() >= 20 && square_rim.len() >= 20, "{} {}", disc_rim.len(), square_rim.len());
+    assert!(contact.is_disjoint(&clamped), "the disc lies strictly inside the square");
+
+    // contact nodes: every node of the "contact" facets, its rim with "free" included
+    let rows: BTreeSet<usize> = l.constraints().node.iter().copied().collect();
+    assert_eq!(rows, contact);
+    assert!(disc_rim.iter().all(|n| rows.contains(n)));
+    for &n in &disc_rim {
+        let x = m.nodes[n];
+        assert!((x[0].hypot(x[1]) - 0.5).abs() < 1e-9 && x[2] == 0.0, "rim node at {x:?}");
+    }
+    // clamped: every node of the "clamped" facets, its rim with "free" included; nothing else
+    let dofs = l.dofs();
+    for n in 0..m.n_nodes() {
+        let fixed = (0..3).filter(|&c| dofs.free(n, c).is_none()).count();
+        assert_eq!(fixed, if clamped.contains(&n) { 3 } else { 0 }, "node {n} at {:?}", m.nodes[n]);
+    }
+    for &n in &square_rim {
+        let x = m.nodes[n];
+        assert!((x[0].abs().max(x[1].abs()) - 0.75).abs() < 1e-9 && x[2] == 0.0, "rim node at {x:?}");
+    }
+}
+
+#[test]
+fn geometric_regions_give_the_same_problem_as_the_groups() {
+    // the predicates shown in the comments of examples/gmsh_punch.toml
+    let mut t = example("gmsh_punch.toml");
+    set(&mut t, "mesh.file", toml::Value::String(repo("tests/data/punch.msh").display().to_string()));
+    let (by_group, _) = build(&t);
+    let region = |s: &str| -> toml::Value { toml::from_str::<toml::Table>(&format!("r = {s}")).unwrap()["r"].clone() };
+    let dirichlet = t["dirichlet"].as_array().unwrap()[0].clone();
+    let mut d = dirichlet.as_table().unwrap().clone();
+    d.insert("on".into(), region("{ not = { box = { min = [-0.75, -0.75, -1e-9], max = [0.75, 0.75, 1e-9] } } }"));
+    t.insert("dirichlet".into(), toml::Value::Array(vec![toml::Value::Table(d)]));
+    set(
+        &mut t,
+        "obstacle.zone",
+        region(
+            "{ all = [ { box = { min = [-1.0, -1.0, -1e-9], max = [1.0, 1.0, 1e-9] } }, \
+             { disc = { center = [0.0, 0.0], radius = 0.5 } } ] }",
+        ),
+    );
+    let (by_geometry, _) = build(&t);
+    assert_eq!(by_group.dofs().dof, by_geometry.dofs().dof);
+    assert_eq!(by_group.constraints().node, by_geometry.constraints().node);
+    // and the same facets as the groups
+    let m = by_group.mesh();
+    let square = Region::Box { min: [-0.75, -0.75, -1e-9], max: [0.75, 0.75, 1e-9] };
+    let expected: BTreeSet<usize> = m.groups["contact"].iter().chain(&m.groups["free"]).copied().collect();
+    assert_eq!(square.facets(m).into_iter().collect::<BTreeSet<_>>(), expected);
+}
+
+#[test]
+fn newton_solves_the_default_scene_on_the_gmsh_mesh() {
+    for file in ["punch.msh", "punch_binary.msh"] {
+        let mut t = example("gmsh_punch.toml");
+        set(&mut t, "mesh.file", toml::Value::String(repo(&format!("tests/data/{file}")).display().to_string()));
+        let (l, solver) = build(&t);
+        let solver = solver.unwrap();
+        let sol = solver.solve(&l, &mut Silent).unwrap();
+        let report = l.contact_report(&sol).unwrap();
+        let u = sol.extras[0];
+        println!(
+            "{file}: U = {u:.6e} ({:+.2} % against the box mesh's {U_BOX:.6e}), KKT {:.2e}, {} iterations, \
+             {} contact nodes of {}, contact radius {:.4}, {} plastic elements of {}",
+            100.0 * (u / U_BOX - 1.0),
+            sol.report.kkt.max(),
+            sol.report.iterations,
+            report.contact_nodes,
+            l.constraints().n_rows(),
+            report.contact_radius,
+            sol.stress.n_plastic(),
+            l.mesh().n_elements()
+        );
+        assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
+        assert!(sol.report.kkt.max() <= 1e-10, "{:?}", sol.report.kkt);
+        // Measured: U = 7.8124e-3, 5.8 % below the box mesh (2 259 dofs against 45 432). P1
+        // tetrahedra are too stiff on a coarse mesh and this one is coarse away from the disc
+        // (size 0.3): refining there raises U toward the box value (7.98e-3 with 7 017
+        // tetrahedra, 8.11e-3 with 16 877). So U lies below the box value, within 8 %.
+        assert!(u < U_BOX && u > 0.92 * U_BOX, "U = {u:e}");
+        // SPEC §6: a contact radius of about 0.23 (the box mesh: 0.2268)
+        assert!((report.contact_radius - 0.2268).abs() < 0.02, "contact radius {}", report.contact_radius);
+        assert!(sol.stress.n_plastic() > 0);
+        assert!(report.warnings.is_empty() && l.warnings().is_empty(), "{:?}", report.warnings);
+    }
+}
+
+/// Writes `bytes` as `dir/name` and a scene using it; returns the scene-level error message.
+fn scene_error(dir: &Path, name: &str, bytes: &[u8], edit: impl FnOnce(&mut toml::Table)) -> String {
+    let mesh = dir.join(name);
+    std::fs::write(&mesh, bytes).unwrap();
+    let mut t = example("gmsh_punch.toml");
+    set(&mut t, "mesh.file", toml::Value::String(name.into()));
+    edit(&mut t);
+    let scene_path = dir.join(format!("{name}.toml"));
+    std::fs::write(&scene_path, toml::to_string(&t).unwrap()).unwrap();
+    let scene = Scene::from_file(&scene_path).unwrap();
+    let err = scene.into_problem().unwrap_err().to_string();
+    println!("{name}: {err}");
+    err
+}
+
+fn assert_contains(err: &str, expected: &[&str]) {
+    for e in expected {
+        assert!(err.contains(e), "error {err:?} lacks {e:?}");
+    }
+}
+
+#[test]
+fn malformed_files_give_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let ascii = std::fs::read_to_string(repo("tests/data/punch.msh")).unwrap();
+    let binary = std::fs::read(repo("tests/data/punch_binary.msh")).unwrap();
+    let none = |_: &mut toml::Table| {};
+
+    // truncated, ASCII and binary
+    let cut = &ascii[..ascii.len() * 2 / 3];
+    let err = scene_error(dir.path(), "cut.msh", cut.as_bytes(), none);
+    assert_contains(&err, &["mesh: ", "cut.msh", "cannot parse the file as MSH 4.1", "truncated", "element section"]);
+    let err = scene_error(dir.path(), "cut_binary.msh", &binary[..binary.len() / 2], none);
+    assert_contains(&err, &["cut_binary.msh", "truncated"]);
+
+    // a tetrahedron referring to a node tag the file does not define
+    let mut lines: Vec<String> = ascii.lines().map(str::to_string).collect();
+    let header = lines.iter().position(|l| l.starts_with("3 ") && l.split(' ').nth(2) == Some("4")).unwrap();
+    let mut fields: Vec<String> = lines[header + 1].split_whitespace().map(str::to_string).collect();
+    let element = fields[0].clone();
+    fields[2] = "999999".into();
+    lines[header + 1] = fields.join(" ");
+    let err = scene_error(dir.path(), "dangling.msh", lines.join("\n").as_bytes(), none);
+    assert_contains(&err, &[&format!("tetrahedron {element} refers to node 999999"), "no node has tag 999999"]);
+
+    // another MSH version
+    let err = scene_error(dir.path(), "v22.msh", ascii.replacen("4.1 0 8", "2.2 0 8", 1).as_bytes(), none);
+    assert_contains(&err, &["v22.msh", "MSH version 2.2 found", "only version 4.1"]);
+
+    // a missing file names its path
+    let mut t = example("gmsh_punch.toml");
+    set(&mut t, "mesh.file", toml::Value::String("nowhere/none.msh".into()));
+    let scene_path = dir.path().join("missing.toml");
+    std::fs::write(&scene_path, toml::to_string(&t).unwrap()).unwrap();
+    let err = Scene::from_file(&scene_path).unwrap().into_problem().unwrap_err().to_string();
+    assert_contains(&err, &["nowhere/none.msh", "cannot read the Gmsh mesh file"]);
+
+    // without $PhysicalNames the groups are physical_<tag>, and the scene's names are missing
+    let start = ascii.find("$PhysicalNames").unwrap();
+    let end = ascii.find("$EndPhysicalNames\n").unwrap() + "$EndPhysicalNames\n".len();
+    let unnamed = format!("{}{}", &ascii[..start], &ascii[end..]);
+    let err = scene_error(dir.path(), "unnamed.msh", unnamed.as_bytes(), none);
+    assert_contains(&err, &["dirichlet[0].on", "\"clamped\"", "physical_1", "physical_2", "physical_3"]);
+}
+
+#[test]
+fn a_missing_group_lists_the_physical_names_of_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let ascii = std::fs::read(repo("tests/data/punch.msh")).unwrap();
+    let nope = || toml::from_str::<toml::Table>("r = { group = \"nope\" }").unwrap()["r"].clone();
+    let err = scene_error(dir.path(), "a.msh", &ascii, |t| {
+        let d = t["dirichlet"].as_array_mut().unwrap()[0].as_table_mut().unwrap();
+        d.insert("on".into(), nope());
+    });
+    assert_contains(
+        &err,
+        &["dirichlet[0].on", "no facet group named [\"nope\"]", "[\"clamped\", \"contact\", \"free\"]"],
+    );
+    let err = scene_error(dir.path(), "b.msh", &ascii, |t| set(t, "obstacle.zone", nope()));
+    assert_contains(&err, &["obstacle.zone", "\"nope\"", "[\"clamped\", \"contact\", \"free\"]"]);
+}
+
+#[test]
+fn saddle_run_on_the_gmsh_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("gmsh");
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["run", repo("examples/gmsh_punch.toml").to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("newton") && stdout.contains("contact nodes"), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["solver"], "newton");
+    assert_eq!(summary["converged"], true);
+    assert_eq!(summary["elements"], punch().mesh.n_elements());
+    assert!(summary["kkt_residual"].as_f64().unwrap() <= 1e-10);
+    let u = summary["U"].as_f64().unwrap();
+    assert!(u < U_BOX && u > 0.92 * U_BOX, "U = {u:e}");
+    let vtu = std::fs::read(out.join("solution.vtu")).unwrap();
+    let head = String::from_utf8_lossy(&vtu[..vtu.len().min(3000)]);
+    assert!(head.contains(&format!("NumberOfCells=\"{}\"", punch().mesh.n_elements())), "{head}");
+}

@@ -1,0 +1,168 @@
+//! Hertz verification (SPEC §7) on the elastic quarter model of `examples/hertz.toml`:
+//! contact radius a, peak pressure p₀ and approach δ within 3 % of Hertz, and F ∝ δ^{3/2}
+//! (exponent within 2 %).
+//!
+//! * a from the second moment of the contact forces: for Hertz's pressure
+//!   Σλ_i r_i² / Σλ_i = (2/5) a² (robust: no areas, no fit, exact for linear interpolation up to
+//!   O(h²));
+//! * p₀ from the nodal pressures p_i = λ_i / A_i (A_i the node's share of the contact face) of
+//!   the inner contact nodes, fitted to Hertz's profile p² = p₀² (1 − r²/a²), a line in r²;
+//! * δ is the approach of distant points. The block is finite and clamped, which makes it
+//!   stiffer than the half-space by a smooth field of size O(a/L) (4 % here); measuring the
+//!   punch against an axis point at depth d and adding that point's half-space displacement
+//!   under Hertz's pressure, δ ≈ U − u₃(0, 0, d) + u₃^{half-space}(0, 0, d), cancels that field
+//!   up to O(d/L).
+
+mod common;
+use common::*;
+use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution};
+use std::f64::consts::PI;
+use std::sync::OnceLock;
+
+const E: f64 = 100.0;
+const NU: f64 = 0.3;
+const R: f64 = 5.0;
+
+/// Hertz's a, p₀, δ for the whole force `f` (SPEC §7).
+fn hertz(f: f64) -> (f64, f64, f64) {
+    let e_star = E / (1.0 - NU * NU);
+    let a = (3.0 * f * R / (4.0 * e_star)).cbrt();
+    (a, 3.0 * f / (2.0 * PI * a * a), a * a / R)
+}
+
+/// Vertical displacement of the half-space on the axis at depth z under Hertz's pressure:
+/// the Boussinesq kernel (1+ν)/(2πE) [2(1−ν)/s + z²/s³] integrated over p₀√(1 − ρ²/a²).
+fn half_space_axis_displacement(a: f64, p0: f64, z: f64) -> f64 {
+    // ρ = a sin θ: p dA = p₀ cos θ · 2π a sin θ · a cos θ dθ, smooth in θ ∈ [0, π/2]
+    let n = 4000;
+    let h = PI / 2.0 / n as f64;
+    let f = |t: f64| {
+        let rho = a * t.sin();
+        let s = (rho * rho + z * z).sqrt();
+        // 2πρ K(ρ, z), written with ρ/s so that the surface z = 0 is exact
+        let ros = if s > 0.0 { rho / s } else { 1.0 };
+        let two_pi_rho_k = (1.0 + NU) / E * (2.0 * (1.0 - NU) * ros + z * z * ros / (s * s).max(f64::MIN_POSITIVE));
+        p0 * t.cos() * a * t.cos() * two_pi_rho_k
+    };
+    // Simpson
+    (0..=n)
+        .map(|k| {
+            f(k as f64 * h)
+                * if k == 0 || k == n {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                }
+        })
+        .sum::<f64>()
+        * h
+        / 3.0
+}
+
+/// The quarter model with whole force 0.3, solved once for all tests.
+fn default_solution() -> &'static (P1P0Lagrangian, Solution) {
+    static SOLVED: OnceLock<(P1P0Lagrangian, Solution)> = OnceLock::new();
+    SOLVED.get_or_init(|| solve(0.3))
+}
+
+/// The quarter model with whole force `f`.
+fn solve(f: f64) -> (P1P0Lagrangian, Solution) {
+    let mut t = example("hertz.toml");
+    set(&mut t, "obstacle.F", toml::Value::Float(f / 4.0));
+    let (l, solver) = build(&t);
+    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged);
+    (l, sol)
+}
+
+/// Measured (a, p₀, δ).
+fn measure(l: &P1P0Lagrangian, sol: &Solution) -> (f64, f64, f64) {
+    let mesh = l.mesh();
+    // each node's share of the contact face x₃ = 0
+    let mut area = vec![0.0; mesh.n_nodes()];
+    for &f in &mesh.groups["zmin"] {
+        let [a, b, c] = mesh.boundary[f].map(|n| mesh.nodes[n]);
+        let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        for n in mesh.boundary[f] {
+            area[n] += cross.abs() / 6.0;
+        }
+    }
+    let rows = l.constraints();
+    let r2 = |i: usize| {
+        let x = mesh.nodes[rows.node[i]];
+        x[0] * x[0] + x[1] * x[1]
+    };
+    let force: f64 = sol.lambda.iter().sum();
+    let a = (2.5 * (0..rows.n_rows()).map(|i| sol.lambda[i] * r2(i)).sum::<f64>() / force).sqrt();
+    // p² against r² over the contact nodes well inside the contact (the rim ring carries the
+    // discretised edge)
+    let pts: Vec<(f64, f64)> = (0..rows.n_rows())
+        .filter(|&i| sol.lambda[i] > 0.0 && r2(i) <= (0.7 * a).powi(2))
+        .map(|i| (r2(i), (sol.lambda[i] / area[rows.node[i]]).powi(2)))
+        .collect();
+    let n = pts.len() as f64;
+    let (sx, sy) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let slope =
+        pts.iter().map(|p| (p.0 - sx) * (p.1 - sy)).sum::<f64>() / pts.iter().map(|p| (p.0 - sx).powi(2)).sum::<f64>();
+    let p0 = (sy - slope * sx).sqrt();
+    // δ against the axis node nearest to depth 3a
+    let disp = l.nodal_displacements(&sol.u);
+    let axis = (0..mesh.n_nodes())
+        .filter(|&k| mesh.nodes[k][0] == 0.0 && mesh.nodes[k][1] == 0.0)
+        .min_by(|&i, &j| (mesh.nodes[i][2] - 3.0 * a).abs().total_cmp(&(mesh.nodes[j][2] - 3.0 * a).abs()))
+        .unwrap();
+    let d = mesh.nodes[axis][2];
+    let (a_h, p0_h, _) = hertz(4.0 * force);
+    let delta = sol.extras[0] - disp[axis][2] + half_space_axis_displacement(a_h, p0_h, d);
+    (a, p0, delta)
+}
+
+#[test]
+fn half_space_kernel_gives_the_hertz_approach_at_the_surface() {
+    // the integral reproduces δ = a²/R at depth 0⁺ and decays like a point load far away
+    let (a, p0, delta) = hertz(0.3);
+    assert!((half_space_axis_displacement(a, p0, 0.0) - delta).abs() < 1e-12 * delta);
+    let z = 50.0 * a;
+    let point = 0.3 * (1.0 + NU) * (3.0 - 2.0 * NU) / (2.0 * PI * E * z);
+    assert!((half_space_axis_displacement(a, p0, z) - point).abs() < 1e-3 * point);
+}
+
+#[test]
+fn contact_radius_peak_pressure_and_approach_match_hertz() {
+    let f = 0.3;
+    let (l, sol) = default_solution();
+    let (a, p0, delta) = measure(l, sol);
+    let (a_h, p0_h, delta_h) = hertz(f);
+    let err = |x: f64, y: f64| (x - y).abs() / y;
+    println!("a {a:.5} (Hertz {a_h:.5}, {:.2}%)", 100.0 * err(a, a_h));
+    println!("p0 {p0:.5} (Hertz {p0_h:.5}, {:.2}%)", 100.0 * err(p0, p0_h));
+    println!(
+        "delta {delta:.6e} (Hertz {delta_h:.6e}, {:.2}%); raw U {:.6e}",
+        100.0 * err(delta, delta_h),
+        sol.extras[0]
+    );
+    assert!(err(a, a_h) < 0.03);
+    assert!(err(p0, p0_h) < 0.03);
+    assert!(err(delta, delta_h) < 0.03);
+}
+
+#[test]
+fn force_grows_like_the_approach_to_the_three_halves() {
+    let fs = [0.3, 0.6, 1.2];
+    let deltas: Vec<f64> = fs
+        .iter()
+        .map(|&f| {
+            let (l, sol) = solve(f);
+            measure(&l, &sol).2
+        })
+        .collect();
+    // least-squares slope of ln F against ln δ
+    let (x, y): (Vec<f64>, Vec<f64>) = deltas.iter().zip(&fs).map(|(d, f)| (d.ln(), f.ln())).unzip();
+    let (mx, my) = (x.iter().sum::<f64>() / 3.0, y.iter().sum::<f64>() / 3.0);
+    let slope = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum::<f64>()
+        / x.iter().map(|a| (a - mx).powi(2)).sum::<f64>();
+    println!("exponent of F against δ: {slope:.4} (Hertz 1.5, {:.2}%); δ = {deltas:?}", 100.0 * (slope / 1.5 - 1.0));
+    assert!((slope / 1.5 - 1.0).abs() < 0.02);
+}
