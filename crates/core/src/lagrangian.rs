@@ -78,7 +78,8 @@ pub struct Iterate<'a> {
 /// The KKT residuals of SPEC §3 (form 2), each relative and dimensionless.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct KktResiduals {
-    /// ‖Bᵀσ(u) − Gᵀλ‖ / max(‖Bᵀσ(u)‖, ‖Gᵀλ‖): internal forces against contact forces.
+    /// ‖Bᵀσ(u) − f_u − Gᵀλ‖ / max(‖Bᵀσ(u)‖, ‖Gᵀλ + f_u‖): internal forces against contact
+    /// forces and loads.
     pub equilibrium: f64,
     /// ‖f + Hᵀλ‖ / max(‖f‖, ‖Hᵀλ‖): the load on the extra unknowns (Σλ = F for the punch).
     pub load_balance: f64,
@@ -125,7 +126,7 @@ pub struct Workspace {
     pub eps: Vec<Sym>,
     /// Stresses of the local law.
     pub stress: StressField,
-    /// Internal forces Bᵀσ.
+    /// Internal forces minus loads, Bᵀσ − f_u (after [`Lagrangian::kkt`]).
     pub force: Vec<f64>,
     /// Gᵀλ.
     pub gu: Vec<f64>,
@@ -177,6 +178,11 @@ pub trait Lagrangian: Sync {
     fn pattern(&self) -> &SymmetricPattern;
     /// values = Σ_T w_T B_Tᵀ C_T B_T on [`Lagrangian::pattern`].
     fn assemble(&self, material: Material<'_>, values: &mut [f64]);
+
+    /// Consistent nodal forces f_u on the free dofs (tractions, body forces); empty for none.
+    fn nodal_load(&self) -> &[f64] {
+        &[]
+    }
 
     /// Number of extra unknowns V.
     fn n_extras(&self) -> usize {
@@ -248,10 +254,12 @@ pub trait Lagrangian: Sync {
         }
     }
 
-    /// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f·V (SPEC §3 form 1).
+    /// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V (SPEC §3 form 1).
     fn energy(&self, u: &[f64], extras: &[f64], ws: &mut Workspace) -> f64 {
         self.strain(u, &mut ws.eps);
-        self.energy_of_strain(&ws.eps) - self.load().iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
+        self.energy_of_strain(&ws.eps)
+            - self.nodal_load().iter().zip(u).map(|(f, x)| f * x).sum::<f64>()
+            - self.load().iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
     }
 
     /// ½[σ̂, σ̂] = ½ Σ_T |T| (Aσ_T:σ_T + q_T·H⁻¹q_T).
@@ -283,14 +291,26 @@ pub trait Lagrangian: Sync {
         self.kkt_with_stress(it, ws)
     }
 
-    /// As [`Lagrangian::kkt`], with `ws.stress` already holding P_D(Cε(u), 0) for `it.u`.
+    /// As [`Lagrangian::kkt`], with `ws.stress` already holding P_D(Cε(u), 0) for `it.u`. On
+    /// return `ws.force` holds Bᵀσ(u) − f_u, the gradient of J in u without the contact forces.
     fn kkt_with_stress(&self, it: &Iterate<'_>, ws: &mut Workspace) -> KktResiduals {
         let rows = self.constraints();
         self.divergence(&ws.stress.sigma, &mut ws.force);
+        let internal = norm(&ws.force);
         ws.gu.iter_mut().for_each(|x| *x = 0.0);
         ws.gv.iter_mut().for_each(|x| *x = 0.0);
         rows.add_transpose(it.lambda, &mut ws.gu, &mut ws.gv);
-        let equilibrium = relative(norm_diff(&ws.force, &ws.gu), norm(&ws.force).max(norm(&ws.gu)));
+        let fu = self.nodal_load();
+        let external = if fu.is_empty() {
+            norm(&ws.gu)
+        } else {
+            for (f, l) in ws.force.iter_mut().zip(fu) {
+                *f -= l;
+            }
+            ws.gu.iter().zip(fu).map(|(a, b)| (a + b) * (a + b)).sum::<f64>().sqrt()
+        };
+        // ‖Bᵀσ − f_u − Gᵀλ‖ / max(‖Bᵀσ‖, ‖Gᵀλ + f_u‖)
+        let equilibrium = relative(norm_diff(&ws.force, &ws.gu), internal.max(external));
         let f = self.load();
         let load_sum: Vec<f64> = f.iter().zip(&ws.gv).map(|(a, b)| a + b).collect();
         let load_balance = relative(norm(&load_sum), norm(f).max(norm(&ws.gv)));

@@ -13,6 +13,7 @@ use crate::elasticity::Elasticity;
 use crate::error::SceneError;
 use crate::lagrangian::{Lagrangian, Material};
 use crate::linalg::SymmetricPattern;
+use crate::loads::{Load, nodal_loads};
 use crate::mesh::TetMesh;
 use crate::solver::Solution;
 use crate::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
@@ -30,6 +31,8 @@ pub struct P1P0Lagrangian {
     obstacle: Option<Box<dyn AdmissibleDisplacements>>,
     rows: ConstraintRows,
     load: Vec<f64>,
+    /// Consistent nodal forces of tractions and body forces (empty: none).
+    nodal_load: Vec<f64>,
     /// |T|.
     weights: Vec<f64>,
     /// Gradients of the barycentric coordinates of each element.
@@ -89,6 +92,7 @@ impl P1P0Lagrangian {
             obstacle,
             rows,
             load,
+            nodal_load: Vec::new(),
             weights,
             grads,
             adj_ptr,
@@ -97,6 +101,13 @@ impl P1P0Lagrangian {
             dof_comp,
             pattern,
         })
+    }
+
+    /// The same problem with tractions and body forces (SPEC §3 with loads on u).
+    pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
+        let f = nodal_loads(&self.mesh, &self.dofs, loads)?;
+        self.nodal_load = if loads.is_empty() { Vec::new() } else { f };
+        Ok(self)
     }
 
     /// The mesh.
@@ -295,6 +306,10 @@ impl Lagrangian for P1P0Lagrangian {
 
     fn load(&self) -> &[f64] {
         &self.load
+    }
+
+    fn nodal_load(&self) -> &[f64] {
+        &self.nodal_load
     }
 
     fn weights(&self) -> &[f64] {

@@ -18,6 +18,10 @@
 //! h = 5.0
 //! [[dirichlet]]                # u = 0 on the closure of the selected facets
 //! on = { not = { all = [ { group = "zmin" }, { box = { min = [-0.75, -0.75, -1.0], max = [0.75, 0.75, 1.0] } } ] } }
+//! [[load]]                     # optional: tractions and body forces
+//! type = "traction"            # or: type = "body_force", b = [0.0, 0.0, -1e-3]
+//! on = { group = "xmax" }
+//! t = [0.0, 0.0, 0.01]
 //! [obstacle]                   # K; omit for no contact
 //! type = "rigid_punch"
 //! F = 0.3
@@ -31,6 +35,7 @@ use crate::displacements::AdmissibleDisplacements;
 use crate::dofs::Dirichlet;
 use crate::elasticity::Elasticity;
 use crate::error::SceneError;
+use crate::loads::Load;
 use crate::mesh::MeshSource;
 use crate::p1p0::P1P0Lagrangian;
 use crate::solver::Solver;
@@ -55,6 +60,9 @@ pub struct Scene {
     /// Dirichlet conditions.
     #[serde(default)]
     pub dirichlet: Vec<Dirichlet>,
+    /// Tractions and body forces (`[[load]]`).
+    #[serde(default)]
+    pub load: Vec<Load>,
     /// K; absent for no contact.
     #[serde(default)]
     pub obstacle: Option<Box<dyn AdmissibleDisplacements>>,
@@ -96,6 +104,9 @@ impl Scene {
         for (i, d) in self.dirichlet.iter().enumerate() {
             d.on.validate(&format!("dirichlet[{i}].on"))?;
         }
+        for (i, l) in self.load.iter().enumerate() {
+            l.validate(&format!("load[{i}]"))?;
+        }
         if let Some(k) = &self.obstacle {
             k.validate("obstacle")?;
         }
@@ -108,7 +119,8 @@ impl Scene {
     /// Builds the mesh and assembles L; returns it with the scene's solver (if any).
     pub fn into_problem(self) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
         let mesh = self.mesh.build(&self.base_dir)?;
-        let l = P1P0Lagrangian::new(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle)?;
+        let l = P1P0Lagrangian::new(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle)?
+            .with_loads(&self.load)?;
         Ok((l, self.solver))
     }
 }

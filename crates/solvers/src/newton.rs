@@ -183,6 +183,9 @@ impl Newton {
                         *s = c_elastic * e;
                     }
                     l.divergence(&elastic_sigma, &mut elastic_grad);
+                    for (g, f) in elastic_grad.iter_mut().zip(l.nodal_load()) {
+                        *g -= f;
+                    }
                 } else {
                     l.assemble(Material::PerPoint(&tangents), &mut k);
                 }

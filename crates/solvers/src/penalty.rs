@@ -210,7 +210,7 @@ impl std::fmt::Debug for PenaltySystem {
 
 /// The current iterate as the Newton step sees it.
 struct Point<'a> {
-    /// Bᵀ(σ + μCε): the gradient of the smooth part.
+    /// Bᵀ(σ + μCε) − f_u: the gradient of the smooth part.
     r: &'a [f64],
     /// The carried gaps g.
     gap: &'a [f64],
@@ -491,6 +491,10 @@ impl Penalty {
                         .for_each(|((s, sg), e)| *s = sg + c_el * e * mu);
                 }
                 l.divergence(&sig_mu, &mut r);
+                // the loads on u belong to the smooth part
+                for (ri, f) in r.iter_mut().zip(l.nodal_load()) {
+                    *ri -= f;
+                }
                 gt_chi.iter_mut().for_each(|x| *x = 0.0);
                 ht_chi.iter_mut().for_each(|x| *x = 0.0);
                 rows.add_transpose(&chi, &mut gt_chi, &mut ht_chi);
@@ -502,7 +506,8 @@ impl Penalty {
                 }
             });
             let grad_norm = (norm(&grad_u).powi(2) + norm(&grad_v).powi(2)).sqrt();
-            let grad_scale = norm(&r).max(norm(&gt_chi)).max(norm(l.load())).max(norm(&ht_chi));
+            let grad_scale =
+                norm(&r).max(norm(&gt_chi)).max(norm(l.load())).max(norm(&ht_chi)).max(norm(l.nodal_load()));
             grad_rel = if grad_scale > 0.0 { grad_norm / grad_scale } else { grad_norm };
             if !grad_rel.is_finite() {
                 return Err(non_finite("the gradient of J_μ", it));

@@ -392,7 +392,7 @@ impl ConeProgramme {
         }
         let length = volume.cbrt();
         let offsets = blocks.iter().flat_map(|b| b.offset.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
-        let fmax = l.load().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let fmax = l.load().iter().chain(l.nodal_load()).fold(0.0f64, |m, v| m.max(v.abs()));
         let stress = if offsets > 0.0 {
             offsets
         } else if fmax > 0.0 {
@@ -501,6 +501,10 @@ impl ConeProgramme {
             av.push(-1.0);
         }
         let mut b = vec![0.0; m];
+        // equilibrium Σ w Bᵀσ − Gᵀλ = f_u (tractions, body forces); load −Hᵀλ = f
+        for (j, f) in l.nodal_load().iter().enumerate() {
+            b[j] = f / s_f;
+        }
         for (k, f) in l.load().iter().enumerate() {
             b[n + k] = f / s_f;
         }

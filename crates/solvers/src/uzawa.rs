@@ -95,10 +95,17 @@ impl Solver for Uzawa {
             Ok(chol)
         })?;
         drop(m_values);
-        monitor.phase("contact set-up");
+        // without contact rows step (ii) is a plain gradient step: no contact structures at all
         let rows = l.constraints();
-        let mut proj = timer
-            .time("contact set-up", || MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load()))?;
+        let mut proj =
+            if rows.n_rows() > 0 {
+                monitor.phase("contact set-up");
+                Some(timer.time("contact set-up", || {
+                    MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load())
+                })?)
+            } else {
+                None
+            };
 
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let mut u = vec![0.0; n];
@@ -175,13 +182,19 @@ impl Solver for Uzawa {
             solves += 1;
             u_prev.clone_from(&u);
             v_prev.clone_from(&v);
-            solves += timer.time("projection", || proj.project(rows, &mut chol, &z, &mut v, &mut u, &mut mu))?;
+            solves += match &mut proj {
+                Some(p) => timer.time("projection", || p.project(rows, &mut chol, &z, &mut v, &mut u, &mut mu))?,
+                None => {
+                    u.copy_from_slice(&z);
+                    0
+                }
+            };
             // δₙ² = Δuᵀ M Δu + Σ m ΔV², with M Δu = Gᵀμ − ρ Bᵀσ (z is free again: it takes Gᵀμ)
             z.iter_mut().for_each(|x| *x = 0.0);
             rows.add_transpose(&mu, &mut z, &mut scratch_v);
             let du_m_du: f64 = (0..n).map(|j| (u[j] - u_prev[j]) * (z[j] - rho * ws.force[j])).sum();
-            let dv_m_dv: f64 =
-                proj.extra_weights().iter().zip(v.iter().zip(&v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
+            let weights = proj.as_ref().map_or(&[][..], |p| p.extra_weights());
+            let dv_m_dv: f64 = weights.iter().zip(v.iter().zip(&v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
             last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
             if it == 0 {
                 first_step = last_step;
@@ -197,11 +210,15 @@ impl Solver for Uzawa {
         counters.insert("rho".into(), self.rho);
         counters.insert("rho_bound".into(), RHO_BOUND);
         counters.insert("factorisations".into(), 1.0);
-        counters.insert("setup_solves".into(), proj.setup_solves as f64);
+        counters.insert("setup_solves".into(), proj.as_ref().map_or(0, |p| p.setup_solves) as f64);
         counters.insert("triangular_solve_pairs".into(), solves as f64);
-        counters.insert("qp_factorisations".into(), proj.qp_work().1 as f64);
+        counters.insert("qp_factorisations".into(), proj.as_ref().map_or(0, |p| p.qp_work().1) as f64);
         counters.insert("return_mappings".into(), if plastic { (it + 1) as f64 * l.n_points() as f64 } else { 0.0 });
-        counters.insert("delassus_columns_kept".into(), proj.keeps_delassus_columns() as u8 as f64);
+        counters.insert("contact_structures".into(), proj.is_some() as u8 as f64);
+        counters.insert(
+            "delassus_columns_kept".into(),
+            proj.as_ref().is_some_and(|p| p.keeps_delassus_columns()) as u8 as f64,
+        );
         let report = SolveReport {
             solver: "uzawa".into(),
             converged: stop == StopReason::Converged,

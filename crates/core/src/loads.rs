@@ -1,0 +1,125 @@
+//! Loads on the displacements (Neumann data): surface tractions on boundary facets and body
+//! forces, assembled into consistent P1 nodal forces f_u. They enter the primal energy as
+//! `J = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V` and equilibrium as `Bᵀσ = Gᵀλ + f_u` (SPEC §3 with
+//! the load term of (1.11) extended to u).
+
+use crate::dofs::DofMap;
+use crate::error::{ParameterError, SceneError, check, join};
+use crate::mesh::TetMesh;
+use crate::region::Region;
+use serde::{Deserialize, Serialize};
+
+/// `[[load]]`: a load on the body.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Load {
+    /// A constant traction t (force per area) on the selected boundary facets.
+    Traction {
+        /// The facets.
+        on: Region,
+        /// t.
+        t: [f64; 3],
+    },
+    /// A constant body force b (force per volume) on the whole body.
+    BodyForce {
+        /// b.
+        b: [f64; 3],
+    },
+}
+
+impl Load {
+    /// Checks the numbers; `path` names this load (`load[0]`).
+    pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        match self {
+            Load::Traction { on, t } => {
+                on.validate(&join(path, "on"))?;
+                check::finite_all(path, "t", t)
+            }
+            Load::BodyForce { b } => check::finite_all(path, "b", b),
+        }
+    }
+}
+
+/// The consistent nodal forces f_u of `loads` on the free dofs (fixed dofs take none). For
+/// constant data on P1 elements each node of a facet receives a third of the facet's force,
+/// each node of a tetrahedron a quarter of its force.
+pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<f64>, SceneError> {
+    let mut f = vec![0.0; dofs.n_free];
+    let mut add = |node: usize, force: [f64; 3], share: f64| {
+        for (c, fc) in force.iter().enumerate() {
+            if let Some(j) = dofs.free(node, c) {
+                f[j] += share * fc;
+            }
+        }
+    };
+    for (i, load) in loads.iter().enumerate() {
+        let path = format!("load[{i}]");
+        load.validate(&path)?;
+        match load {
+            Load::Traction { on, t } => {
+                let field = join(&path, "on");
+                let missing = on.missing_groups(mesh);
+                if !missing.is_empty() {
+                    return Err(SceneError::Region {
+                        field,
+                        message: format!("no facet group named {:?}; the mesh has {:?}", missing, mesh.group_names()),
+                    });
+                }
+                let facets = on.facets(mesh);
+                if facets.is_empty() {
+                    return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
+                }
+                for fi in facets {
+                    let [a, b, c] = mesh.boundary[fi].map(|n| mesh.nodes[n]);
+                    let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
+                    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+                    let area = 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                    for &node in &mesh.boundary[fi] {
+                        add(node, *t, area / 3.0);
+                    }
+                }
+            }
+            Load::BodyForce { b } => {
+                for (e, tet) in mesh.tets.iter().enumerate() {
+                    let vol = mesh.volume(e);
+                    for &node in tet {
+                        add(node, *b, vol / 4.0);
+                    }
+                }
+            }
+        }
+    }
+    Ok(f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::box_mesh::BoxMesh;
+
+    #[test]
+    fn resultants_equal_traction_times_area_and_body_force_times_volume() {
+        let m = BoxMesh::new([0.0; 3], [2.0, 1.0, 1.0], [4, 3, 2]).graded([0.0; 3], 2.0).mesh().unwrap();
+        let dofs = DofMap::new(&m, &[]).unwrap();
+        let loads = [
+            Load::Traction { on: Region::Group("xmax".into()), t: [0.0, 0.0, 3.0] },
+            Load::BodyForce { b: [1.0, 0.0, 0.0] },
+        ];
+        let f = nodal_loads(&m, &dofs, &loads).unwrap();
+        let total = |c: usize| (0..m.n_nodes()).map(|n| f[dofs.free(n, c).unwrap()]).sum::<f64>();
+        assert!((total(2) - 3.0 * 1.0).abs() < 1e-12, "traction resultant {}", total(2));
+        assert!((total(0) - 2.0).abs() < 1e-12, "body force resultant {}", total(0));
+        assert!(total(1).abs() < 1e-14);
+        let e = nodal_loads(&m, &dofs, &[Load::Traction { on: Region::Group("top".into()), t: [0.0; 3] }]).unwrap_err();
+        assert!(e.to_string().contains("load[0].on"), "{e}");
+        let e = nodal_loads(&m, &dofs, &[Load::BodyForce { b: [f64::NAN, 0.0, 0.0] }]).unwrap_err();
+        assert!(e.to_string().contains("load[0].b[0]"), "{e}");
+    }
+
+    #[test]
+    fn scene_syntax() {
+        let l: Load = toml::from_str("type = \"traction\"\non = { group = \"zmax\" }\nt = [0.0, 0.0, -1.0]").unwrap();
+        assert!(matches!(l, Load::Traction { .. }));
+        assert!(toml::from_str::<Load>("type = \"body_force\"\nb = [0.0, 0.0, -1.0]\nt = 1").is_err());
+    }
+}
