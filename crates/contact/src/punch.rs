@@ -10,7 +10,7 @@
 //! Both share zone selection, rows, the direct gap and the report (a private `Punch`).
 
 use crate::gap::{GapShape, validate_gap};
-use crate::zone::{candidate_nodes, rim_rows, rim_warning};
+use crate::zone::{candidate_nodes, rim_rows, rim_warning, row_areas};
 use saddle_core::error::{check, join};
 use saddle_core::{
     AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, ParameterError, Region, SceneError, TetMesh,
@@ -132,8 +132,20 @@ impl Punch<'_> {
             })
             .fold(0.0, f64::max);
         let rim = rim_rows(mesh, rows, &contact);
+        // contact pressures: each row's force over its share of the contact face
+        let area = row_areas(mesh, rows);
+        let force: f64 = lambda.iter().sum();
+        let peak = contact.iter().map(|&i| lambda[i] / area[i]).fold(0.0, f64::max);
+        let contact_area: f64 = contact.iter().map(|&i| area[i]).sum();
+        let mean = if contact_area > 0.0 { force / contact_area } else { 0.0 };
         ContactReport {
-            quantities: vec![("U".into(), self.u(extras)), ("force".into(), lambda.iter().sum())],
+            quantities: vec![
+                ("U".into(), self.u(extras)),
+                ("force".into(), force),
+                ("peak_pressure".into(), peak),
+                ("mean_pressure".into(), mean),
+                ("contact_area".into(), contact_area),
+            ],
             contact_nodes: contact.len(),
             contact_radius,
             warnings: rim_warning("obstacle", mesh, rows, &rim).into_iter().collect(),

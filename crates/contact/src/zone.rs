@@ -102,6 +102,30 @@ pub fn rim_rows(mesh: &TetMesh, rows: &ConstraintRows, contact: &[usize]) -> Vec
 }
 
 /// |(b − a) × (c − a)|: twice the area of a triangle.
+/// Each row's share of the contact face: a third of every boundary facet facing the punch
+/// (outward normal n₃ < 0) at each of its row nodes — the nodal area that turns a contact force
+/// λ_i into a pressure.
+pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
+    let mut row_of = vec![usize::MAX; mesh.n_nodes()];
+    for (i, &n) in rows.node.iter().enumerate() {
+        row_of[n] = i;
+    }
+    let mut area = vec![0.0; rows.n_rows()];
+    for f in &mesh.boundary {
+        let [a, b, c] = f.map(|i| mesh.nodes[i]);
+        let n3 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        let area2 = tri_area2(a, b, c);
+        if n3 < -1e-8 * area2 {
+            for &n in f {
+                if row_of[n] != usize::MAX {
+                    area[row_of[n]] += area2 / 6.0;
+                }
+            }
+        }
+    }
+    area
+}
+
 fn tri_area2(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];

@@ -108,7 +108,7 @@ fn parameters_name_the_field_and_the_value() {
     assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.U", "NaN"));
     let bad_zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: -1.0 }]);
     let e = RigidPunch::new(0.3, bad_zone, Box::new(Flat::default())).validate("obstacle").unwrap_err();
-    assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.zone[1].disc.radius", "-1"));
+    assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.zone.all[1].disc.radius", "-1"));
     // a negative prescribed U is a legal position (the punch pulled away)
     RigidPunchDisplacement::new(-0.01, disc(0.5), Box::new(Flat::default())).validate("obstacle").unwrap();
     // discretise validates too
@@ -297,4 +297,23 @@ fn scene_tables_parse_and_unknown_fields_are_rejected() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("unknown field `R`"), "{err}");
+}
+
+#[test]
+fn contact_pressures_of_a_uniform_force_field() {
+    // equal forces on every row of a flat zone: pressure = force / nodal area, whose mean over
+    // the zone is the total force over the zone's area
+    let mesh = common::mesh();
+    let dofs = common::dofs(&mesh);
+    let zone = saddle_core::Region::Group("zmin".into());
+    let punch = saddle_contact::RigidPunch::new(1.0, zone, Box::new(saddle_contact::Flat::default()));
+    let rows = saddle_core::AdmissibleDisplacements::discretise(&punch, &mesh, &dofs, "obstacle").unwrap();
+    let areas = saddle_contact::zone::row_areas(&mesh, &rows);
+    let zone_area: f64 = areas.iter().sum();
+    let lambda = vec![1.0 / rows.n_rows() as f64; rows.n_rows()];
+    let r = saddle_core::AdmissibleDisplacements::report(&punch, &mesh, &rows, &[0.0], &lambda);
+    assert!((r.get("contact_area").unwrap() - zone_area).abs() < 1e-12);
+    assert!((r.get("mean_pressure").unwrap() - 1.0 / zone_area).abs() < 1e-12);
+    let smallest = areas.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!((r.get("peak_pressure").unwrap() - lambda[0] / smallest).abs() < 1e-12);
 }

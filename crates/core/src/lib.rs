@@ -49,7 +49,7 @@ pub use inline_mesh::InlineMesh;
 pub use lagrangian::{Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace};
 pub use linalg::{SparseCholesky, SymmetricPattern};
 pub use loads::Load;
-pub use mesh::{MeshSource, TetMesh};
+pub use mesh::{MeshQuality, MeshSource, TetMesh};
 pub use output::{Summary, write_vtu};
 pub use p1p0::P1P0Lagrangian;
 pub use region::Region;

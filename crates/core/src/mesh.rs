@@ -117,10 +117,50 @@ impl TetMesh {
         max_edge(&self.nodes, &self.tets[e])
     }
 
+    /// Shape quality: the worst aspect ratio (longest edge over shortest altitude, scaled so
+    /// that a regular tetrahedron has 1; slivers and needles have large values) and where.
+    pub fn quality(&self) -> MeshQuality {
+        let mut q = MeshQuality { max_aspect_ratio: 0.0, worst_element: 0, min_volume: f64::INFINITY, max_volume: 0.0 };
+        for (e, t) in self.tets.iter().enumerate() {
+            let v = signed_volume(&self.nodes, t);
+            let x = t.map(|n| self.nodes[n]);
+            let largest_face = LOCAL_FACES
+                .iter()
+                .map(|f| {
+                    let (u, w) = (sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]]));
+                    let n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+                    0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+                })
+                .fold(0.0, f64::max);
+            let shortest_altitude = 3.0 * v / largest_face;
+            let ar = max_edge(&self.nodes, t) / shortest_altitude / 1.5f64.sqrt();
+            if ar > q.max_aspect_ratio {
+                q.max_aspect_ratio = ar;
+                q.worst_element = e;
+            }
+            q.min_volume = q.min_volume.min(v);
+            q.max_volume = q.max_volume.max(v);
+        }
+        q
+    }
+
     /// Names of the facet groups, for error messages.
     pub fn group_names(&self) -> Vec<&str> {
         self.groups.keys().map(|s| s.as_str()).collect()
     }
+}
+
+/// Shape and size statistics of a mesh ([`TetMesh::quality`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct MeshQuality {
+    /// Largest aspect ratio (1 for a regular tetrahedron).
+    pub max_aspect_ratio: f64,
+    /// The element where it occurs.
+    pub worst_element: usize,
+    /// Smallest element volume.
+    pub min_volume: f64,
+    /// Largest element volume.
+    pub max_volume: f64,
 }
 
 /// A source of meshes chosen by `type` in the `[mesh]` table of a scene (the structured box
@@ -206,6 +246,29 @@ mod tests {
         let [a, b, c] = f.map(|i| m.nodes[i]);
         let (u, v) = (sub(b, a), sub(c, a));
         assert!(u[0] * v[1] - u[1] * v[0] < 0.0);
+    }
+
+    #[test]
+    fn aspect_ratio_is_one_for_a_regular_tet_and_large_for_a_sliver() {
+        let s = (8.0f64 / 9.0).sqrt();
+        let regular = vec![
+            [0.0, 0.0, 1.0],
+            [s, 0.0, -1.0 / 3.0],
+            [-s / 2.0, (2.0f64 / 3.0).sqrt(), -1.0 / 3.0],
+            [-s / 2.0, -(2.0f64 / 3.0).sqrt(), -1.0 / 3.0],
+        ];
+        let t = if signed_volume(&regular, &[0, 1, 2, 3]) > 0.0 { [0, 1, 2, 3] } else { [0, 2, 1, 3] };
+        let m = TetMesh::new(regular, vec![t], vec![]).unwrap();
+        assert!((m.quality().max_aspect_ratio - 1.0).abs() < 1e-12);
+        // a unit right tetrahedron squashed to height 0.01
+        let m = TetMesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.01]],
+            vec![[0, 1, 2, 3]],
+            vec![],
+        )
+        .unwrap();
+        let ar = m.quality().max_aspect_ratio;
+        assert!(ar > 80.0 && ar < 150.0, "{ar}");
     }
 
     #[test]

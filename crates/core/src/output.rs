@@ -2,6 +2,7 @@
 //! ParaView: u, σ, von Mises stress, ξ, plastic flag, contact force).
 
 use crate::lagrangian::{KktResiduals, Lagrangian, Workspace};
+use crate::mesh::MeshQuality;
 use crate::p1p0::P1P0Lagrangian;
 use crate::solver::{Solution, StopReason};
 use crate::tensor::{to_vtk, von_mises};
@@ -57,6 +58,10 @@ pub struct Summary {
     pub nodes: usize,
     /// Rows of K_h (candidate contact nodes).
     pub contact_rows: usize,
+    /// Everything the obstacle reports (U, force, peak and mean contact pressure, ...).
+    pub contact: BTreeMap<String, f64>,
+    /// Element shape statistics (aspect ratio: 1 for a regular tetrahedron).
+    pub mesh_quality: MeshQuality,
     /// Wall time per solver phase.
     pub phases: BTreeMap<String, f64>,
     /// Solver-specific counters.
@@ -76,6 +81,14 @@ impl Summary {
         let contact = l.contact_report(sol);
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
+        let mesh_quality = l.mesh().quality();
+        if mesh_quality.max_aspect_ratio > 30.0 {
+            warnings.push(format!(
+                "the mesh has elements of aspect ratio up to {:.0} (element {}): expect larger discretisation errors \
+                 and stiffer linear systems there",
+                mesh_quality.max_aspect_ratio, mesh_quality.worst_element
+            ));
+        }
         if let Some(c) = &contact {
             warnings.extend(c.warnings.iter().cloned());
         }
@@ -101,6 +114,8 @@ impl Summary {
             elements: l.n_points(),
             nodes: l.mesh().n_nodes(),
             contact_rows: l.constraints().n_rows(),
+            contact: contact.as_ref().map_or_else(BTreeMap::new, |c| c.quantities.iter().cloned().collect()),
+            mesh_quality,
             phases: sol.report.phases.iter().cloned().collect(),
             counters: sol.report.counters.clone(),
             residual_history: sol.report.residual_history.clone(),

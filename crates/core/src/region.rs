@@ -60,8 +60,11 @@ impl Region {
                 check::positive(&p, "radius", *radius)?;
                 Ok(())
             }
-            Region::All(rs) | Region::Any(rs) => {
-                rs.iter().enumerate().try_for_each(|(i, r)| r.validate(&format!("{path}[{i}]")))
+            Region::All(rs) => {
+                rs.iter().enumerate().try_for_each(|(i, r)| r.validate(&format!("{}[{i}]", join(path, "all"))))
+            }
+            Region::Any(rs) => {
+                rs.iter().enumerate().try_for_each(|(i, r)| r.validate(&format!("{}[{i}]", join(path, "any"))))
             }
             Region::Not(r) => r.validate(&join(path, "not")),
         }
@@ -201,5 +204,11 @@ mod tests {
         // nodes of the 0.25 grid with x² + y² ≤ 0.25: 13 of them
         assert_eq!(disc.nodes(&m).len(), 13);
         assert!(Region::Group("nope".into()).missing_groups(&m) == vec!["nope".to_string()]);
+        // validation errors carry the full TOML path
+        let bad = Region::Not(Box::new(Region::All(vec![
+            Region::Group("zmin".into()),
+            Region::Disc { center: [0.0, f64::NAN], radius: 0.5 },
+        ])));
+        assert_eq!(bad.validate("obstacle.zone").unwrap_err().field, "obstacle.zone.not.all[1].disc.center[1]");
     }
 }
