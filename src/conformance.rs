@@ -22,7 +22,7 @@
 
 use saddle_core::stresses::energy_inner;
 use saddle_core::{
-    Lagrangian, P1P0Lagrangian, Scene, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
+    Lagrangian, P1P0Lagrangian, Scene, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
 };
 use std::path::Path;
 use thiserror::Error;
@@ -95,8 +95,8 @@ const JOHNSON: &str = include_str!("../examples/johnson.toml");
 const HOMOGENEOUS: &str = include_str!("../examples/homogeneous.toml");
 const HERTZ: &str = include_str!("../examples/hertz.toml");
 
-/// A scene from TOML text with `edits` applied (dotted paths, e.g. `("yield.h", 0.5)`).
-pub fn scene_with(text: &str, edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
+/// `text` (a scene) with `edits` applied (dotted paths, e.g. `("yield.h", 0.5)`), as TOML text.
+pub fn edited(text: &str, edits: &[(&str, toml::Value)]) -> String {
     let mut table: toml::Table = toml::from_str(text).expect("kit scenes parse");
     for (path, value) in edits {
         let mut keys: Vec<&str> = path.split('.').collect();
@@ -107,20 +107,34 @@ pub fn scene_with(text: &str, edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
         }
         cur.insert(last.to_string(), value.clone());
     }
-    let scene =
-        Scene::from_toml(&toml::to_string(&table).unwrap(), Path::new("kit.toml")).expect("kit scenes are valid");
-    scene.into_problem().expect("kit scenes assemble").0
+    toml::to_string(&table).unwrap()
+}
+
+/// A scene from TOML text with `edits` applied, or the error that makes it invalid.
+pub fn try_scene_with(text: &str, edits: &[(&str, toml::Value)]) -> Result<P1P0Lagrangian, SceneError> {
+    let scene = Scene::from_toml(&edited(text, edits), Path::new("kit.toml"))?;
+    Ok(scene.into_problem()?.0)
+}
+
+/// A scene from TOML text with `edits` applied (dotted paths, e.g. `("yield.h", 0.5)`).
+pub fn scene_with(text: &str, edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
+    try_scene_with(text, edits).expect("kit scenes are valid")
 }
 
 fn cells(c: [i64; 3]) -> toml::Value {
     toml::Value::Array(c.iter().map(|&x| toml::Value::Integer(x)).collect())
 }
 
-/// The small default scene of SPEC §6 (12×12×6 cells graded 3): plasticity and contact.
-pub fn small_johnson(edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
+/// The TOML text of the small default scene of SPEC §6 (12×12×6 cells graded 3) with `edits`.
+pub fn small_johnson_text(edits: &[(&str, toml::Value)]) -> String {
     let mut all = vec![("mesh.cells", cells([12, 12, 6])), ("mesh.grading.ratio", toml::Value::Float(3.0))];
     all.extend(edits.iter().cloned());
-    scene_with(JOHNSON, &all)
+    edited(JOHNSON, &all)
+}
+
+/// The small default scene of SPEC §6 (12×12×6 cells graded 3): plasticity and contact.
+pub fn small_johnson(edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
+    scene_with(&small_johnson_text(edits), &[])
 }
 
 /// U of homogeneous compression (SPEC §7) for E = 100, ν = 0.3, k₀ = 1, h = 5.
