@@ -27,3 +27,4 @@ pub use saddle_yield as yield_surfaces;
 pub mod conformance;
 pub mod report;
 pub mod run;
+pub mod stability;

@@ -20,6 +20,13 @@ pub trait GapShape: Debug + Send + Sync {
     /// Where φ is smallest (the first point of contact x̄); the contact radius is measured from
     /// here.
     fn center(&self) -> [f64; 2];
+
+    /// Whether the punch's face has an edge inside the zone: true for a flat punch, whose face
+    /// is the candidate zone itself, so contact at the zone's rim is the punch's edge (where the
+    /// pressure concentrates), not a sign of a zone too small. False by default.
+    fn has_edge(&self) -> bool {
+        false
+    }
 }
 
 /// `type = "paraboloid"`: the sphere of radius R near its apex,
@@ -117,6 +124,10 @@ impl GapShape for Flat {
 
     fn center(&self) -> [f64; 2] {
         self.center
+    }
+
+    fn has_edge(&self) -> bool {
+        true
     }
 }
 

@@ -138,6 +138,12 @@ impl Punch<'_> {
         let peak = contact.iter().map(|&i| lambda[i] / area[i]).fold(0.0, f64::max);
         let contact_area: f64 = contact.iter().map(|&i| area[i]).sum();
         let mean = if contact_area > 0.0 { force / contact_area } else { 0.0 };
+        // the pressure concentration at the rim: mean pressure of the rim rows over the mean
+        let rim_area: f64 = rim.iter().map(|&i| area[i]).sum();
+        let rim_force: f64 = rim.iter().map(|&i| lambda[i]).sum();
+        let rim_ratio = if rim_area > 0.0 && mean > 0.0 { rim_force / rim_area / mean } else { 0.0 };
+        let warnings =
+            if self.gap.has_edge() { None } else { rim_warning("obstacle", mesh, rows, &rim) }.into_iter().collect();
         ContactReport {
             quantities: vec![
                 ("U".into(), self.u(extras)),
@@ -145,10 +151,11 @@ impl Punch<'_> {
                 ("peak_pressure".into(), peak),
                 ("mean_pressure".into(), mean),
                 ("contact_area".into(), contact_area),
+                ("rim_pressure_ratio".into(), rim_ratio),
             ],
             contact_nodes: contact.len(),
             contact_radius,
-            warnings: rim_warning("obstacle", mesh, rows, &rim).into_iter().collect(),
+            warnings,
         }
     }
 }

@@ -92,6 +92,16 @@ impl DofMap {
                 }
             }
         }
+        if let Some(motion) = free_rigid_motion(mesh, &fixed) {
+            return Err(SceneError::Region {
+                field: "dirichlet".into(),
+                message: format!(
+                    "the conditions leave a rigid-body motion free ({motion}): the stiffness would be singular. \
+                     Clamp the body on a surface, or fix enough components (three non-collinear nodes clamped \
+                     at least)"
+                ),
+            });
+        }
         let mut n_free = 0u32;
         let dof = fixed
             .iter()
@@ -132,6 +142,61 @@ impl DofMap {
     }
 }
 
+/// A rigid-body motion r(x) = a + b × (x − x̄) that vanishes on every fixed component, described
+/// in words, or `None` when the conditions hold all six (the kernel of the elastic stiffness on
+/// the free space is then trivial). The six modes are orthonormalised over all nodes and the
+/// Gram matrix of their fixed components is tested for a null direction.
+fn free_rigid_motion(mesh: &TetMesh, fixed: &[[bool; 3]]) -> Option<String> {
+    use nalgebra::{Matrix6, SymmetricEigen, Vector6};
+    let n = mesh.n_nodes().max(1) as f64;
+    let centre = mesh.nodes.iter().fold([0.0; 3], |c, x| std::array::from_fn(|k| c[k] + x[k] / n));
+    let size = mesh.nodes.iter().flat_map(|x| (0..3).map(move |k| (x[k] - centre[k]).abs())).fold(0.0, f64::max);
+    let size = if size > 0.0 { size } else { 1.0 };
+    // mode values of component c at x: translations e_c, rotations e_k × (x − x̄) / size
+    let modes = |x: &[f64; 3], c: usize| -> Vector6<f64> {
+        let d: [f64; 3] = std::array::from_fn(|k| (x[k] - centre[k]) / size);
+        let mut m = Vector6::zeros();
+        m[c] = 1.0;
+        // (e_k × d)_c for k = 0, 1, 2
+        m[3] = [0.0, -d[2], d[1]][c];
+        m[4] = [d[2], 0.0, -d[0]][c];
+        m[5] = [-d[1], d[0], 0.0][c];
+        m
+    };
+    let (mut all, mut held) = (Matrix6::<f64>::zeros(), Matrix6::<f64>::zeros());
+    for (x, fx) in mesh.nodes.iter().zip(fixed) {
+        for (c, &is_fixed) in fx.iter().enumerate() {
+            let m = modes(x, c);
+            let mm = m * m.transpose();
+            all += mm;
+            if is_fixed {
+                held += mm;
+            }
+        }
+    }
+    // generalised eigenproblem held v = λ all v through all = LLᵀ
+    let l = all.cholesky()?.l();
+    let l_inv = l.try_inverse()?;
+    let reduced = l_inv * held * l_inv.transpose();
+    let eig = SymmetricEigen::new(reduced);
+    let (k, &lambda) = eig.eigenvalues.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
+    if lambda > 1e-10 {
+        return None;
+    }
+    let v = l_inv.transpose() * eig.eigenvectors.column(k);
+    let describe = |w: [f64; 3]| {
+        let norm = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        format!("({:.2}, {:.2}, {:.2})", w[0] / norm, w[1] / norm, w[2] / norm)
+    };
+    let (t, r) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]]);
+    let (tn, rn) = (t.iter().map(|a| a * a).sum::<f64>().sqrt(), r.iter().map(|a| a * a).sum::<f64>().sqrt());
+    Some(if rn < 1e-6 * tn.max(1e-300) {
+        format!("a translation along {}", describe(t))
+    } else {
+        format!("a rotation about the axis {}", describe(r))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,5 +228,29 @@ mod tests {
         assert!(e.to_string().contains("dirichlet[0].on") && e.to_string().contains("top"), "{e}");
         let e = DofMap::new(&m, &[Dirichlet::clamped(Region::Disc { center: [5.0, 5.0], radius: 0.1 })]).unwrap_err();
         assert!(e.to_string().contains("selects no boundary facet"), "{e}");
+    }
+
+    #[test]
+    fn rigid_body_motion_left_free_is_an_error_naming_it() {
+        let m = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
+        // nothing fixed: a translation is free
+        let e = DofMap::new(&m, &[]).unwrap_err().to_string();
+        assert!(e.contains("dirichlet") && e.contains("rigid-body motion free"), "{e}");
+        // z fixed on the bottom only: x, y translations and the rotation about z are free
+        let e = DofMap::new(&m, &[Dirichlet::roller(Region::Group("zmin".into()), Component::Z)]).unwrap_err();
+        assert!(e.to_string().contains("rigid-body"), "{e}");
+        // rollers on three orthogonal faces (x on xmin, y on ymin, z on zmin) hold every rigid motion
+        let rollers = [
+            Dirichlet::roller(Region::Group("xmin".into()), Component::X),
+            Dirichlet::roller(Region::Group("ymin".into()), Component::Y),
+            Dirichlet::roller(Region::Group("zmin".into()), Component::Z),
+        ];
+        assert!(DofMap::new(&m, &rollers).is_ok());
+        // the bottom clamped
+        let bottom_only = [Dirichlet::clamped(Region::Group("zmin".into()))];
+        assert!(DofMap::new(&m, &bottom_only).is_ok());
+        // only x fixed everywhere on xmin: translation along y free, named as such
+        let e = DofMap::new(&m, &[Dirichlet::roller(Region::Group("xmin".into()), Component::X)]).unwrap_err();
+        assert!(e.to_string().contains("rigid-body"), "{e}");
     }
 }

@@ -86,9 +86,26 @@ impl Scene {
 
     /// Parses and validates scene text; `origin` names it in error messages.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
-            path: origin.to_path_buf(),
-            message: e.to_string().trim_end().to_string(),
+        let parse_error = |message: String| SceneError::Parse { path: origin.to_path_buf(), message };
+        // TOML syntax first, then every number finite (no field of a scene takes NaN or ±inf),
+        // then the typed deserialisation with the path of the field it fails on.
+        let table = toml::Value::Table(
+            toml::from_str(text).map_err(|e: toml::de::Error| parse_error(e.to_string().trim_end().into()))?,
+        );
+        non_finite_number(&table, &mut String::new())?;
+        let de = toml::de::Deserializer::parse(text).map_err(|e| parse_error(e.to_string().trim_end().into()))?;
+        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
+            // the same error from the plain parser carries the line and the snippet
+            let detail = toml::from_str::<Scene>(text).err().map(|e| e.to_string()).unwrap_or_default();
+            let mut path = e.path().to_string();
+            let inner = e.into_inner().message().to_string();
+            // Inside a plugin (typetag buffers its table) the path stops at the plugin: find the
+            // field by the value the message quotes (`integer `-3``).
+            if let Some(leaf) = quoted_value(&inner).and_then(|v| unique_leaf(&table, &path, v)) {
+                path = leaf;
+            }
+            let detail = if detail.is_empty() { inner } else { detail.trim_end().to_string() };
+            parse_error(if path == "." { detail } else { format!("{path}: {detail}") })
         })?;
         scene.validate()?;
         Ok(scene)
@@ -122,5 +139,100 @@ impl Scene {
         let l = P1P0Lagrangian::new(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle)?
             .with_loads(&self.load)?;
         Ok((l, self.solver))
+    }
+}
+
+/// The first NaN or infinite number in a scene's TOML, as an error naming its path (`mesh.min[0]`).
+fn non_finite_number(v: &toml::Value, path: &mut String) -> Result<(), SceneError> {
+    match v {
+        toml::Value::Float(x) if !x.is_finite() => Err(SceneError::Parameter(crate::error::ParameterError::new(
+            path.clone(),
+            x,
+            "a finite number (no number in a scene may be NaN or infinite)",
+        ))),
+        toml::Value::Table(t) => t.iter().try_for_each(|(k, x)| {
+            let len = path.len();
+            if !path.is_empty() {
+                path.push('.');
+            }
+            path.push_str(k);
+            let r = non_finite_number(x, path);
+            path.truncate(len);
+            r
+        }),
+        toml::Value::Array(a) => a.iter().enumerate().try_for_each(|(i, x)| {
+            let len = path.len();
+            path.push_str(&format!("[{i}]"));
+            let r = non_finite_number(x, path);
+            path.truncate(len);
+            r
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// The value a serde message quotes between backticks (`invalid value: integer `-3`, …`).
+fn quoted_value(message: &str) -> Option<&str> {
+    let start = message.find('`')? + 1;
+    let len = message[start..].find('`')?;
+    Some(&message[start..start + len])
+}
+
+/// The path of the only numeric leaf under `path` (`.` for the root) written as `value`.
+fn unique_leaf(root: &toml::Value, path: &str, value: &str) -> Option<String> {
+    fn walk(v: &toml::Value, path: String, value: &str, found: &mut Vec<String>) {
+        match v {
+            toml::Value::Integer(i) if i.to_string() == value => found.push(path),
+            toml::Value::Float(x) if value.parse::<f64>().ok() == Some(*x) => found.push(path),
+            toml::Value::Table(t) => t.iter().for_each(|(k, x)| walk(x, format!("{path}.{k}"), value, found)),
+            toml::Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| walk(x, format!("{path}[{i}]"), value, found)),
+            _ => {}
+        }
+    }
+    let mut node = root;
+    if path != "." {
+        for part in path.split('.') {
+            let mut pieces = part.split(['[', ']']).filter(|s| !s.is_empty());
+            node = node.get(pieces.next()?)?;
+            for index in pieces {
+                node = node.get(index.parse::<usize>().ok()?)?;
+            }
+        }
+    }
+    let mut found = vec![];
+    walk(node, if path == "." { String::new() } else { path.to_string() }, value, &mut found);
+    let found: Vec<String> = found.into_iter().map(|p| p.trim_start_matches('.').to_string()).collect();
+    (found.len() == 1).then(|| found[0].clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = r#"
+[mesh]
+type = "box"
+min = [-1.0, -1.0, 0.0]
+max = [1.0, 1.0, 1.0]
+cells = [4, 4, 3]
+[material]
+E = 100.0
+nu = 0.3
+[[dirichlet]]
+on = { group = "zmax" }
+"#;
+
+    fn error(text: &str) -> String {
+        Scene::from_toml(text, Path::new("s.toml")).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn parse_errors_name_the_field_inside_plugins_and_arrays() {
+        let e = error(&SCENE.replace("[4, 4, 3]", "[4, 4, -3]"));
+        assert!(e.starts_with("s.toml: mesh.cells[2]: ") && e.contains("expected usize"), "{e}");
+        let e = error(&format!("{SCENE}components = [\"w\"]\n"));
+        assert!(e.contains("dirichlet[0].components[0]"), "{e}");
+        let e = error(&SCENE.replace("min = [-1.0, -1.0, 0.0]", "min = [-1.0, -inf, 0.0]"));
+        assert!(e.contains("mesh.min[1] = -inf") && e.contains("finite"), "{e}");
     }
 }
