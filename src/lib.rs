@@ -24,6 +24,7 @@ pub use saddle_core as core;
 pub use saddle_solvers as solvers;
 pub use saddle_yield as yield_surfaces;
 
+pub mod bench;
 pub mod conformance;
 pub mod report;
 pub mod run;

@@ -1,5 +1,6 @@
 //! The `saddle` command line: `saddle run SCENE.toml [--out DIR] [--solver TYPE]` and
-//! `saddle report SCENE.toml --out DIR [--quick]`.
+//! `saddle report SCENE.toml --out DIR [--quick]` and `saddle bench SCENE.toml [--out DIR] [--sizes N,..]
+//! [--solvers T,..]`.
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -53,6 +54,22 @@ enum Command {
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
+    },
+    /// Cost against problem size: the scene's box mesh scaled to each size; per-phase times,
+    /// one elastic linear solve as the baseline, every solver's total and its ratio to that
+    /// solve, iterations, peak memory. Writes DIR/bench.{csv,md,png,svg}.
+    Bench {
+        /// The scene file (TOML) with a `box` mesh; its [solver] table is ignored.
+        scene: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "docs/bench")]
+        out: PathBuf,
+        /// Target numbers of DOFs, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = vec![10_000usize, 50_000, 100_000, 200_000, 400_000])]
+        sizes: Vec<usize>,
+        /// Solver types, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = vec!["newton".to_string(), "uzawa".to_string()])]
+        solvers: Vec<String>,
     },
 }
 
@@ -214,11 +231,28 @@ fn report(scene: PathBuf, out: PathBuf, quick: bool, quiet: bool) -> Result<Exit
     Ok(ExitCode::SUCCESS)
 }
 
+fn bench(scene: PathBuf, out: PathBuf, sizes: Vec<usize>, solvers: Vec<String>) -> Result<ExitCode, String> {
+    for s in &solvers {
+        run::solver_by_type(s).map_err(|e| e.to_string())?;
+    }
+    eprintln!("{}: bench at {sizes:?} DOFs with {solvers:?} into {}", scene.display(), out.display());
+    let opts = saddle::bench::BenchOptions { sizes, solvers };
+    let started = Instant::now();
+    let b = saddle::bench::generate(&scene, &out, &opts, &mut |line| {
+        eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
+    })
+    .map_err(|e| e.to_string())?;
+    println!("{}", saddle::bench::markdown(&b));
+    println!("  wrote {}/bench.csv, bench.md, bench.png, bench.svg", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet).map_err(|e| e.to_string()),
         Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
+        Command::Bench { scene, out, sizes, solvers } => bench(scene, out, sizes, solvers),
     };
     result.unwrap_or_else(|e| {
         eprintln!("error: {e}");

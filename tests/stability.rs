@@ -5,7 +5,9 @@
 use saddle::stability::{
     Outcome, all_solvers, first_yield_force, locking, run, scene, sliver_scene, unclamped_scene, units_check,
 };
-use saddle::core::{StopReason, Summary};
+use saddle::core::{P1P0Lagrangian, Scene, Silent, StopReason, Summary};
+use saddle::stability::solver_from;
+use std::path::Path;
 
 fn f(x: f64) -> toml::Value {
     toml::Value::Float(x)
@@ -132,6 +134,17 @@ fn slivers_and_unclamped_body() {
         match run(&unclamped_scene(), &solver).0 {
             Outcome::SceneError(e) => assert!(e.contains("dirichlet") && e.contains("rigid-body motion"), "{e}"),
             other => panic!("{solver}: {other:?}"),
+        }
+    }
+    // the same L assembled in code (no scene check): every solver returns a typed error
+    let scene = Scene::from_toml(&unclamped_scene(), Path::new("unclamped.toml")).unwrap();
+    let mesh = scene.mesh.build(Path::new(".")).unwrap();
+    let l = P1P0Lagrangian::new(mesh, &[], scene.material, scene.yield_surface, scene.obstacle).unwrap();
+    for solver in all_solvers() {
+        let s = solver_from(&format!("type = \"{solver}\""));
+        match s.solve(&l, &mut Silent) {
+            Err(e) => assert!(!e.to_string().is_empty()),
+            Ok(sol) => panic!("{solver}: an unrestrained body solved: converged = {}", sol.report.converged),
         }
     }
 }

@@ -476,3 +476,46 @@ pub fn convergence(
     };
     render(&fig, png, svg)
 }
+
+/// `bench.png` and `.svg`: wall time against DOFs on log–log axes, one line per entry of
+/// `series` (name with its fitted slope, points (DOFs, seconds)), and a dashed N¹ reference.
+pub fn scaling(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> Result<(), super::ReportError> {
+    let mut lines: Vec<Series> = series
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, pts))| !pts.is_empty())
+        .map(|(i, (name, pts))| Series {
+            name: name.clone(),
+            color: COLORS[i % COLORS.len()],
+            marker: MARKERS[i % MARKERS.len()],
+            line: pts.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect(),
+            open: vec![],
+            dashed: false,
+        })
+        .collect();
+    if let Some((first, last)) = lines.first().and_then(|s| Some((*s.line.first()?, *s.line.last()?))) {
+        lines.push(Series {
+            name: "slope 1 (linear in N)".into(),
+            color: GREY,
+            marker: Marker::Circle,
+            line: vec![first, (last.0, first.1 * last.0 / first.0)],
+            open: vec![],
+            dashed: true,
+        });
+    }
+    let panel = Panel {
+        caption: "wall time against problem size".into(),
+        x_desc: "degrees of freedom".into(),
+        y_desc: "wall time (s)".into(),
+        series: lines.clone(),
+    };
+    let fig = Figure {
+        title: "saddle bench: the default scene family (2 cores)".into(),
+        panels: vec![panel],
+        legend: lines,
+        legend_note: None,
+        note_marker: false,
+        size: (1000, 700),
+    };
+    render(&fig, png, svg)
+}

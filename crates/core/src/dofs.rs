@@ -92,16 +92,6 @@ impl DofMap {
                 }
             }
         }
-        if let Some(motion) = free_rigid_motion(mesh, &fixed) {
-            return Err(SceneError::Region {
-                field: "dirichlet".into(),
-                message: format!(
-                    "the conditions leave a rigid-body motion free ({motion}): the stiffness would be singular. \
-                     Clamp the body on a surface, or fix enough components (three non-collinear nodes clamped \
-                     at least)"
-                ),
-            });
-        }
         let mut n_free = 0u32;
         let dof = fixed
             .iter()
@@ -134,6 +124,23 @@ impl DofMap {
     /// Nodal displacements from a vector of free values (fixed components are zero).
     pub fn nodal(&self, u: &[f64]) -> Vec<[f64; 3]> {
         self.dof.iter().map(|d| std::array::from_fn(|c| if d[c] == FIXED { 0.0 } else { u[d[c] as usize] })).collect()
+    }
+
+    /// An error naming the rigid-body motion the conditions leave free, if any (the elastic
+    /// stiffness on the free space is then singular). Scenes check this before solving.
+    pub fn check_rigid_motions(&self, mesh: &TetMesh) -> Result<(), SceneError> {
+        let fixed: Vec<[bool; 3]> = self.dof.iter().map(|d| d.map(|x| x == FIXED)).collect();
+        match free_rigid_motion(mesh, &fixed) {
+            None => Ok(()),
+            Some(motion) => Err(SceneError::Region {
+                field: "dirichlet".into(),
+                message: format!(
+                    "the conditions leave a rigid-body motion free ({motion}): the stiffness would be singular. \
+                     Clamp the body on a surface, or fix enough components (three non-collinear nodes clamped \
+                     at least)"
+                ),
+            }),
+        }
     }
 
     /// Number of nodes with at least one fixed component.
@@ -234,10 +241,11 @@ mod tests {
     fn rigid_body_motion_left_free_is_an_error_naming_it() {
         let m = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
         // nothing fixed: a translation is free
-        let e = DofMap::new(&m, &[]).unwrap_err().to_string();
+        let check = |c: &[Dirichlet]| DofMap::new(&m, c).unwrap().check_rigid_motions(&m);
+        let e = check(&[]).unwrap_err().to_string();
         assert!(e.contains("dirichlet") && e.contains("rigid-body motion free"), "{e}");
         // z fixed on the bottom only: x, y translations and the rotation about z are free
-        let e = DofMap::new(&m, &[Dirichlet::roller(Region::Group("zmin".into()), Component::Z)]).unwrap_err();
+        let e = check(&[Dirichlet::roller(Region::Group("zmin".into()), Component::Z)]).unwrap_err();
         assert!(e.to_string().contains("rigid-body"), "{e}");
         // rollers on three orthogonal faces (x on xmin, y on ymin, z on zmin) hold every rigid motion
         let rollers = [
@@ -245,12 +253,12 @@ mod tests {
             Dirichlet::roller(Region::Group("ymin".into()), Component::Y),
             Dirichlet::roller(Region::Group("zmin".into()), Component::Z),
         ];
-        assert!(DofMap::new(&m, &rollers).is_ok());
+        assert!(check(&rollers).is_ok());
         // the bottom clamped
         let bottom_only = [Dirichlet::clamped(Region::Group("zmin".into()))];
-        assert!(DofMap::new(&m, &bottom_only).is_ok());
+        assert!(check(&bottom_only).is_ok());
         // only x fixed everywhere on xmin: translation along y free, named as such
-        let e = DofMap::new(&m, &[Dirichlet::roller(Region::Group("xmin".into()), Component::X)]).unwrap_err();
+        let e = check(&[Dirichlet::roller(Region::Group("xmin".into()), Component::X)]).unwrap_err();
         assert!(e.to_string().contains("rigid-body"), "{e}");
     }
 }

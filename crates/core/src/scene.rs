@@ -133,11 +133,13 @@ impl Scene {
         Ok(())
     }
 
-    /// Builds the mesh and assembles L; returns it with the scene's solver (if any).
+    /// Builds the mesh and assembles L; returns it with the scene's solver (if any). A scene
+    /// whose Dirichlet conditions leave a rigid-body motion free is an error here.
     pub fn into_problem(self) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
         let mesh = self.mesh.build(&self.base_dir)?;
         let l = P1P0Lagrangian::new(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle)?
             .with_loads(&self.load)?;
+        l.dofs().check_rigid_motions(l.mesh())?;
         Ok((l, self.solver))
     }
 }

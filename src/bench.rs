@@ -1,0 +1,467 @@
+//! `saddle bench`: cost against problem size (issue 6). The scene's box mesh is scaled to a
+//! ladder of sizes (the default scene family: cells 2n × 2n × n); at each size it measures the
+//! phases of building the problem (mesh, L with its pattern and stiffness, one re-assembly of
+//! the stiffness values), **one elastic linear solve** of that mesh with faer's supernodal
+//! Cholesky (symbolic analysis, numeric factorisation, one solve) as the baseline, an elastic
+//! scene without contact run through each solver (what a scene pays for the framework: ratio
+//! to the baseline, issue 5), and each solver on the scene itself: wall time, per-phase times,
+//! iterations, the KKT residual, peak resident memory, and the ratio *solver total / baseline*.
+//! Writes `bench.csv`, `bench.md` and (feature `report`) `bench.png`/`bench.svg`: time against
+//! DOFs on log–log axes with the fitted slopes.
+//!
+//! ```text
+//! cargo run --release -- bench examples/johnson.toml --out docs/bench
+//! cargo run --release -- bench examples/johnson.toml --sizes 10000,50000,100000 --solvers newton,uzawa
+//! ```
+
+use crate::report::{ReportError, SceneSource};
+use saddle_core::{Lagrangian, Material, P1P0Lagrangian, Scene, Silent, Solver, SparseCholesky, Workspace};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    /// Target numbers of free DOFs (the nearest size of the mesh family is used).
+    pub sizes: Vec<usize>,
+    /// Solver types, each with its defaults.
+    pub solvers: Vec<String>,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self { sizes: vec![10_000, 50_000, 100_000, 200_000, 400_000], solvers: vec!["newton".into(), "uzawa".into()] }
+    }
+}
+
+/// Peak resident memory since the last [`reset_peak_memory`], in MiB (Linux; 0 elsewhere).
+pub fn peak_memory_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kib| kib / 1024.0)
+}
+
+/// Resets the peak resident memory to the current one (Linux ≥ 4.0: `clear_refs` = 5).
+pub fn reset_peak_memory() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// One elastic linear solve of K u = f with faer's supernodal Cholesky: the baseline.
+#[derive(Clone, Debug, Default)]
+pub struct LinearSolve {
+    /// Symbolic analysis (AMD ordering, supernodes), s.
+    pub analyse_s: f64,
+    /// Numeric factorisation, s.
+    pub factorise_s: f64,
+    /// One forward and back substitution, s.
+    pub solve_s: f64,
+    /// Stored entries of L.
+    pub nnz_l: usize,
+    /// Peak resident memory, MiB.
+    pub peak_mib: f64,
+}
+
+impl LinearSolve {
+    /// analyse + factorise + solve.
+    pub fn total_s(&self) -> f64 {
+        self.analyse_s + self.factorise_s + self.solve_s
+    }
+}
+
+/// One solver run.
+#[derive(Clone, Debug)]
+pub struct SolverRun {
+    /// Solver type.
+    pub solver: String,
+    /// `scene` (the benchmark scene) or `elastic` (no yield, no contact, a body force).
+    pub variant: &'static str,
+    /// Converged to its tolerance.
+    pub converged: bool,
+    /// Iterations.
+    pub iterations: usize,
+    /// Relative KKT residual recomputed from the solution.
+    pub kkt: f64,
+    /// Wall time of `solve`, s.
+    pub total_s: f64,
+    /// Per-phase times, s.
+    pub phases: Vec<(String, f64)>,
+    /// Factorisations and triangular solve pairs (the solver's counters).
+    pub factorisations: f64,
+    /// Triangular solve pairs.
+    pub solve_pairs: f64,
+    /// Peak resident memory, MiB.
+    pub peak_mib: f64,
+    /// The error, if the solver failed.
+    pub error: Option<String>,
+}
+
+/// Everything measured at one size.
+#[derive(Clone, Debug)]
+pub struct SizeResult {
+    /// Box cells.
+    pub cells: [usize; 3],
+    /// Free DOFs.
+    pub dofs: usize,
+    /// Tetrahedra.
+    pub elements: usize,
+    /// Contact rows.
+    pub contact_rows: usize,
+    /// Mesh generation, s.
+    pub mesh_s: f64,
+    /// L: DOFs, pattern, stiffness, constraints, s.
+    pub problem_s: f64,
+    /// One re-assembly of the stiffness values on the fixed pattern, s.
+    pub reassembly_s: f64,
+    /// The baseline.
+    pub linear: LinearSolve,
+    /// The runs (elastic variants first).
+    pub runs: Vec<SolverRun>,
+}
+
+/// The whole benchmark.
+#[derive(Clone, Debug)]
+pub struct Bench {
+    /// Scene title.
+    pub title: String,
+    /// One entry per size.
+    pub sizes: Vec<SizeResult>,
+    /// Machine load (1-minute average) before and after.
+    pub load: (f64, f64),
+}
+
+/// The 1-minute load average (Linux).
+pub fn load_average() -> f64 {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(f64::NAN)
+}
+
+/// Cells of the scene's box mesh scaled to about `target` free DOFs (free DOFs grow like the
+/// number of nodes: the scale factor is the cube root of the ratio).
+pub fn cells_for(base: [usize; 3], base_dofs: usize, target: usize) -> [usize; 3] {
+    let s = (target as f64 / base_dofs as f64).cbrt();
+    base.map(|c| ((c as f64 * s).round() as usize).max(2))
+}
+
+/// Runs one size; `progress` gets a line per finished step.
+pub fn measure(
+    source: &SceneSource,
+    cells: [usize; 3],
+    opts: &BenchOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<SizeResult, ReportError> {
+    let scene = source.scene(Some(cells))?;
+    let t = Instant::now();
+    let mesh = scene.mesh.build(&scene.base_dir).map_err(saddle_core::SceneError::from)?;
+    let mesh_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let l = P1P0Lagrangian::new(mesh, &scene.dirichlet, scene.material.clone(), scene.yield_surface, scene.obstacle)?
+        .with_loads(&scene.load)?;
+    let problem_s = t.elapsed().as_secs_f64();
+    let c = l.elasticity().stiffness_matrix();
+    let mut k = vec![0.0; l.pattern().nnz()];
+    let t = Instant::now();
+    l.assemble(Material::Uniform(&c), &mut k);
+    let reassembly_s = t.elapsed().as_secs_f64();
+    progress(&format!("{} dofs: mesh {mesh_s:.2} s, L {problem_s:.2} s, re-assembly {reassembly_s:.3} s", l.n_dofs()));
+    // the baseline: one elastic solve with the scene's own load vector (punch: a unit load)
+    reset_peak_memory();
+    let mut linear = LinearSolve::default();
+    let t = Instant::now();
+    let mut chol = SparseCholesky::analyse(l.pattern(), "elastic stiffness").map_err(bench_error)?;
+    linear.analyse_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    chol.factorise(l.pattern(), &k).map_err(bench_error)?;
+    linear.factorise_s = t.elapsed().as_secs_f64();
+    let mut x: Vec<f64> = (0..l.n_dofs()).map(|i| ((i % 7) as f64 - 3.0) * 1e-3).collect();
+    let t = Instant::now();
+    chol.solve(&mut x);
+    linear.solve_s = t.elapsed().as_secs_f64();
+    linear.nnz_l = chol.nnz_l();
+    linear.peak_mib = peak_memory_mib();
+    drop(chol);
+    progress(&format!(
+        "{} dofs: elastic solve {:.2} s (analyse {:.2}, factorise {:.2}, solve {:.3})",
+        l.n_dofs(),
+        linear.total_s(),
+        linear.analyse_s,
+        linear.factorise_s,
+        linear.solve_s
+    ));
+    let mut runs = vec![];
+    // the elastic scene without contact: what the framework costs over one linear solve
+    let elastic = elastic_variant(source, cells)?;
+    for name in &opts.solvers {
+        let run = run_solver(&elastic, name, "elastic")?;
+        progress(&format!("{} dofs: elastic scene, {name}: {:.2} s", l.n_dofs(), run.total_s));
+        runs.push(run);
+    }
+    for name in &opts.solvers {
+        let run = run_solver(&l, name, "scene")?;
+        progress(&format!(
+            "{} dofs: {name}: {:.2} s, {} iterations, KKT {:.1e}{}",
+            l.n_dofs(),
+            run.total_s,
+            run.iterations,
+            run.kkt,
+            run.error.as_deref().map_or(String::new(), |e| format!(" ERROR {e}"))
+        ));
+        runs.push(run);
+    }
+    Ok(SizeResult {
+        cells,
+        dofs: l.n_dofs(),
+        elements: l.n_points(),
+        contact_rows: l.constraints().n_rows(),
+        mesh_s,
+        problem_s,
+        reassembly_s,
+        linear,
+        runs,
+    })
+}
+
+fn bench_error(e: impl std::fmt::Display) -> ReportError {
+    ReportError::Scene(saddle_core::SceneError::Parse { path: "bench".into(), message: e.to_string() })
+}
+
+/// The scene at `cells` without yield surface and obstacle, loaded by a body force instead.
+fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<P1P0Lagrangian, ReportError> {
+    let mut table: toml::Table = toml::from_str(&source.text).map_err(bench_error)?;
+    table.remove("yield");
+    table.remove("obstacle");
+    table.remove("solver");
+    let load: toml::Table = toml::from_str("load = [ { type = \"body_force\", b = [0.0, 0.0, -1e-3] } ]").unwrap();
+    table.extend(load);
+    if let Some(mesh) = table.get_mut("mesh").and_then(|m| m.as_table_mut()) {
+        mesh.insert("cells".into(), toml::Value::try_from(cells).map_err(bench_error)?);
+    }
+    let mut scene = Scene::from_toml(&toml::to_string(&table).map_err(bench_error)?, &source.path)?;
+    scene.base_dir = source.path.parent().map(Path::to_path_buf).unwrap_or_default();
+    Ok(scene.into_problem()?.0)
+}
+
+/// Runs solver `name` (defaults) on `l`, measuring time and peak memory.
+fn run_solver(l: &P1P0Lagrangian, name: &str, variant: &'static str) -> Result<SolverRun, ReportError> {
+    let solver: Box<dyn Solver> = crate::run::solver_by_type(name).map_err(bench_error)?;
+    reset_peak_memory();
+    let t = Instant::now();
+    let result = solver.solve(l, &mut Silent);
+    let total_s = t.elapsed().as_secs_f64();
+    let peak_mib = peak_memory_mib();
+    Ok(match result {
+        Ok(sol) => {
+            let kkt = l.kkt(&sol.iterate(), &mut Workspace::new(l)).max();
+            let r = &sol.report;
+            SolverRun {
+                solver: name.into(),
+                variant,
+                converged: r.converged,
+                iterations: r.iterations,
+                kkt,
+                total_s,
+                phases: r.phases.clone(),
+                factorisations: r.counters.get("factorisations").copied().unwrap_or(f64::NAN),
+                solve_pairs: r.counters.get("triangular_solve_pairs").copied().unwrap_or(f64::NAN),
+                peak_mib,
+                error: None,
+            }
+        }
+        Err(e) => SolverRun {
+            solver: name.into(),
+            variant,
+            converged: false,
+            iterations: 0,
+            kkt: f64::NAN,
+            total_s,
+            phases: vec![],
+            factorisations: f64::NAN,
+            solve_pairs: f64::NAN,
+            peak_mib,
+            error: Some(e.to_string()),
+        },
+    })
+}
+
+/// Runs the benchmark on `scene` into `out`.
+pub fn generate(
+    scene: &Path,
+    out: &Path,
+    opts: &BenchOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Bench, ReportError> {
+    let source = SceneSource::read(scene)?;
+    let base = source.box_cells().map_err(bench_error)?;
+    let base_dofs = source.problem(None)?.n_dofs();
+    let load0 = load_average();
+    let mut sizes = vec![];
+    for &target in &opts.sizes {
+        let cells = cells_for(base, base_dofs, target);
+        sizes.push(measure(&source, cells, opts, progress)?);
+    }
+    let bench = Bench { title: source.title(), sizes, load: (load0, load_average()) };
+    std::fs::create_dir_all(out).map_err(|e| io_error(out, e))?;
+    let csv = out.join("bench.csv");
+    std::fs::write(&csv, csv_text(&bench)).map_err(|e| io_error(&csv, e))?;
+    let md = out.join("bench.md");
+    std::fs::write(&md, markdown(&bench)).map_err(|e| io_error(&md, e))?;
+    #[cfg(feature = "report")]
+    crate::report::plot::scaling(&scaling_series(&bench), &out.join("bench.png"), &out.join("bench.svg"))?;
+    Ok(bench)
+}
+
+fn io_error(path: &Path, source: std::io::Error) -> ReportError {
+    ReportError::Io { path: PathBuf::from(path), source }
+}
+
+/// Least-squares slope of ln t against ln N.
+pub fn fitted_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let (n, t): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
+    crate::report::convergence::fitted_rate(&n, &t)
+}
+
+/// (name, points (DOFs, seconds)) per line of the plot: the baseline and each solver.
+pub fn scaling_series(bench: &Bench) -> Vec<(String, Vec<(f64, f64)>)> {
+    let mut series = vec![(
+        "one elastic linear solve (faer Cholesky)".to_string(),
+        bench.sizes.iter().map(|s| (s.dofs as f64, s.linear.total_s())).collect::<Vec<_>>(),
+    )];
+    let names: Vec<String> = bench.sizes.first().map_or(vec![], |s| {
+        s.runs.iter().filter(|r| r.variant == "scene").map(|r| r.solver.clone()).collect()
+    });
+    for name in names {
+        let pts: Vec<(f64, f64)> = bench
+            .sizes
+            .iter()
+            .filter_map(|s| {
+                s.runs.iter().find(|r| r.variant == "scene" && r.solver == name && r.converged).map(|r| (s.dofs as f64, r.total_s))
+            })
+            .collect();
+        series.push((name, pts));
+    }
+    series
+        .into_iter()
+        .map(|(name, pts)| {
+            let slope = fitted_slope(&pts).map_or(String::new(), |p| format!(" (slope {p:.2})"));
+            (format!("{name}{slope}"), pts)
+        })
+        .collect()
+}
+
+fn phase_list(phases: &[(String, f64)]) -> String {
+    phases.iter().map(|(k, t)| format!("{k}={t:.3}")).collect::<Vec<_>>().join(";")
+}
+
+/// `bench.csv`: one row per size and run (the baseline as solver `linear`).
+pub fn csv_text(bench: &Bench) -> String {
+    let mut s = String::from(
+        "dofs,elements,contact_rows,cells,variant,solver,converged,iterations,kkt,total_s,ratio_to_linear,\
+         factorisations,solve_pairs,peak_mib,mesh_s,problem_s,reassembly_s,phases\n",
+    );
+    for z in &bench.sizes {
+        let cells = format!("{}x{}x{}", z.cells[0], z.cells[1], z.cells[2]);
+        let head = format!("{},{},{},{cells}", z.dofs, z.elements, z.contact_rows);
+        let tail = format!("{:.4},{:.4},{:.4}", z.mesh_s, z.problem_s, z.reassembly_s);
+        let lin = &z.linear;
+        let _ = writeln!(
+            s,
+            "{head},elastic,linear,true,1,,{:.4},1,1,1,{:.0},{tail},analyse={:.3};factorise={:.3};solve={:.4}",
+            lin.total_s(),
+            lin.peak_mib,
+            lin.analyse_s,
+            lin.factorise_s,
+            lin.solve_s
+        );
+        for r in &z.runs {
+            let _ = writeln!(
+                s,
+                "{head},{},{},{},{},{:.3e},{:.4},{:.3},{},{},{:.0},{tail},{}",
+                r.variant,
+                r.solver,
+                r.converged,
+                r.iterations,
+                r.kkt,
+                r.total_s,
+                r.total_s / lin.total_s(),
+                r.factorisations,
+                r.solve_pairs,
+                r.peak_mib,
+                phase_list(&r.phases)
+            );
+        }
+    }
+    s
+}
+
+/// `bench.md`: the table and the fitted slopes.
+pub fn markdown(bench: &Bench) -> String {
+    let mut s = format!(
+        "Machine: 2 cores; 1-minute load average {:.2} before, {:.2} after.\n\n\
+         | DOFs | tets | mesh | L (pattern + stiffness) | re-assembly | elastic solve: analyse / factorise / solve | peak |",
+        bench.load.0, bench.load.1
+    );
+    let names: Vec<String> = bench.sizes.first().map_or(vec![], |z| {
+        z.runs.iter().filter(|r| r.variant == "scene").map(|r| r.solver.clone()).collect()
+    });
+    for n in &names {
+        let _ = write!(s, " elastic scene, {n} (ratio) |");
+    }
+    for n in &names {
+        let _ = write!(s, " {n}: total (ratio), iterations, factorisations, KKT, peak |");
+    }
+    s.push_str("\n|---:|---:|---:|---:|---:|---|---:|");
+    for _ in 0..2 * names.len() {
+        s.push_str("---|");
+    }
+    s.push('\n');
+    for z in &bench.sizes {
+        let lin = &z.linear;
+        let _ = write!(
+            s,
+            "| {} | {} | {:.2} s | {:.2} s | {:.3} s | {:.2} s: {:.2} / {:.2} / {:.3} | {:.0} MiB |",
+            z.dofs,
+            z.elements,
+            z.mesh_s,
+            z.problem_s,
+            z.reassembly_s,
+            lin.total_s(),
+            lin.analyse_s,
+            lin.factorise_s,
+            lin.solve_s,
+            lin.peak_mib
+        );
+        for variant in ["elastic", "scene"] {
+            for n in &names {
+                let cell = match z.runs.iter().find(|r| r.variant == variant && &r.solver == n) {
+                    None => "–".to_string(),
+                    Some(r) if r.error.is_some() => format!("error: {}", r.error.as_deref().unwrap_or_default()),
+                    Some(r) if variant == "elastic" => format!("{:.2} s ({:.2}×)", r.total_s, r.total_s / lin.total_s()),
+                    Some(r) => format!(
+                        "{:.1} s ({:.1}×), {} it, {} fact., {:.0e}{}, {:.0} MiB",
+                        r.total_s,
+                        r.total_s / lin.total_s(),
+                        r.iterations,
+                        r.factorisations,
+                        r.kkt,
+                        if r.converged { "" } else { " NOT CONVERGED" },
+                        r.peak_mib
+                    ),
+                };
+                let _ = write!(s, " {cell} |");
+            }
+        }
+        s.push('\n');
+    }
+    s.push('\n');
+    for (name, pts) in scaling_series(bench) {
+        if pts.len() >= 2 {
+            let _ = writeln!(s, "* {name}: time against DOFs from {:.0} to {:.0}", pts[0].0, pts[pts.len() - 1].0);
+        }
+    }
+    s
+}
