@@ -23,6 +23,9 @@ pub struct Csr {
 /// Rows per parallel task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: usize = 2048;
 
+/// Rows per parallel task of the sparse product (rows of coarse matrices are long).
+const PRODUCT_CHUNK: usize = 256;
+
 impl Csr {
     /// The full symmetric matrix whose lower triangle is `values` on `pattern`.
     pub fn from_symmetric_lower(pattern: &SymmetricPattern, values: &[f64]) -> Self {
@@ -206,37 +209,38 @@ impl Csr {
     /// accumulator over the columns of B).
     pub fn matmul(&self, b: &Csr) -> Csr {
         assert_eq!(self.ncols, b.nrows);
-        let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..self.nrows.div_ceil(CHUNK))
+        let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..self.nrows.div_ceil(PRODUCT_CHUNK))
             .into_par_iter()
-            .map(|c| {
-                let (r0, r1) = (c * CHUNK, ((c + 1) * CHUNK).min(self.nrows));
-                let mut acc = vec![0.0; b.ncols];
-                let mut mark = vec![u32::MAX; b.ncols];
-                let mut cols: Vec<u32> = Vec::new();
-                let (mut lens, mut idx, mut val) = (Vec::with_capacity(r1 - r0), Vec::new(), Vec::new());
-                for r in r0..r1 {
-                    cols.clear();
-                    for q in self.ptr[r]..self.ptr[r + 1] {
-                        let (k, a) = (self.idx[q] as usize, self.val[q]);
-                        for p in b.ptr[k]..b.ptr[k + 1] {
-                            let j = b.idx[p];
-                            if mark[j as usize] != r as u32 {
-                                mark[j as usize] = r as u32;
-                                acc[j as usize] = 0.0;
-                                cols.push(j);
+            .map_init(
+                || (vec![0.0; b.ncols], vec![u32::MAX; b.ncols]),
+                |(acc, mark), c| {
+                    let (r0, r1) = (c * PRODUCT_CHUNK, ((c + 1) * PRODUCT_CHUNK).min(self.nrows));
+                    let mut cols: Vec<u32> = Vec::new();
+                    let (mut lens, mut idx, mut val) = (Vec::with_capacity(r1 - r0), Vec::new(), Vec::new());
+                    for r in r0..r1 {
+                        cols.clear();
+                        let (lo, hi) = (self.ptr[r], self.ptr[r + 1]);
+                        for (&k, &a) in self.idx[lo..hi].iter().zip(&self.val[lo..hi]) {
+                            let (blo, bhi) = (b.ptr[k as usize], b.ptr[k as usize + 1]);
+                            for (&j, &v) in b.idx[blo..bhi].iter().zip(&b.val[blo..bhi]) {
+                                let ju = j as usize;
+                                if mark[ju] != r as u32 {
+                                    mark[ju] = r as u32;
+                                    acc[ju] = a * v;
+                                    cols.push(j);
+                                } else {
+                                    acc[ju] += a * v;
+                                }
                             }
-                            acc[j as usize] += a * b.val[p];
                         }
+                        cols.sort_unstable();
+                        lens.push(cols.len());
+                        idx.extend_from_slice(&cols);
+                        val.extend(cols.iter().map(|&j| acc[j as usize]));
                     }
-                    cols.sort_unstable();
-                    lens.push(cols.len());
-                    for &j in &cols {
-                        idx.push(j);
-                        val.push(acc[j as usize]);
-                    }
-                }
-                (lens, idx, val)
-            })
+                    (lens, idx, val)
+                },
+            )
             .collect();
         let mut ptr = Vec::with_capacity(self.nrows + 1);
         ptr.push(0);
@@ -259,9 +263,9 @@ mod tests {
 
     fn dense(a: &Csr) -> Vec<Vec<f64>> {
         let mut d = vec![vec![0.0; a.ncols]; a.nrows];
-        for r in 0..a.nrows {
+        for (r, row) in d.iter_mut().enumerate() {
             for q in a.ptr[r]..a.ptr[r + 1] {
-                d[r][a.idx[q] as usize] += a.val[q];
+                row[a.idx[q] as usize] += a.val[q];
             }
         }
         d
@@ -299,5 +303,79 @@ mod tests {
         assert_eq!(dense(&a), vec![vec![4.0, 1.0, 0.0], vec![1.0, 5.0, 2.0], vec![0.0, 2.0, 6.0]]);
         assert!((0..3).all(|r| a.idx[a.ptr[r]..a.ptr[r + 1]].windows(2).all(|w| w[0] < w[1])));
         assert_eq!(a.diagonal(), vec![4.0, 5.0, 6.0]);
+    }
+
+    /// A random m × n matrix with up to `per_row` entries per row (sorted, distinct columns).
+    fn random(m: usize, n: usize, per_row: usize, seed: u64) -> Csr {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let mut ptr = vec![0];
+        let (mut idx, mut val) = (vec![], vec![]);
+        for _ in 0..m {
+            let mut cols: Vec<u32> = (0..per_row).map(|_| rng.random_range(0..n as u32)).collect();
+            cols.sort_unstable();
+            cols.dedup();
+            for c in cols {
+                idx.push(c);
+                val.push(rng.random_range(-1.0..1.0));
+            }
+            ptr.push(idx.len());
+        }
+        Csr { nrows: m, ncols: n, ptr, idx, val }
+    }
+
+    fn sorted_rows(a: &Csr) -> bool {
+        (0..a.nrows).all(|r| a.idx[a.ptr[r]..a.ptr[r + 1]].windows(2).all(|w| w[0] < w[1]))
+    }
+
+    #[test]
+    fn products_across_parallel_tasks_agree_with_vector_products() {
+        // more rows than one task holds, so that the parallel splits are exercised
+        let (a, b) = (random(5000, 3000, 7, 1), random(3000, 900, 5, 2));
+        let x: Vec<f64> = (0..900).map(|i| (i as f64 * 0.7).sin()).collect();
+        let ab = a.matmul(&b);
+        assert!(sorted_rows(&ab) && ab.ptr.len() == 5001 && ab.ncols == 900);
+        let (mut bx, mut abx, mut ab_x) = (vec![0.0; 3000], vec![0.0; 5000], vec![0.0; 5000]);
+        b.spmv(&x, &mut bx);
+        a.spmv(&bx, &mut abx);
+        ab.spmv(&x, &mut ab_x);
+        assert!(abx.iter().zip(&ab_x).all(|(p, q)| (p - q).abs() < 1e-12), "(AB)x ≠ A(Bx)");
+        // yᵀ(A z) = (Aᵀ y)ᵀ z, and the transpose is sorted
+        let at = a.transpose();
+        assert!(sorted_rows(&at) && at.transpose() == a);
+        let y: Vec<f64> = (0..5000).map(|i| (i as f64 * 0.3).cos()).collect();
+        let z: Vec<f64> = (0..3000).map(|i| (i as f64 * 0.1).sin()).collect();
+        let (mut az, mut aty) = (vec![0.0; 5000], vec![0.0; 3000]);
+        a.spmv(&z, &mut az);
+        at.spmv(&y, &mut aty);
+        let (l, r): (f64, f64) =
+            (y.iter().zip(&az).map(|(p, q)| p * q).sum(), aty.iter().zip(&z).map(|(p, q)| p * q).sum());
+        assert!((l - r).abs() < 1e-10 * l.abs().max(1.0));
+        // y += 2 A z and b − A z
+        let mut w = y.clone();
+        a.spmv_add(2.0, &z, &mut w);
+        let mut res = vec![0.0; 5000];
+        a.residual(&y, &z, &mut res);
+        assert!((0..5000).all(|i| (w[i] - y[i] - 2.0 * az[i]).abs() < 1e-12 && (res[i] - y[i] + az[i]).abs() < 1e-12));
+        // α A + β B on the union of the patterns
+        let c = random(5000, 3000, 7, 3);
+        let sum = a.add(2.0, &c, -0.5);
+        let mut sz = vec![0.0; 5000];
+        sum.spmv(&z, &mut sz);
+        let mut cz = vec![0.0; 5000];
+        c.spmv(&z, &mut cz);
+        assert!(sorted_rows(&sum) && (0..5000).all(|i| (sz[i] - 2.0 * az[i] + 0.5 * cz[i]).abs() < 1e-12));
+    }
+
+    #[test]
+    fn lower_triangle_round_trip() {
+        let p = SymmetricPattern::new(3, vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2]);
+        let v = [4.0, 1.0, 5.0, 2.0, 6.0];
+        let (q, w) = Csr::from_symmetric_lower(&p, &v).to_symmetric_lower();
+        assert_eq!((q.col_ptr(), q.row_idx(), w.as_slice()), (p.col_ptr(), p.row_idx(), &v[..]));
+        let (mut y1, mut y2) = (vec![0.0; 3], vec![0.0; 3]);
+        p.matvec(&v, &[1.0, 2.0, 3.0], &mut y1);
+        Csr::from_symmetric_lower(&p, &v).spmv(&[1.0, 2.0, 3.0], &mut y2);
+        assert_eq!(y1, y2);
     }
 }
