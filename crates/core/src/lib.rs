@@ -41,7 +41,7 @@ pub mod solver;
 pub mod stresses;
 pub mod tensor;
 
-pub use amg::{AmgParams, DofLayout, SmoothedAggregation};
+pub use amg::{AmgParams, DofLayout, LevelInfo, SmoothedAggregation};
 pub use box_mesh::{BoxMesh, Grading};
 pub use csr::Csr;
 pub use displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};

@@ -98,7 +98,7 @@ impl Pcg {
 
     /// Solves A x = b by CG preconditioned with `m`, from the initial guess in `x`, until
     /// ‖b − A x‖ ≤ `tol` ‖b‖ or `max_iter` iterations. Not converging is reported, not an error;
-    /// a breakdown or non-finite data is an error (x then holds the last finite iterate).
+    /// a breakdown or non-finite data is an error (x then holds the iterate reached).
     pub fn solve(
         &mut self,
         a: &Csr,
