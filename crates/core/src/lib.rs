@@ -17,7 +17,9 @@
 //! [`P1P0Lagrangian`] assembles L from a tetrahedral [`TetMesh`] (P1 displacements, P0
 //! stresses, §3); [`Scene`] reads a whole problem from TOML, plugins chosen by `type`.
 
+pub mod amg;
 pub mod box_mesh;
+pub mod csr;
 pub mod displacements;
 pub mod dofs;
 pub mod elasticity;
@@ -31,6 +33,7 @@ pub mod loads;
 pub mod mesh;
 pub mod output;
 pub mod p1p0;
+pub mod pcg;
 pub mod projection;
 pub mod region;
 pub mod scene;
@@ -38,11 +41,13 @@ pub mod solver;
 pub mod stresses;
 pub mod tensor;
 
+pub use amg::{AmgParams, DofLayout, LevelInfo, SmoothedAggregation};
 pub use box_mesh::{BoxMesh, Grading};
+pub use csr::Csr;
 pub use displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
 pub use dofs::{Component, Dirichlet, DofMap};
 pub use elasticity::Elasticity;
-pub use error::{LinalgError, MeshError, ParameterError, SceneError};
+pub use error::{AmgError, LinalgError, MeshError, ParameterError, PcgError, SceneError};
 #[cfg(feature = "gmsh")]
 pub use gmsh::{GmshImport, GmshMesh, PhysicalGroup};
 pub use inline_mesh::InlineMesh;
@@ -52,6 +57,7 @@ pub use loads::Load;
 pub use mesh::{MeshQuality, MeshSource, TetMesh};
 pub use output::{Summary, write_vtu};
 pub use p1p0::P1P0Lagrangian;
+pub use pcg::{Identity, Jacobi, Pcg, PcgReport, Preconditioner};
 pub use region::Region;
 pub use scene::Scene;
 pub use solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
