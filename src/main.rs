@@ -67,9 +67,12 @@ enum Command {
         /// Target numbers of DOFs, comma-separated.
         #[arg(long, value_delimiter = ',', default_values_t = vec![10_000usize, 50_000, 100_000, 200_000, 400_000])]
         sizes: Vec<usize>,
-        /// Solver types, comma-separated.
-        #[arg(long, value_delimiter = ',', default_values_t = vec!["newton".to_string(), "uzawa".to_string()])]
+        /// Solvers, comma-separated: a type (`uzawa`) or TYPE-LINEAR (`newton-amg`, `newton-direct`).
+        #[arg(long, value_delimiter = ',', default_values_t = vec!["newton-amg".to_string(), "newton-direct".to_string(), "uzawa".to_string()])]
         solvers: Vec<String>,
+        /// Above this many DOFs the Cholesky baseline and the factorising solvers are skipped.
+        #[arg(long, default_value_t = 250_000)]
+        direct_max_dofs: usize,
     },
 }
 
@@ -231,12 +234,18 @@ fn report(scene: PathBuf, out: PathBuf, quick: bool, quiet: bool) -> Result<Exit
     Ok(ExitCode::SUCCESS)
 }
 
-fn bench(scene: PathBuf, out: PathBuf, sizes: Vec<usize>, solvers: Vec<String>) -> Result<ExitCode, String> {
+fn bench(
+    scene: PathBuf,
+    out: PathBuf,
+    sizes: Vec<usize>,
+    solvers: Vec<String>,
+    direct_max_dofs: usize,
+) -> Result<ExitCode, String> {
     for s in &solvers {
-        run::solver_by_type(s).map_err(|e| e.to_string())?;
+        saddle::bench::solver_spec(s)?;
     }
     eprintln!("{}: bench at {sizes:?} DOFs with {solvers:?} into {}", scene.display(), out.display());
-    let opts = saddle::bench::BenchOptions { sizes, solvers };
+    let opts = saddle::bench::BenchOptions { sizes, solvers, direct_max_dofs };
     let started = Instant::now();
     let b = saddle::bench::generate(&scene, &out, &opts, &mut |line| {
         eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
@@ -252,7 +261,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet).map_err(|e| e.to_string()),
         Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
-        Command::Bench { scene, out, sizes, solvers } => bench(scene, out, sizes, solvers),
+        Command::Bench { scene, out, sizes, solvers, direct_max_dofs } => {
+            bench(scene, out, sizes, solvers, direct_max_dofs)
+        }
     };
     result.unwrap_or_else(|e| {
         eprintln!("error: {e}");

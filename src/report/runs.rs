@@ -18,7 +18,8 @@ use std::time::Instant;
 
 /// The reference: semismooth Newton to a relative KKT residual of 1e-13.
 pub fn reference_solver() -> Newton {
-    Newton { tol: 1e-13, max_iter: 50, line_search: true }
+    // the direct backend: exact linear solves down to round-off
+    Newton { tol: 1e-13, max_iter: 50, line_search: true, linear: saddle_solvers::LinearSolver::Direct }
 }
 
 /// What a rung runs.
@@ -107,7 +108,7 @@ pub fn ladder(quick: bool) -> Vec<Rung> {
             setting: format!("ipm_tol = {:.0e}, polish = true, tol = {:.0e}", base.ipm_tol, base.tol),
             kind: RungKind::Polish {
                 from,
-                newton: Newton { tol: base.tol, max_iter: base.polish_max_iter, line_search: true },
+                newton: Newton { tol: base.tol, max_iter: base.polish_max_iter, line_search: true, ..Newton::default() },
             },
         });
     }

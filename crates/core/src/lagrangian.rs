@@ -179,6 +179,12 @@ pub trait Lagrangian: Sync {
     /// values = Σ_T w_T B_Tᵀ C_T B_T on [`Lagrangian::pattern`].
     fn assemble(&self, material: Material<'_>, values: &mut [f64]);
 
+    /// The node and coordinates of every free dof (for the rigid-body near-nullspace of an
+    /// algebraic multigrid); `None` when the discretisation has no nodal dofs.
+    fn dof_layout(&self) -> Option<crate::amg::DofLayout> {
+        None
+    }
+
     /// Consistent nodal forces f_u on the free dofs (tractions, body forces); empty for none.
     fn nodal_load(&self) -> &[f64] {
         &[]

@@ -288,6 +288,11 @@ impl Lagrangian for P1P0Lagrangian {
         self.dofs.n_free
     }
 
+    /// The P1 nodes of the free dofs (rigid-body modes for multigrid).
+    fn dof_layout(&self) -> Option<crate::amg::DofLayout> {
+        crate::amg::DofLayout::new(&self.dofs, &self.mesh.nodes).ok()
+    }
+
     fn n_points(&self) -> usize {
         self.mesh.n_elements()
     }

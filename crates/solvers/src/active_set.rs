@@ -13,9 +13,93 @@
 //! Cholesky analysis is done once; du depends affinely on dV, `du = du⁰ + W dV`, from one solve
 //! with 1 + n_extras right-hand sides, and dV follows from an n_extras × n_extras system. The
 //! contact forces are the reactions at the fixed dofs.
+//!
+//! The systems are solved by one of two [`LinearBackend`]s: a sparse Cholesky factorisation of
+//! every tangent (symbolic analysis once), or conjugate gradients preconditioned by a
+//! smoothed-aggregation multigrid of the *elastic* stiffness, built once and reused for every
+//! tangent (the fixed dofs are handled by the preconditioner as a diagonal block), to a
+//! relative tolerance the caller sets per step (inexact Newton).
 
 use nalgebra::{DMatrix, DVector};
-use saddle_core::{ConstraintRows, Lagrangian, SolveError, SparseCholesky, SymmetricPattern};
+use saddle_core::{
+    AmgParams, ConstraintRows, Csr, Lagrangian, Material, Pcg, Preconditioner, SmoothedAggregation, SolveError,
+    SparseCholesky, SymmetricPattern,
+};
+use serde::{Deserialize, Serialize};
+use std::sync::Mutex;
+
+/// `linear = "direct" | "amg" | "auto"`: how a solver's linear systems are solved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolver {
+    /// Sparse Cholesky (faer, supernodal): exact, memory ~ N^1.5.
+    Direct,
+    /// CG with smoothed-aggregation AMG of the elastic stiffness: memory ~ N, inexact.
+    Amg,
+    /// Direct up to [`AUTO_AMG_DOFS`] free dofs, AMG above (the default).
+    #[default]
+    Auto,
+}
+
+/// Above this many free dofs `auto` picks AMG (measured crossover on the default scene family,
+/// `saddle bench`).
+pub const AUTO_AMG_DOFS: usize = 20_000;
+
+impl LinearSolver {
+    /// Direct or AMG for a problem with `n` free dofs.
+    pub fn resolve(self, n: usize) -> LinearSolver {
+        match self {
+            LinearSolver::Auto if n > AUTO_AMG_DOFS => LinearSolver::Amg,
+            LinearSolver::Auto => LinearSolver::Direct,
+            other => other,
+        }
+    }
+}
+
+/// The solver of the linearised systems.
+pub enum LinearBackend {
+    /// A numeric Cholesky factorisation per system on the pattern analysed once.
+    Direct(SparseCholesky),
+    /// PCG with the elastic multigrid hierarchy.
+    Amg(Box<IterativeSolve>),
+}
+
+/// CG preconditioned by smoothed aggregation of the elastic stiffness (module docs).
+pub struct IterativeSolve {
+    amg: SmoothedAggregation,
+    pcg: Pcg,
+    /// Relative residual tolerance of the next solves.
+    pub tol: f64,
+    /// CG iteration budget per solve.
+    pub max_iter: usize,
+    /// CG iterations so far.
+    pub iterations: usize,
+    /// Solves that stopped at the budget before the tolerance.
+    pub unconverged: usize,
+}
+
+/// The AMG preconditioner with the active (fixed) dofs split off as a diagonal block:
+/// z_F = M⁻¹ r_F (r zero on the fixed dofs), z_s = r_s / d_s on a fixed dof s.
+struct FixedDofs<'a> {
+    amg: &'a SmoothedAggregation,
+    fixed: &'a [usize],
+    diag: &'a [f64],
+    scratch: Mutex<Vec<f64>>,
+}
+
+impl Preconditioner for FixedDofs<'_> {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let mut t = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        t.copy_from_slice(r);
+        for &s in self.fixed {
+            t[s] = 0.0;
+        }
+        self.amg.apply(&t, z);
+        for &s in self.fixed {
+            z[s] = r[s] / self.diag[s];
+        }
+    }
+}
 
 /// The slave dof and coefficient of each contact row.
 #[derive(Clone, Debug)]
@@ -99,30 +183,67 @@ pub struct Step {
     pub lambda: Vec<f64>,
 }
 
-/// The factorised linearised problem for one active set.
+/// The linearised problem for one active set, and the solver of its systems.
 pub struct ActiveSetSystem {
     slaves: SlaveRows,
     transpose: TransposeIndex,
-    chol: SparseCholesky,
+    /// How the systems are solved.
+    pub backend: LinearBackend,
     work: Vec<f64>,
     /// Numeric factorisations so far.
     pub factorisations: usize,
-    /// Triangular solve pairs so far.
+    /// Triangular solve pairs (direct) or CG solves (AMG) so far.
     pub solves: usize,
 }
 
 impl ActiveSetSystem {
-    /// Symbolic analysis of L's pattern, once.
+    /// Symbolic analysis of L's pattern, once (the direct backend).
     pub fn new(l: &dyn Lagrangian, solver: &str) -> Result<Self, SolveError> {
+        Self::with_backend(l, solver, LinearSolver::Direct)
+    }
+
+    /// With the backend `linear` (resolved for L's size): the direct one analyses L's pattern;
+    /// the iterative one builds the multigrid hierarchy of the elastic stiffness.
+    pub fn with_backend(l: &dyn Lagrangian, solver: &str, linear: LinearSolver) -> Result<Self, SolveError> {
         let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
+        let backend = match linear.resolve(l.n_dofs()) {
+            LinearSolver::Amg => {
+                let layout = l.dof_layout().ok_or_else(|| SolveError::Unsupported {
+                    solver: solver.into(),
+                    message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
+                })?;
+                let c = l.elasticity().stiffness_matrix();
+                let k = Csr::from_symmetric_lower(l.pattern(), &l.stiffness(Material::Uniform(&c)));
+                let amg = SmoothedAggregation::new(&k, &layout, &AmgParams::default()).map_err(|e| {
+                    SolveError::Unsupported { solver: solver.into(), message: format!("multigrid set-up: {e}") }
+                })?;
+                LinearBackend::Amg(Box::new(IterativeSolve {
+                    amg,
+                    pcg: Pcg::new(l.n_dofs()),
+                    tol: 1e-10,
+                    max_iter: 2000,
+                    iterations: 0,
+                    unconverged: 0,
+                }))
+            }
+            _ => LinearBackend::Direct(SparseCholesky::analyse(l.pattern(), "tangent stiffness")?),
+        };
         Ok(Self {
             slaves,
             transpose: TransposeIndex::new(l.pattern()),
-            chol: SparseCholesky::analyse(l.pattern(), "tangent stiffness")?,
+            backend,
             work: vec![0.0; l.pattern().nnz()],
             factorisations: 0,
             solves: 0,
         })
+    }
+
+    /// The iterative backend, if that is the one in use.
+    pub fn iterative(&mut self) -> Option<&mut IterativeSolve> {
+        match &mut self.backend {
+            LinearBackend::Amg(it) => Some(it),
+            LinearBackend::Direct(_) => None,
+        }
     }
 
     /// The slave dofs of the rows.
@@ -154,8 +275,10 @@ impl ActiveSetSystem {
                 self.work[q] = 0.0;
             }
         }
-        self.chol.factorise(p, &self.work)?;
-        self.factorisations += 1;
+        if let LinearBackend::Direct(chol) = &mut self.backend {
+            chol.factorise(p, &self.work)?;
+            self.factorisations += 1;
+        }
         // prescribed values δ at the fixed dofs: column 0 for the gaps, column 1 + k for dV_k
         let nc = 1 + ne;
         let mut delta = vec![0.0; n * nc];
@@ -179,7 +302,26 @@ impl ActiveSetSystem {
                 xcol[s] = self.work[cp[s]] * dcol[s];
             }
         }
-        self.chol.solve_columns(&mut x, nc);
+        match &mut self.backend {
+            LinearBackend::Direct(chol) => chol.solve_columns(&mut x, nc),
+            LinearBackend::Amg(it) => {
+                let a = Csr::from_symmetric_lower(p, &self.work);
+                let fixed: Vec<usize> = (0..nr).filter(|&i| active[i]).map(|i| self.slaves.dof[i]).collect();
+                let diag = a.diagonal();
+                let pre = FixedDofs { amg: &it.amg, fixed: &fixed, diag: &diag, scratch: Mutex::new(vec![0.0; n]) };
+                let mut col = vec![0.0; n];
+                for c in 0..nc {
+                    let b = &x[c * n..(c + 1) * n];
+                    col.iter_mut().for_each(|v| *v = 0.0);
+                    let report = it.pcg.solve(&a, &pre, b, &mut col, it.tol, it.max_iter).map_err(|e| {
+                        SolveError::Unsupported { solver: "newton".into(), message: format!("CG on the tangent: {e}") }
+                    })?;
+                    it.iterations += report.iterations;
+                    it.unconverged += !report.converged as usize;
+                    x[c * n..(c + 1) * n].copy_from_slice(&col);
+                }
+            }
+        }
         self.solves += nc;
         // reactions at the fixed dofs: λ = (∇E + K du)_s / a, affine in dV
         let mut kx = vec![0.0; n];

@@ -17,6 +17,7 @@ pub mod penalty;
 pub mod socp;
 pub mod uzawa;
 
+pub use active_set::LinearSolver;
 pub use newton::{Newton, Start};
 pub use penalty::Penalty;
 #[cfg(feature = "socp")]

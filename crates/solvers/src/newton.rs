@@ -24,7 +24,7 @@
 //! set settle, convergence is quadratic. [`Newton::solve_from`] starts from another solver's
 //! iterate (SOCP polishing).
 
-use crate::active_set::ActiveSetSystem;
+use crate::active_set::{ActiveSetSystem, LinearSolver};
 use crate::kh_projection::MetricProjection;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::lagrangian::{Iterate, Lagrangian, StressField, Workspace, max_abs};
@@ -43,11 +43,15 @@ pub struct Newton {
     pub max_iter: usize,
     /// Backtracking line search on J (off: full Newton steps).
     pub line_search: bool,
+    /// How the linearised systems are solved: `direct` (Cholesky per iteration), `amg` (CG
+    /// with the elastic multigrid, inexact Newton) or `auto` (direct up to 20 000 dofs, where
+    /// the two cost the same; measured with `saddle bench`).
+    pub linear: LinearSolver,
 }
 
 impl Default for Newton {
     fn default() -> Self {
-        Self { tol: 1e-10, max_iter: 50, line_search: true }
+        Self { tol: 1e-10, max_iter: 50, line_search: true, linear: LinearSolver::Auto }
     }
 }
 
@@ -96,8 +100,11 @@ impl Newton {
         let rows = l.constraints();
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let mut start_is_cold = start.is_none();
+        let linear = self.linear.resolve(n);
         let mut elastic_start = None;
-        if start_is_cold && nr > 0 {
+        // (with the iterative backend the Delassus columns would cost a CG solve per row: the
+        // elastic contact set is then found by the active-set phase below)
+        if start_is_cold && nr > 0 && linear == LinearSolver::Direct {
             // 0. the elastic contact problem, exactly, with one factorisation of K
             monitor.phase("elastic contact");
             match timer.time("elastic contact", || elastic_contact_start(l)) {
@@ -118,7 +125,8 @@ impl Newton {
         let Start { mut u, extras: mut v, mut lambda } =
             start.unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
         monitor.phase("analysis");
-        let mut system = timer.time("analysis", || ActiveSetSystem::new(l, name))?;
+        let phase = if linear == LinearSolver::Amg { "multigrid set-up" } else { "analysis" };
+        let mut system = timer.time(phase, || ActiveSetSystem::with_backend(l, name, linear))?;
         let mut ws = Workspace::new(l);
         let mut stress = StressField::new(l.n_points(), l.hardening_dim());
         let mut tangents = vec![SymOp::zeros(); l.n_points()];
@@ -214,9 +222,16 @@ impl Newton {
                 }
             });
             active_changes += changed;
-            // 3. the Newton step for this active set
+            // 3. the Newton step for this active set (inexact with CG: forcing term 1e-2·r)
+            // (a linear problem — no plasticity, no contact — is solved in one step to the tolerance)
+            let linear_problem = l.plasticity().is_none() && nr == 0;
+            if let Some(iterative) = system.iterative() {
+                iterative.tol =
+                    if linear_problem { 0.1 * self.tol } else { (1e-2 * r.min(1.0)).max(1e-13) }.max(1e-14);
+            }
             grad.copy_from_slice(if elastic_phase { &elastic_grad } else { &ws.force });
-            let step = timer.time("factorisation and solves", || system.step(l, &k, &active, &grad, &gap))?;
+            let phase = if linear == LinearSolver::Amg { "CG solves" } else { "factorisation and solves" };
+            let step = timer.time(phase, || system.step(l, &k, &active, &grad, &gap))?;
             if step.du.iter().chain(&step.dv).chain(&step.lambda).any(|x| !x.is_finite()) {
                 return Err(SolveError::NonFinite {
                     solver: name.into(),
@@ -266,6 +281,10 @@ impl Newton {
         counters.insert("symbolic_analyses".into(), 1.0 + elastic_factorisations as f64);
         counters.insert("triangular_solve_pairs".into(), (system.solves + elastic_solves) as f64);
         counters.insert("elastic_contact_solves".into(), elastic_solves as f64);
+        if let Some(iterative) = system.iterative() {
+            counters.insert("pcg_iterations".into(), iterative.iterations as f64);
+            counters.insert("pcg_unconverged".into(), iterative.unconverged as f64);
+        }
         counters.insert("line_search_backtracks".into(), backtracks as f64);
         counters.insert("active_set_changes".into(), active_changes as f64);
         counters.insert("return_mappings".into(), return_mappings as f64);

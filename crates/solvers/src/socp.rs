@@ -169,7 +169,7 @@ impl Solver for Socp {
             };
             return Ok(Solution { u, extras, stress, lambda, report });
         }
-        let newton = Newton { tol: self.tol, max_iter: self.polish_max_iter, line_search: true };
+        let newton = Newton { tol: self.tol, max_iter: self.polish_max_iter, line_search: true, ..Newton::default() };
         let mut sol = newton.solve_from(l, Some(Start { u, extras, lambda }), monitor, &mut timer, NAME)?;
         let report = &mut sol.report;
         counters.insert("polish_iterations".into(), report.iterations as f64);

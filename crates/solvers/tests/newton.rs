@@ -6,7 +6,7 @@ use saddle_core::{
     AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, P1P0Lagrangian, PhaseTimer, Region,
     Silent, Solver, Workspace,
 };
-use saddle_solvers::{Newton, Start, Uzawa};
+use saddle_solvers::{LinearSolver, Newton, Start, Uzawa};
 use saddle_yield::VonMises;
 
 fn johnson(h: f64) -> P1P0Lagrangian {
@@ -70,9 +70,28 @@ fn agrees_with_uzawa_and_converges_quadratically() {
     for w in tail.windows(2) {
         assert!(w[1] <= 10.0 * w[0] * w[0] || w[1] < 1e-13, "not quadratic: {h:?}");
     }
-    assert_eq!(newton.report.counters["symbolic_analyses"], 1.0);
+    // one symbolic analysis for the tangents, one for the elastic contact start
+    assert_eq!(newton.report.counters["symbolic_analyses"], 2.0);
+    assert_eq!(newton.report.counters["elastic_phase_steps"], 0.0);
+    assert!(newton.report.counters["elastic_contact_solves"] >= l.constraints().n_rows() as f64);
     // the recomputed residual meets the tolerance
     assert!(l.kkt(&newton.iterate(), &mut Workspace::new(&l)).max() <= 1e-12);
+}
+
+/// The iterative backend (CG with the elastic multigrid, inexact Newton) reaches the same
+/// solution as the direct one.
+#[test]
+fn amg_backend_agrees_with_the_direct_one() {
+    let l = johnson(5.0);
+    let direct = Newton { tol: 1e-11, linear: LinearSolver::Direct, ..Newton::default() };
+    let amg = Newton { tol: 1e-11, linear: LinearSolver::Amg, ..Newton::default() };
+    let (d, a) = (direct.solve(&l, &mut Silent).unwrap(), amg.solve(&l, &mut Silent).unwrap());
+    assert!(d.report.converged && a.report.converged, "{:?}", a.report.residual_history);
+    assert!((d.extras[0] - a.extras[0]).abs() <= 1e-9 * d.extras[0]);
+    assert_eq!(d.stress.plastic, a.stress.plastic);
+    assert_eq!(a.report.counters["factorisations"], 0.0);
+    assert!(a.report.counters["pcg_iterations"] > 0.0);
+    assert!(l.kkt(&a.iterate(), &mut Workspace::new(&l)).max() <= 1e-11);
 }
 
 #[test]
