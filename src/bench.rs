@@ -56,7 +56,8 @@ pub fn solver_spec(name: &str) -> Result<(Box<dyn Solver>, bool), String> {
     if let Some(lin) = linear {
         table += &format!("\nlinear = {}", toml::Value::String(lin.to_string()));
     }
-    let solver: Box<dyn Solver> = toml::from_str(&table).map_err(|e| format!("bench solver {name:?}: {}", e.message()))?;
+    let solver: Box<dyn Solver> =
+        toml::from_str(&table).map_err(|e| format!("bench solver {name:?}: {}", e.message()))?;
     Ok((solver, linear != Some("amg")))
 }
 
@@ -207,7 +208,7 @@ pub fn measure(
     let mesh = scene.mesh.build(&scene.base_dir).map_err(saddle_core::SceneError::from)?;
     let mesh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let l = P1P0Lagrangian::new(mesh, &scene.dirichlet, scene.material.clone(), scene.yield_surface, scene.obstacle)?
+    let l = P1P0Lagrangian::new(mesh, &scene.dirichlet, scene.material, scene.yield_surface, scene.obstacle)?
         .with_loads(&scene.load)?;
     let problem_s = t.elapsed().as_secs_f64();
     let c = l.elasticity().stiffness_matrix();

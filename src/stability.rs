@@ -289,8 +289,12 @@ pub fn markdown(rows: &[Row]) -> String {
                     notes.join("; "),
                 )
             }
-            Outcome::SceneError(e) => ("scene error".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(e, 110)),
-            Outcome::SolveError(e) => ("**error**".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(e, 110)),
+            Outcome::SceneError(e) => {
+                ("scene error".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(e, 110))
+            }
+            Outcome::SolveError(e) => {
+                ("**error**".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(e, 110))
+            }
         };
         out += &format!(
             "| {} | {} | {solver} | {outcome} | {it} | {kkt} | {du} | {time} | {notes} |\n",

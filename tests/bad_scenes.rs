@@ -28,7 +28,11 @@ fn base_scenes() -> Vec<(String, toml::Table)> {
     }
     let table = |text: &str| -> toml::Value { toml::from_str::<toml::Table>(text).unwrap()["v"].clone() };
     let mut t = small_johnson();
-    set(&mut t, "obstacle.gap", table("v = { type = \"elliptic_paraboloid\", R1 = 4.0, R2 = 6.0, c1 = 0.1, c2 = -0.1 }"));
+    set(
+        &mut t,
+        "obstacle.gap",
+        table("v = { type = \"elliptic_paraboloid\", R1 = 4.0, R2 = 6.0, c1 = 0.1, c2 = -0.1 }"),
+    );
     scenes.push(("elliptic gap".into(), t));
     let mut t = small_johnson();
     set(&mut t, "obstacle.gap", table("v = { type = \"flat\", center = [0.0, 0.0] }"));

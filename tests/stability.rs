@@ -2,11 +2,11 @@
 //! each run by every solver with a measured outcome. The full table (more values per case) is
 //! `cargo run --release --example stability`, which rewrites the README's stability table.
 
+use saddle::core::{P1P0Lagrangian, Scene, Silent, StopReason, Summary};
+use saddle::stability::solver_from;
 use saddle::stability::{
     Outcome, all_solvers, first_yield_force, locking, run, scene, sliver_scene, unclamped_scene, units_check,
 };
-use saddle::core::{P1P0Lagrangian, Scene, Silent, StopReason, Summary};
-use saddle::stability::solver_from;
 use std::path::Path;
 
 fn f(x: f64) -> toml::Value {
@@ -18,7 +18,11 @@ fn f(x: f64) -> toml::Value {
 fn converged(text: &str, solver: &str) -> Box<Summary> {
     match run(text, solver).0 {
         Outcome::Returned { summary, recomputed_kkt, .. } => {
-            assert!(summary.converged, "{solver}: stopped {:?} after {} iterations", summary.stop_reason, summary.iterations);
+            assert!(
+                summary.converged,
+                "{solver}: stopped {:?} after {} iterations",
+                summary.stop_reason, summary.iterations
+            );
             assert_eq!(summary.stop_reason, StopReason::Converged);
             assert!(
                 recomputed_kkt <= summary.tolerance,
@@ -91,7 +95,11 @@ fn tiny_and_huge_loads() {
     assert!((1..=2).contains(&tiny.contact_nodes), "{} contact nodes", tiny.contact_nodes);
     let huge = scene(&[("obstacle.F", f(100.0 * first_yield_force(100.0, 0.3, 1.0, 5.0)))]);
     let s = all_agree(&huge, &fast_solvers(), 1e-6);
-    assert!(s.warnings.iter().any(|w| w.contains("rim of obstacle.zone") && w.contains("too small")), "{:?}", s.warnings);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("rim of obstacle.zone") && w.contains("too small")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 /// Case 5: the flat punch converges with every solver; its pressure concentrates at the edge

@@ -108,7 +108,12 @@ pub fn ladder(quick: bool) -> Vec<Rung> {
             setting: format!("ipm_tol = {:.0e}, polish = true, tol = {:.0e}", base.ipm_tol, base.tol),
             kind: RungKind::Polish {
                 from,
-                newton: Newton { tol: base.tol, max_iter: base.polish_max_iter, line_search: true, ..Newton::default() },
+                newton: Newton {
+                    tol: base.tol,
+                    max_iter: base.polish_max_iter,
+                    line_search: true,
+                    ..Newton::default()
+                },
             },
         });
     }

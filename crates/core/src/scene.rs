@@ -187,7 +187,9 @@ fn unique_leaf(root: &toml::Value, path: &str, value: &str) -> Option<String> {
             toml::Value::Integer(i) if i.to_string() == value => found.push(path),
             toml::Value::Float(x) if value.parse::<f64>().ok() == Some(*x) => found.push(path),
             toml::Value::Table(t) => t.iter().for_each(|(k, x)| walk(x, format!("{path}.{k}"), value, found)),
-            toml::Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| walk(x, format!("{path}[{i}]"), value, found)),
+            toml::Value::Array(a) => {
+                a.iter().enumerate().for_each(|(i, x)| walk(x, format!("{path}[{i}]"), value, found))
+            }
             _ => {}
         }
     }

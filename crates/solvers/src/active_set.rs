@@ -59,7 +59,7 @@ impl LinearSolver {
 /// The solver of the linearised systems.
 pub enum LinearBackend {
     /// A numeric Cholesky factorisation per system on the pattern analysed once.
-    Direct(SparseCholesky),
+    Direct(Box<SparseCholesky>),
     /// PCG with the elastic multigrid hierarchy.
     Amg(Box<IterativeSolve>),
 }
@@ -226,7 +226,7 @@ impl ActiveSetSystem {
                     unconverged: 0,
                 }))
             }
-            _ => LinearBackend::Direct(SparseCholesky::analyse(l.pattern(), "tangent stiffness")?),
+            _ => LinearBackend::Direct(Box::new(SparseCholesky::analyse(l.pattern(), "tangent stiffness")?)),
         };
         Ok(Self {
             slaves,

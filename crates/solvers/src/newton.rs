@@ -226,8 +226,7 @@ impl Newton {
             // (a linear problem — no plasticity, no contact — is solved in one step to the tolerance)
             let linear_problem = l.plasticity().is_none() && nr == 0;
             if let Some(iterative) = system.iterative() {
-                iterative.tol =
-                    if linear_problem { 0.1 * self.tol } else { (1e-2 * r.min(1.0)).max(1e-13) }.max(1e-14);
+                iterative.tol = if linear_problem { 0.1 * self.tol } else { (1e-2 * r.min(1.0)).max(1e-13) }.max(1e-14);
             }
             grad.copy_from_slice(if elastic_phase { &elastic_grad } else { &ws.force });
             let phase = if linear == LinearSolver::Amg { "CG solves" } else { "factorisation and solves" };

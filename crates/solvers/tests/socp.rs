@@ -73,7 +73,8 @@ fn homogeneous(f: f64) -> P1P0Lagrangian {
 
 /// Newton to 1e-12: the reference.
 fn newton(l: &P1P0Lagrangian) -> Solution {
-    let sol = Newton { tol: 1e-12, max_iter: 60, line_search: true, ..Newton::default() }.solve(l, &mut Silent).unwrap();
+    let sol =
+        Newton { tol: 1e-12, max_iter: 60, line_search: true, ..Newton::default() }.solve(l, &mut Silent).unwrap();
     assert!(sol.report.converged, "reference Newton: {:?}", sol.report.stop_reason);
     sol
 }
