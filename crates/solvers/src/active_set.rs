@@ -76,6 +76,9 @@ pub struct IterativeSolve {
     pub iterations: usize,
     /// Solves that stopped at the budget before the tolerance.
     pub unconverged: usize,
+    /// The last solutions of the extras' columns (W = K⁻¹(−K δ_V)): they change little from
+    /// one Newton step to the next and start the next CG solves.
+    previous: Vec<f64>,
 }
 
 /// The AMG preconditioner with the active (fixed) dofs split off as a diagonal block:
@@ -224,6 +227,7 @@ impl ActiveSetSystem {
                     max_iter: 2000,
                     iterations: 0,
                     unconverged: 0,
+                    previous: Vec::new(),
                 }))
             }
             _ => LinearBackend::Direct(Box::new(SparseCholesky::analyse(l.pattern(), "tangent stiffness")?)),
@@ -310,15 +314,23 @@ impl ActiveSetSystem {
                 let diag = a.diagonal();
                 let pre = FixedDofs { amg: &it.amg, fixed: &fixed, diag: &diag, scratch: Mutex::new(vec![0.0; n]) };
                 let mut col = vec![0.0; n];
+                it.previous.resize(n * (nc - 1), 0.0);
                 for c in 0..nc {
                     let b = &x[c * n..(c + 1) * n];
-                    col.iter_mut().for_each(|v| *v = 0.0);
+                    // the displacement column from zero, the extras' columns from their last value
+                    match c {
+                        0 => col.iter_mut().for_each(|v| *v = 0.0),
+                        _ => col.copy_from_slice(&it.previous[(c - 1) * n..c * n]),
+                    }
                     let report = it.pcg.solve(&a, &pre, b, &mut col, it.tol, it.max_iter).map_err(|e| {
                         SolveError::Unsupported { solver: "newton".into(), message: format!("CG on the tangent: {e}") }
                     })?;
                     it.iterations += report.iterations;
                     it.unconverged += !report.converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(&col);
+                    if c > 0 {
+                        it.previous[(c - 1) * n..c * n].copy_from_slice(&col);
+                    }
                 }
             }
         }
