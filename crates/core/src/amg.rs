@@ -67,7 +67,7 @@
 //! and recomputes the smoothing, the Galerkin products and the coarse factorisation.
 
 use crate::csr::Csr;
-use crate::dofs::{DofMap, FIXED};
+use crate::dofs::DofMap;
 use crate::error::{AmgError, ParameterError, check};
 use crate::linalg::SparseCholesky;
 use crate::pcg::Preconditioner;
@@ -105,16 +105,7 @@ impl DofLayout {
                 found: nodes.len(),
             });
         }
-        let mut node = vec![0u32; dofs.n_free];
-        let mut comp = vec![0u8; dofs.n_free];
-        for (n, d) in dofs.dof.iter().enumerate() {
-            for c in 0..3 {
-                if d[c] != FIXED {
-                    node[d[c] as usize] = n as u32;
-                    comp[d[c] as usize] = c as u8;
-                }
-            }
-        }
+        let (node, comp) = dofs.owners();
         Ok(Self { node, comp, coords: nodes.to_vec() })
     }
 
@@ -736,6 +727,7 @@ fn add_to(x: &mut [f64], d: &[f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dofs::FIXED;
     use crate::lagrangian::{Lagrangian, Material};
     use crate::linalg::SymmetricPattern;
     use crate::pcg::{Jacobi, Pcg};

@@ -171,9 +171,7 @@ impl MeshSource for BoxMesh {
                     format!("must exceed min[{k}] = {}", self.min[k]),
                 ));
             }
-            if self.cells[k] == 0 {
-                return Err(ParameterError::new(join(path, &format!("cells[{k}]")), 0, "must be >= 1"));
-            }
+            check::at_least_one(path, &format!("cells[{k}]"), self.cells[k])?;
         }
         for (k, coords) in self.align.iter().enumerate() {
             check::finite_all(path, &format!("align[{k}]"), coords)?;

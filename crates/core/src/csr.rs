@@ -26,6 +26,32 @@ const CHUNK: usize = 2048;
 /// Rows per parallel task of the sparse product (rows of coarse matrices are long).
 const PRODUCT_CHUNK: usize = 256;
 
+/// Visits every entry of the full symmetric matrix whose lower triangle is `values` on
+/// `pattern` as (position in the rows `ptr`, column, value). Columns in increasing order: row i
+/// receives (i, j) for j ≤ i in increasing j, then its own column's (i, i′) for i′ > i in
+/// increasing i′ — sorted without a sort.
+fn scatter_lower(
+    pattern: &SymmetricPattern,
+    values: &[f64],
+    ptr: &[usize],
+    fill: &mut [usize],
+    mut put: impl FnMut(usize, u32, f64),
+) {
+    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    fill.copy_from_slice(&ptr[..pattern.n()]);
+    for j in 0..pattern.n() {
+        for k in cp[j]..cp[j + 1] {
+            let i = ri[k];
+            put(fill[i], j as u32, values[k]);
+            fill[i] += 1;
+            if i != j {
+                put(fill[j], i as u32, values[k]);
+                fill[j] += 1;
+            }
+        }
+    }
+}
+
 impl Csr {
     /// The full symmetric matrix whose lower triangle is `values` on `pattern`.
     pub fn from_symmetric_lower(pattern: &SymmetricPattern, values: &[f64]) -> Self {
@@ -44,26 +70,22 @@ impl Csr {
         for i in 0..n {
             ptr[i + 1] = ptr[i] + len[i];
         }
-        let mut fill = ptr.clone();
         let nnz = ptr[n];
-        let mut idx = vec![0u32; nnz];
-        let mut val = vec![0.0; nnz];
-        // columns in increasing order: row i receives (i, j) for j ≤ i in increasing j, then its
-        // own column's (i, i′) for i′ > i in increasing i′ — sorted without a sort
-        for j in 0..n {
-            for k in cp[j]..cp[j + 1] {
-                let i = ri[k];
-                idx[fill[i]] = j as u32;
-                val[fill[i]] = values[k];
-                fill[i] += 1;
-                if i != j {
-                    idx[fill[j]] = i as u32;
-                    val[fill[j]] = values[k];
-                    fill[j] += 1;
-                }
-            }
-        }
+        let (mut idx, mut val) = (vec![0u32; nnz], vec![0.0; nnz]);
+        scatter_lower(pattern, values, &ptr, &mut vec![0; n], |q, col, v| {
+            idx[q] = col;
+            val[q] = v;
+        });
         Self { nrows: n, ncols: n, ptr, idx, val }
+    }
+
+    /// New `values` of the lower triangle on the `pattern` this matrix was built from
+    /// ([`Csr::from_symmetric_lower`]), without touching the structure; `fill` is scratch.
+    pub fn assign_symmetric_lower(&mut self, pattern: &SymmetricPattern, values: &[f64], fill: &mut Vec<usize>) {
+        assert_eq!(pattern.n(), self.nrows, "not the pattern this matrix was built from");
+        fill.resize(self.nrows, 0);
+        let val = &mut self.val;
+        scatter_lower(pattern, values, &self.ptr, fill, |q, _, v| val[q] = v);
     }
 
     /// Stored entries.
@@ -303,6 +325,11 @@ mod tests {
         assert_eq!(dense(&a), vec![vec![4.0, 1.0, 0.0], vec![1.0, 5.0, 2.0], vec![0.0, 2.0, 6.0]]);
         assert!((0..3).all(|r| a.idx[a.ptr[r]..a.ptr[r + 1]].windows(2).all(|w| w[0] < w[1])));
         assert_eq!(a.diagonal(), vec![4.0, 5.0, 6.0]);
+        // new values on the same pattern, structure kept
+        let mut b = a.clone();
+        b.assign_symmetric_lower(&p, &[7.0, -1.0, 8.0, 3.0, 9.0], &mut Vec::new());
+        assert_eq!((&b.ptr, &b.idx), (&a.ptr, &a.idx));
+        assert_eq!(dense(&b), vec![vec![7.0, -1.0, 0.0], vec![-1.0, 8.0, 3.0], vec![0.0, 3.0, 9.0]]);
     }
 
     /// A random m × n matrix with up to `per_row` entries per row (sorted, distinct columns).

@@ -116,6 +116,21 @@ impl DofMap {
         (d != FIXED).then_some(d as usize)
     }
 
+    /// The inverse numbering: the node and the component (0, 1, 2) of every free dof.
+    pub fn owners(&self) -> (Vec<u32>, Vec<u8>) {
+        let mut node = vec![0u32; self.n_free];
+        let mut comp = vec![0u8; self.n_free];
+        for (n, d) in self.dof.iter().enumerate() {
+            for c in 0..3 {
+                if d[c] != FIXED {
+                    node[d[c] as usize] = n as u32;
+                    comp[d[c] as usize] = c as u8;
+                }
+            }
+        }
+        (node, comp)
+    }
+
     /// Number of nodes.
     pub fn n_nodes(&self) -> usize {
         self.dof.len()

@@ -65,6 +65,11 @@ pub mod check {
         }
     }
 
+    /// A count (iterations, cells) is at least 1.
+    pub fn at_least_one(path: &str, field: &str, value: usize) -> Result<usize, ParameterError> {
+        if value >= 1 { Ok(value) } else { Err(ParameterError::new(join(path, field), value, "must be >= 1")) }
+    }
+
     /// Every entry of a coordinate array is finite.
     pub fn finite_all(path: &str, field: &str, values: &[f64]) -> Result<(), ParameterError> {
         for (i, v) in values.iter().enumerate() {

@@ -69,16 +69,7 @@ impl P1P0Lagrangian {
         let (grads, weights): (Vec<_>, Vec<_>) =
             (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
         let (adj_ptr, adj) = node_element_adjacency(&mesh);
-        let mut dof_node = vec![0u32; dofs.n_free];
-        let mut dof_comp = vec![0u8; dofs.n_free];
-        for (n, d) in dofs.dof.iter().enumerate() {
-            for c in 0..3 {
-                if d[c] != FIXED {
-                    dof_node[d[c] as usize] = n as u32;
-                    dof_comp[d[c] as usize] = c as u8;
-                }
-            }
-        }
+        let (dof_node, dof_comp) = dofs.owners();
         let pattern = stiffness_pattern(&mesh, &dofs, &adj_ptr, &adj);
         let (rows, load) = match &obstacle {
             Some(k) => (k.discretise(&mesh, &dofs, "obstacle")?, k.load()),
@@ -290,7 +281,11 @@ impl Lagrangian for P1P0Lagrangian {
 
     /// The P1 nodes of the free dofs (rigid-body modes for multigrid).
     fn dof_layout(&self) -> Option<crate::amg::DofLayout> {
-        crate::amg::DofLayout::new(&self.dofs, &self.mesh.nodes).ok()
+        Some(crate::amg::DofLayout {
+            node: self.dof_node.clone(),
+            comp: self.dof_comp.clone(),
+            coords: self.mesh.nodes.clone(),
+        })
     }
 
     fn n_points(&self) -> usize {

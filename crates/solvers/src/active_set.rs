@@ -68,6 +68,12 @@ pub enum LinearBackend {
 pub struct IterativeSolve {
     amg: SmoothedAggregation,
     pcg: Pcg,
+    /// The system matrix, on L's pattern: built once, its values re-assigned per step.
+    a: Csr,
+    /// Scratch of [`Csr::assign_symmetric_lower`], of the preconditioner and of one column.
+    fill: Vec<usize>,
+    scratch: Mutex<Vec<f64>>,
+    col: Vec<f64>,
     /// Relative residual tolerance of the next solves.
     pub tol: f64,
     /// CG iteration budget per solve.
@@ -85,21 +91,21 @@ pub struct IterativeSolve {
 /// z_F = M⁻¹ r_F (r zero on the fixed dofs), z_s = r_s / d_s on a fixed dof s.
 struct FixedDofs<'a> {
     amg: &'a SmoothedAggregation,
-    fixed: &'a [usize],
-    diag: &'a [f64],
-    scratch: Mutex<Vec<f64>>,
+    /// The fixed dofs s with their diagonal entries d_s.
+    fixed: &'a [(usize, f64)],
+    scratch: &'a Mutex<Vec<f64>>,
 }
 
 impl Preconditioner for FixedDofs<'_> {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let mut t = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
         t.copy_from_slice(r);
-        for &s in self.fixed {
+        for &(s, _) in self.fixed {
             t[s] = 0.0;
         }
         self.amg.apply(&t, z);
-        for &s in self.fixed {
-            z[s] = r[s] / self.diag[s];
+        for &(s, d) in self.fixed {
+            z[s] = r[s] / d;
         }
     }
 }
@@ -223,6 +229,10 @@ impl ActiveSetSystem {
                 LinearBackend::Amg(Box::new(IterativeSolve {
                     amg,
                     pcg: Pcg::new(l.n_dofs()),
+                    a: k,
+                    fill: Vec::new(),
+                    scratch: Mutex::new(vec![0.0; l.n_dofs()]),
+                    col: vec![0.0; l.n_dofs()],
                     tol: 1e-10,
                     max_iter: 2000,
                     iterations: 0,
@@ -240,6 +250,14 @@ impl ActiveSetSystem {
             factorisations: 0,
             solves: 0,
         })
+    }
+
+    /// The Cholesky factor of the direct backend, if that is the one in use.
+    pub fn direct(&mut self) -> Option<&mut SparseCholesky> {
+        match &mut self.backend {
+            LinearBackend::Direct(chol) => Some(chol),
+            LinearBackend::Amg(_) => None,
+        }
     }
 
     /// The iterative backend, if that is the one in use.
@@ -309,27 +327,42 @@ impl ActiveSetSystem {
         match &mut self.backend {
             LinearBackend::Direct(chol) => chol.solve_columns(&mut x, nc),
             LinearBackend::Amg(it) => {
-                let a = Csr::from_symmetric_lower(p, &self.work);
-                let fixed: Vec<usize> = (0..nr).filter(|&i| active[i]).map(|i| self.slaves.dof[i]).collect();
-                let diag = a.diagonal();
-                let pre = FixedDofs { amg: &it.amg, fixed: &fixed, diag: &diag, scratch: Mutex::new(vec![0.0; n]) };
-                let mut col = vec![0.0; n];
-                it.previous.resize(n * (nc - 1), 0.0);
+                let IterativeSolve {
+                    amg,
+                    pcg,
+                    a,
+                    fill,
+                    scratch,
+                    col,
+                    previous,
+                    tol,
+                    max_iter,
+                    iterations,
+                    unconverged,
+                } = &mut **it;
+                a.assign_symmetric_lower(p, &self.work, fill);
+                let fixed: Vec<(usize, f64)> = (0..nr)
+                    .filter(|&i| active[i])
+                    .map(|i| (self.slaves.dof[i], self.work[cp[self.slaves.dof[i]]]))
+                    .collect();
+                let pre = FixedDofs { amg, fixed: &fixed, scratch };
+                previous.resize(n * (nc - 1), 0.0);
                 for c in 0..nc {
                     let b = &x[c * n..(c + 1) * n];
                     // the displacement column from zero, the extras' columns from their last value
                     match c {
                         0 => col.iter_mut().for_each(|v| *v = 0.0),
-                        _ => col.copy_from_slice(&it.previous[(c - 1) * n..c * n]),
+                        _ => col.copy_from_slice(&previous[(c - 1) * n..c * n]),
                     }
-                    let report = it.pcg.solve(&a, &pre, b, &mut col, it.tol, it.max_iter).map_err(|e| {
-                        SolveError::Unsupported { solver: "newton".into(), message: format!("CG on the tangent: {e}") }
+                    let report = pcg.solve(a, &pre, b, col, *tol, *max_iter).map_err(|e| SolveError::Unsupported {
+                        solver: "newton".into(),
+                        message: format!("CG on the tangent: {e}"),
                     })?;
-                    it.iterations += report.iterations;
-                    it.unconverged += !report.converged as usize;
-                    x[c * n..(c + 1) * n].copy_from_slice(&col);
+                    *iterations += report.iterations;
+                    *unconverged += !report.converged as usize;
+                    x[c * n..(c + 1) * n].copy_from_slice(col);
                     if c > 0 {
-                        it.previous[(c - 1) * n..c * n].copy_from_slice(&col);
+                        previous[(c - 1) * n..c * n].copy_from_slice(col);
                     }
                 }
             }

@@ -13,6 +13,7 @@ pub mod active_set;
 pub mod kh_projection;
 pub mod newton;
 pub mod penalty;
+mod residual;
 #[cfg(feature = "socp")]
 pub mod socp;
 pub mod uzawa;

@@ -26,7 +26,8 @@
 
 use crate::active_set::{ActiveSetSystem, LinearSolver};
 use crate::kh_projection::MetricProjection;
-use saddle_core::error::{ParameterError, check, join};
+use crate::residual;
+use saddle_core::error::{ParameterError, check};
 use saddle_core::lagrangian::{Iterate, Lagrangian, StressField, Workspace, max_abs};
 use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Material, SparseCholesky, SymOp};
@@ -70,9 +71,7 @@ pub struct Start {
 impl Solver for Newton {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
-        if self.max_iter == 0 {
-            return Err(ParameterError::new(join(path, "max_iter"), 0, "must be >= 1"));
-        }
+        check::at_least_one(path, "max_iter", self.max_iter)?;
         Ok(())
     }
 
@@ -101,13 +100,17 @@ impl Newton {
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let mut start_is_cold = start.is_none();
         let linear = self.linear.resolve(n);
+        monitor.phase("analysis");
+        let phase = if linear == LinearSolver::Amg { "multigrid set-up" } else { "analysis" };
+        let mut system = timer.time(phase, || ActiveSetSystem::with_backend(l, name, linear))?;
         let mut elastic_start = None;
         // (with the iterative backend the Delassus columns would cost a CG solve per row: the
         // elastic contact set is then found by the active-set phase below)
-        if start_is_cold && nr > 0 && linear == LinearSolver::Direct {
-            // 0. the elastic contact problem, exactly, with one factorisation of K
+        if let Some(chol) = system.direct().filter(|_| start_is_cold && nr > 0) {
+            // 0. the elastic contact problem, exactly, with one factorisation of K on the
+            //    tangents' symbolic analysis
             monitor.phase("elastic contact");
-            match timer.time("elastic contact", || elastic_contact_start(l)) {
+            match timer.time("elastic contact", || elastic_contact_start(l, chol)) {
                 Ok(s) => elastic_start = Some(s),
                 // dependent rows and the like: fall back on the elastic active-set phase
                 Err(SolveError::Unsupported { .. }) => {}
@@ -124,9 +127,6 @@ impl Newton {
         };
         let Start { mut u, extras: mut v, mut lambda } =
             start.unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
-        monitor.phase("analysis");
-        let phase = if linear == LinearSolver::Amg { "multigrid set-up" } else { "analysis" };
-        let mut system = timer.time(phase, || ActiveSetSystem::with_backend(l, name, linear))?;
         let mut ws = Workspace::new(l);
         let mut stress = StressField::new(l.n_points(), l.hardening_dim());
         let mut tangents = vec![SymOp::zeros(); l.n_points()];
@@ -164,15 +164,7 @@ impl Newton {
                 l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
             });
             let r = kkt.max();
-            history.push(r);
-            monitor.iteration(it, r, self.tol);
-            if !r.is_finite() {
-                return Err(SolveError::NonFinite {
-                    solver: name.into(),
-                    what: "the KKT residual".into(),
-                    iteration: it,
-                });
-            }
+            residual::record(name, it, r, self.tol, &mut history, monitor)?;
             if r <= self.tol {
                 break (StopReason::Converged, kkt);
             }
@@ -277,7 +269,7 @@ impl Newton {
         };
         let elastic_factorisations = (elastic_solves > 0) as usize;
         counters.insert("factorisations".into(), (system.factorisations + elastic_factorisations) as f64);
-        counters.insert("symbolic_analyses".into(), 1.0 + elastic_factorisations as f64);
+        counters.insert("symbolic_analyses".into(), 1.0);
         counters.insert("triangular_solve_pairs".into(), (system.solves + elastic_solves) as f64);
         counters.insert("elastic_contact_solves".into(), elastic_solves as f64);
         if let Some(iterative) = system.iterative() {
@@ -305,15 +297,15 @@ impl Newton {
     }
 }
 
-/// The elastic contact problem solved exactly: the projection onto K_h, in the energy metric
-/// of the elastic stiffness K, of the unconstrained elastic solution z = K⁻¹f (Uzawa's step (ii)
-/// of SPEC §4 with ρ = 1 from u = 0, which for an elastic body is the solution). One
-/// factorisation of K, one solve per contact row for the Delassus matrix G K⁻¹ Gᵀ (in blocks of
-/// columns) and a dense QP over the rows. Returns the start and the triangular solves spent.
-fn elastic_contact_start(l: &dyn Lagrangian) -> Result<(Start, usize), SolveError> {
+/// The elastic contact problem solved exactly: the projection onto K_h, in the energy metric of
+/// the elastic stiffness K, of the unconstrained elastic solution z = K⁻¹f (Uzawa's step (ii) of
+/// SPEC §4 with ρ = 1 from u = 0, which for an elastic body is the solution). One factorisation
+/// of K into `chol` (analysed on L's pattern), one solve per contact row for the Delassus matrix
+/// G K⁻¹ Gᵀ (in blocks of columns) and a dense QP over the rows. Returns the start and the
+/// triangular solves spent.
+fn elastic_contact_start(l: &dyn Lagrangian, chol: &mut SparseCholesky) -> Result<(Start, usize), SolveError> {
     let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.constraints().n_rows());
     let c = l.elasticity().stiffness_matrix();
-    let mut chol = SparseCholesky::analyse(l.pattern(), "elastic stiffness")?;
     chol.factorise(l.pattern(), &l.stiffness(Material::Uniform(&c)))?;
     // z = K⁻¹f_u (zero without loads on u)
     let mut z = vec![0.0; n];
@@ -323,9 +315,9 @@ fn elastic_contact_start(l: &dyn Lagrangian) -> Result<(Start, usize), SolveErro
         chol.solve(&mut z);
     }
     let rows = l.constraints();
-    let mut projection = MetricProjection::new(rows, &mut chol, 0.0, 1.0, l.load())?;
+    let mut projection = MetricProjection::new(rows, chol, 0.0, 1.0, l.load())?;
     let (mut u, mut extras, mut lambda) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
-    let solves = projection.setup_solves + projection.project(rows, &mut chol, &z, &mut extras, &mut u, &mut lambda)?;
+    let solves = projection.setup_solves + projection.project(rows, chol, &z, &mut extras, &mut u, &mut lambda)?;
     Ok((Start { u, extras, lambda }, solves))
 }
 

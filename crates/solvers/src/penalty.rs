@@ -94,9 +94,10 @@
 //! relative to ‖f‖), `mu`, and `condition_estimate` (see [`PenaltySystem`]).
 
 use crate::active_set::SlaveRows;
+use crate::residual;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use saddle_core::error::{ParameterError, check, join};
+use saddle_core::error::{ParameterError, check};
 use saddle_core::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace, max_abs, norm};
 use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{SparseCholesky, Sym, SymOp};
@@ -141,9 +142,7 @@ impl Solver for Penalty {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "mu", self.mu)?;
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
-        if self.max_iter == 0 {
-            return Err(ParameterError::new(join(path, "max_iter"), 0, "must be >= 1"));
-        }
+        check::at_least_one(path, "max_iter", self.max_iter)?;
         Ok(())
     }
 
@@ -472,11 +471,7 @@ impl Penalty {
                 ws.stress.clone_from(&stress);
                 l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &chi }, &mut ws)
             });
-            history.push(kkt.max());
-            monitor.iteration(it, kkt.max(), self.tol);
-            if !kkt.max().is_finite() {
-                return Err(non_finite("the KKT residual", it));
-            }
+            residual::record("penalty", it, kkt.max(), self.tol, &mut history, monitor)?;
             // 3. ∇J_μ (of the elastic J_μ in the cold iteration)
             timer.time("gradient", || {
                 let eps = &ws.eps;

@@ -17,6 +17,7 @@
 //! iterate, never on the step length; divergence and NaN are detected and reported.
 
 use crate::kh_projection::MetricProjection;
+use crate::residual;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace};
 use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
@@ -66,9 +67,7 @@ impl Solver for Uzawa {
         check::positive(path, "rho", self.rho)?;
         check::non_negative(path, "extra_metric", self.extra_metric)?;
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
-        if self.max_iter == 0 {
-            return Err(ParameterError::new(saddle_core::error::join(path, "max_iter"), 0, "must be >= 1"));
-        }
+        check::at_least_one(path, "max_iter", self.max_iter)?;
         Ok(())
     }
 
@@ -140,15 +139,7 @@ impl Solver for Uzawa {
                 l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
             });
             let r = kkt.max();
-            history.push(r);
-            monitor.iteration(it, r, self.tol);
-            if !r.is_finite() {
-                return Err(SolveError::NonFinite {
-                    solver: "uzawa".into(),
-                    what: "the KKT residual".into(),
-                    iteration: it,
-                });
-            }
+            residual::record("uzawa", it, r, self.tol, &mut history, monitor)?;
             if r <= self.tol {
                 break (StopReason::Converged, kkt);
             }
