@@ -5,6 +5,18 @@
 use saddle::core::{Lagrangian, P1P0Lagrangian, Scene, Silent, Solver};
 use std::path::Path;
 
+/// Rollers on the three coordinate planes through the origin: a body free to stretch and
+/// contract laterally, held against rigid-body motion.
+const ROLLERS: &str = r#"[[dirichlet]]
+on = { group = "xmin" }
+components = ["x"]
+[[dirichlet]]
+on = { group = "ymin" }
+components = ["y"]
+[[dirichlet]]
+on = { group = "zmin" }
+components = ["z"]"#;
+
 fn bar(p: f64, plastic: bool) -> P1P0Lagrangian {
     let yield_table = if plastic { "[yield]\ntype = \"von_mises\"\nk0 = 1.0\nh = 5.0\n" } else { "" };
     let text = format!(
@@ -18,15 +30,7 @@ cells = [2, 2, 4]
 E = 100.0
 nu = 0.3
 {yield_table}
-[[dirichlet]]
-on = {{ group = "xmin" }}
-components = ["x"]
-[[dirichlet]]
-on = {{ group = "ymin" }}
-components = ["y"]
-[[dirichlet]]
-on = {{ group = "zmin" }}
-components = ["z"]
+{ROLLERS}
 [[load]]
 type = "traction"
 on = {{ group = "zmax" }}
@@ -126,15 +130,7 @@ cells = [{lateral}, {lateral}, {cells}]
 [material]
 E = 100.0
 nu = 0.0
-[[dirichlet]]
-on = {{ group = "xmin" }}
-components = ["x"]
-[[dirichlet]]
-on = {{ group = "ymin" }}
-components = ["y"]
-[[dirichlet]]
-on = {{ group = "zmin" }}
-components = ["z"]
+{ROLLERS}
 [[load]]
 type = "body_force"
 b = [0.0, 0.0, -0.8]

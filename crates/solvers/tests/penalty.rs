@@ -4,67 +4,25 @@
 //!
 //! The μ study: `cargo test --release -p saddle-solvers --test penalty -- --ignored --nocapture mu_table`.
 
-use saddle_contact::{Flat, Paraboloid, RigidPunch, RigidPunchDisplacement};
+use saddle_contact::{Paraboloid, RigidPunchDisplacement};
 use saddle_core::{
-    BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, P1P0Lagrangian, Region, Silent, Solution, SolveError,
-    Solver, StopReason, StressField, contact_set,
+    Lagrangian, P1P0Lagrangian, Silent, Solution, SolveError, Solver, StopReason, StressField, contact_set,
 };
 use saddle_solvers::{Newton, Penalty};
-use saddle_yield::VonMises;
+
+mod common;
+use common::{SCALED, homogeneous};
 
 /// The default scene of SPEC §6 on a coarse graded mesh.
 fn johnson() -> P1P0Lagrangian {
-    let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [10, 10, 5]).graded([0.0; 3], 3.0).mesh().unwrap();
-    let gamma1 = Region::All(vec![
-        Region::Group("zmin".into()),
-        Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
-    ]);
-    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
-    P1P0Lagrangian::new(
-        mesh,
-        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
-        Elasticity::new(100.0, 0.3).unwrap(),
-        Some(Box::new(VonMises::new(1.0, 5.0))),
-        Some(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
-    )
-    .unwrap()
+    common::johnson([10, 10, 5], Some((1.0, 5.0)), SCALED)
 }
 
 /// The default scene with the punch moved by a prescribed U (no extra unknown).
 fn johnson_prescribed(u: f64) -> P1P0Lagrangian {
-    let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [10, 10, 5]).graded([0.0; 3], 3.0).mesh().unwrap();
-    let gamma1 = Region::All(vec![
-        Region::Group("zmin".into()),
-        Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
-    ]);
-    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
-    P1P0Lagrangian::new(
-        mesh,
-        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
-        Elasticity::new(100.0, 0.3).unwrap(),
-        Some(Box::new(VonMises::new(1.0, 5.0))),
-        Some(Box::new(RigidPunchDisplacement::new(u, zone, Box::new(Paraboloid::new(5.0))))),
-    )
-    .unwrap()
-}
-
-/// Homogeneous compression of SPEC §7: the unit cube on rollers (u₁ = 0 on x₁ = 0, u₂ = 0 on
-/// x₂ = 0, u₃ = 0 on x₃ = 1), a flat punch on the whole bottom face with force `f`.
-fn homogeneous(f: f64) -> P1P0Lagrangian {
-    let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]).mesh().unwrap();
-    let g = |name: &str| Region::Group(name.into());
-    P1P0Lagrangian::new(
-        mesh,
-        &[
-            Dirichlet::roller(g("xmin"), Component::X),
-            Dirichlet::roller(g("ymin"), Component::Y),
-            Dirichlet::roller(g("zmax"), Component::Z),
-        ],
-        Elasticity::new(100.0, 0.3).unwrap(),
-        Some(Box::new(VonMises::new(1.0, 5.0))),
-        Some(Box::new(RigidPunch::new(f, g("zmin"), Box::new(Flat::default())))),
-    )
-    .unwrap()
+    common::johnson_with([10, 10, 5], Some((1.0, 5.0)), SCALED, |zone, _, radius| {
+        Box::new(RigidPunchDisplacement::new(u, zone, Box::new(Paraboloid::new(radius))))
+    })
 }
 
 /// U of the closed form of SPEC §7 (E = 100, k₀ = 1, h = 5): U = −ε₃₃, ε = Aσ + p.

@@ -3,8 +3,7 @@
 //! the default scene, the QP of an elastic problem, the signs of the displacements read from
 //! the equality duals, invariance to units, perfect plasticity, and parameter errors.
 
-use saddle_contact::{Flat, Paraboloid, RigidPunch};
-use saddle_core::dofs::Component;
+use saddle_contact::{Flat, RigidPunch};
 use saddle_core::elasticity::Elasticity;
 use saddle_core::error::ParameterError;
 use saddle_core::stresses::AdmissibleStresses;
@@ -17,58 +16,12 @@ use saddle_solvers::{Newton, Socp};
 use saddle_yield::VonMises;
 use serde::{Deserialize, Serialize};
 
-/// Units of a scene: stresses (E, k₀, h) are multiplied by `stress`, lengths by `length`.
-#[derive(Clone, Copy)]
-struct Units {
-    stress: f64,
-    length: f64,
-}
-
-const SCALED: Units = Units { stress: 1.0, length: 1.0 };
-
-/// The default scene of SPEC §6 on a coarse graded mesh; `k0_h = None` is elastic.
-fn johnson(cells: [usize; 3], k0_h: Option<(f64, f64)>, units: Units) -> P1P0Lagrangian {
-    let s = units.length;
-    let mesh = BoxMesh::new([-s, -s, 0.0], [s, s, s], cells).graded([0.0; 3], 3.0).mesh().unwrap();
-    let gamma1 = Region::All(vec![
-        Region::Group("zmin".into()),
-        Region::Box { min: [-0.75 * s, -0.75 * s, -s], max: [0.75 * s, 0.75 * s, s] },
-    ]);
-    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 * s }]);
-    let p: Option<Box<dyn AdmissibleStresses>> =
-        k0_h.map(|(k0, h)| Box::new(VonMises::new(k0 * units.stress, h * units.stress)) as _);
-    let force = 0.3 * units.stress * s * s;
-    P1P0Lagrangian::new(
-        mesh,
-        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
-        Elasticity::new(100.0 * units.stress, 0.3).unwrap(),
-        p,
-        Some(Box::new(RigidPunch::new(force, zone, Box::new(Paraboloid::new(5.0 * s))))),
-    )
-    .unwrap()
-}
+mod common;
+use common::{SCALED, Units, homogeneous, johnson};
 
 /// The plastic default scene (k₀ = 1, h = 5) on the small mesh [10, 10, 5].
 fn small_johnson() -> P1P0Lagrangian {
     johnson([10, 10, 5], Some((1.0, 5.0)), SCALED)
-}
-
-/// SPEC §7 homogeneous compression: unit cube on rollers, flat punch on the whole bottom.
-fn homogeneous(f: f64) -> P1P0Lagrangian {
-    let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]).mesh().unwrap();
-    let bc = [
-        Dirichlet::roller(Region::Group("xmin".into()), Component::X),
-        Dirichlet::roller(Region::Group("ymin".into()), Component::Y),
-        Dirichlet::roller(Region::Group("zmax".into()), Component::Z),
-    ];
-    P1P0Lagrangian::new(
-        mesh,
-        &bc,
-        Elasticity::new(100.0, 0.3).unwrap(),
-        Some(Box::new(VonMises::new(1.0, 5.0))),
-        Some(Box::new(RigidPunch::new(f, Region::Group("zmin".into()), Box::new(Flat::default())))),
-    )
-    .unwrap()
 }
 
 /// Newton to 1e-12: the reference.

@@ -2,32 +2,14 @@
 //! a step above the stable bound is detected early and named; elastic problems run no return
 //! mapping.
 
-use saddle_contact::{Paraboloid, RigidPunch};
-use saddle_core::{
-    BoxMesh, Dirichlet, Elasticity, Lagrangian, P1P0Lagrangian, Region, Silent, SolveError, Solver, StopReason,
-    Workspace,
-};
+use saddle_core::{Lagrangian, P1P0Lagrangian, Silent, SolveError, Solver, StopReason, Workspace};
 use saddle_solvers::{Uzawa, UzawaMetric};
-use saddle_yield::VonMises;
 
-/// The default scene of SPEC §6 on a coarse graded mesh.
+mod common;
+
+/// The default scene of SPEC §6 on a coarse graded mesh (elastic unless `plastic`).
 fn johnson(plastic: bool) -> P1P0Lagrangian {
-    let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [10, 10, 5]).graded([0.0; 3], 3.0).mesh().unwrap();
-    let gamma1 = Region::All(vec![
-        Region::Group("zmin".into()),
-        Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
-    ]);
-    let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
-    let p: Option<Box<dyn saddle_core::AdmissibleStresses>> =
-        if plastic { Some(Box::new(VonMises::new(1.0, 5.0))) } else { None };
-    P1P0Lagrangian::new(
-        mesh,
-        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
-        Elasticity::new(100.0, 0.3).unwrap(),
-        p,
-        Some(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
-    )
-    .unwrap()
+    common::johnson([10, 10, 5], plastic.then_some((1.0, 5.0)), common::SCALED)
 }
 
 fn uzawa() -> Uzawa {
