@@ -15,10 +15,10 @@
 //! ```
 
 use crate::report::{ReportError, SceneSource};
-use saddle_core::{
-    AmgParams, Csr, Lagrangian, Material, P1P0Lagrangian, Pcg, Scene, Silent, SmoothedAggregation, Solver,
-    SparseCholesky, Workspace,
-};
+use saddle_core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
+use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
+use saddle_core::{Lagrangian, Load, Material, P1P0Lagrangian, Silent, Solver, Workspace};
+use saddle_solvers::{LinearSolver, Newton};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -52,12 +52,23 @@ pub fn solver_spec(name: &str) -> Result<(Box<dyn Solver>, bool), String> {
         Some((k, lin)) => (k, Some(lin)),
         None => (name, None),
     };
-    let mut table = format!("type = {}", toml::Value::String(kind.to_string()));
-    if let Some(lin) = linear {
-        table += &format!("\nlinear = {}", toml::Value::String(lin.to_string()));
-    }
-    let solver: Box<dyn Solver> =
-        toml::from_str(&table).map_err(|e| format!("bench solver {name:?}: {}", e.message()))?;
+    let solver: Box<dyn Solver> = match linear {
+        None => crate::run::solver_by_type(kind).map_err(|e| format!("bench solver {name:?}: {e}"))?,
+        Some(lin) => {
+            let linear = match lin {
+                "direct" => LinearSolver::Direct,
+                "amg" => LinearSolver::Amg,
+                "auto" => LinearSolver::Auto,
+                other => {
+                    return Err(format!("bench solver {name:?}: unknown linear backend `{other}` (direct, amg, auto)"));
+                }
+            };
+            if kind != "newton" {
+                return Err(format!("bench solver {name:?}: only `newton` takes a linear backend"));
+            }
+            Box::new(Newton { linear, ..Newton::default() })
+        }
+    };
     Ok((solver, linear != Some("amg")))
 }
 
@@ -224,10 +235,10 @@ pub fn measure(
         reset_peak_memory();
         let mut linear = LinearSolve::default();
         let t = Instant::now();
-        let mut chol = SparseCholesky::analyse(l.pattern(), "elastic stiffness").map_err(bench_error)?;
+        let mut chol = SparseCholesky::analyse(lower(&l), "elastic stiffness").map_err(bench_error)?;
         linear.analyse_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        chol.factorise(l.pattern(), &k).map_err(bench_error)?;
+        chol.factorise(&k).map_err(bench_error)?;
         linear.factorise_s = t.elapsed().as_secs_f64();
         let mut x = b.clone();
         let t = Instant::now();
@@ -250,9 +261,10 @@ pub fn measure(
     let iterative = {
         reset_peak_memory();
         let t = Instant::now();
-        let layout = l.dof_layout().ok_or_else(|| bench_error("no dof layout"))?;
-        let a = Csr::from_symmetric_lower(l.pattern(), &k);
-        let amg = SmoothedAggregation::new(&a, &layout, &AmgParams::default()).map_err(bench_error)?;
+        let modes = l.rigid_body_modes().ok_or_else(|| bench_error("no rigid-body modes"))?;
+        let near_null = NearNullSpace::new(modes.node, modes.modes, RIGID_BODY_MODES).map_err(bench_error)?;
+        let a = Csr::from_symmetric_lower(lower(&l), &k);
+        let amg = SmoothedAggregation::new(&a, &near_null, &AmgParams::default()).map_err(bench_error)?;
         let setup_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut x = vec![0.0; l.n_dofs()];
@@ -310,18 +322,18 @@ fn bench_error(e: impl std::fmt::Display) -> ReportError {
 
 /// The scene at `cells` without yield surface and obstacle, loaded by a body force instead.
 fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<P1P0Lagrangian, ReportError> {
-    let mut table: toml::Table = toml::from_str(&source.text).map_err(bench_error)?;
-    table.remove("yield");
-    table.remove("obstacle");
-    table.remove("solver");
-    let load: toml::Table = toml::from_str("load = [ { type = \"body_force\", b = [0.0, 0.0, -1e-3] } ]").unwrap();
-    table.extend(load);
-    if let Some(mesh) = table.get_mut("mesh").and_then(|m| m.as_table_mut()) {
-        mesh.insert("cells".into(), toml::Value::try_from(cells).map_err(bench_error)?);
-    }
-    let mut scene = Scene::from_toml(&toml::to_string(&table).map_err(bench_error)?, &source.path)?;
-    scene.base_dir = source.path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut scene = source.scene(Some(cells))?;
+    scene.yield_surface = None;
+    scene.obstacle = None;
+    scene.solver = None;
+    scene.load = vec![Load::BodyForce { b: [0.0, 0.0, -1e-3] }];
     Ok(scene.into_problem()?.0)
+}
+
+/// The lower triangle of L's matrices as the linear algebra takes it.
+fn lower(l: &P1P0Lagrangian) -> LowerCsc<'_> {
+    let p = l.pattern();
+    LowerCsc::new(p.n(), p.col_ptr(), p.row_idx())
 }
 
 /// Runs solver `name` (defaults) on `l`, measuring time and peak memory.

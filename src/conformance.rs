@@ -20,9 +20,10 @@
 //! # Ok::<(), saddle::conformance::KitFailure>(())
 //! ```
 
-use saddle_core::stresses::energy_inner;
+use crate::scene::Scene;
+use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{
-    Lagrangian, P1P0Lagrangian, Scene, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
+    Lagrangian, P1P0Lagrangian, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
 };
 use std::path::Path;
 use thiserror::Error;

@@ -10,7 +10,8 @@
 //! `saddle` binary is its command line.
 //!
 //! ```no_run
-//! use saddle::core::{Lagrangian, Scene, Silent};
+//! use saddle::core::{Lagrangian, Silent};
+//! use saddle::scene::Scene;
 //! let scene = Scene::from_file("examples/johnson.toml".as_ref())?;
 //! let (problem, solver) = scene.into_problem()?;
 //! let solver = solver.unwrap_or_else(saddle::run::default_solver);
@@ -26,6 +27,8 @@ pub use saddle_yield as yield_surfaces;
 
 pub mod bench;
 pub mod conformance;
+pub mod output;
 pub mod report;
 pub mod run;
+pub mod scene;
 pub mod stability;

@@ -4,9 +4,10 @@
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use saddle::output::Summary;
 use saddle::report::{self, Progress, ReportOptions};
 use saddle::run::{self, RunError};
-use saddle_core::{Lagrangian, Monitor, Summary};
+use saddle_core::{Lagrangian, Monitor};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};

@@ -1,7 +1,9 @@
 //! Running a scene file end to end: read and validate, assemble, solve, summarise, write
 //! `summary.json` and `solution.vtu`. Nothing is written unless the solve returns a solution.
 
-use saddle_core::{Monitor, P1P0Lagrangian, Scene, SceneError, Solution, SolveError, Solver, Summary, write_vtu};
+use crate::output::{Summary, write_vtu};
+use crate::scene::Scene;
+use saddle_core::{Discretisation, Monitor, P1P0Lagrangian, SceneError, Solution, SolveError, Solver};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -27,10 +29,13 @@ pub fn default_solver() -> Box<dyn Solver> {
     Box::new(saddle_solvers::Uzawa::default())
 }
 
-/// A solver of type `name` with its default parameters (as `[solver] type = "name"`).
+/// A solver of type `name` with its default parameters (as `[solver] type = "name"`): the
+/// registered solver types are looked up by their `type` tag, so solvers added by plugins are
+/// found too; an unknown name lists the known ones.
 pub fn solver_by_type(name: &str) -> Result<Box<dyn Solver>, RunError> {
-    let text = format!("type = {}", toml::Value::String(name.to_string()));
-    toml::from_str::<Box<dyn Solver>>(&text)
+    let table = toml::Table::from_iter([("type".to_string(), toml::Value::String(name.to_string()))]);
+    toml::Value::Table(table)
+        .try_into::<Box<dyn Solver>>()
         .map_err(|e| RunError::UnknownSolver { name: name.to_string(), message: e.message().to_string() })
 }
 
@@ -73,7 +78,7 @@ pub fn solve_and_write(loaded: &Loaded, out_dir: &Path, monitor: &mut dyn Monito
 }
 
 /// Writes both files through temporary names, so that a failure leaves no half-written file.
-fn write_outputs(out_dir: &Path, l: &P1P0Lagrangian, sol: &Solution, summary: &Summary) -> Result<(), RunError> {
+fn write_outputs(out_dir: &Path, l: &dyn Discretisation, sol: &Solution, summary: &Summary) -> Result<(), RunError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| RunError::Io { path, source }

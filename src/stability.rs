@@ -12,7 +12,9 @@
 //! 5 184 tetrahedra) with edits, so that the whole table takes about a minute.
 
 use crate::conformance::{edited, small_johnson_text};
-use saddle_core::{Lagrangian, P1P0Lagrangian, Scene, Silent, Solution, Solver, StopReason, Summary, Workspace};
+use crate::output::Summary;
+use crate::scene::Scene;
+use saddle_core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, StopReason, Workspace};
 use std::path::Path;
 use std::time::Instant;
 

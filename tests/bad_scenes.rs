@@ -5,7 +5,8 @@
 
 mod common;
 use common::*;
-use saddle::core::{Scene, Solver};
+use saddle::core::Solver;
+use saddle::scene::Scene;
 use std::path::Path;
 
 /// Base scenes that together use every plugin and every numeric field: the examples plus

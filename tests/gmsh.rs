@@ -5,8 +5,9 @@
 
 mod common;
 use common::*;
-use saddle::core::gmsh::{GmshImport, read_msh};
-use saddle::core::{Lagrangian, Region, Scene, Silent, TetMesh};
+use saddle::core::mesh::gmsh::{GmshImport, read_msh};
+use saddle::core::{Lagrangian, Region, Silent, TetMesh};
+use saddle::scene::Scene;
 use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
@@ -194,7 +195,7 @@ fn newton_solves_the_default_scene_on_the_gmsh_mesh() {
         let (l, solver) = build(&t);
         let solver = solver.unwrap();
         let sol = solver.solve(&l, &mut Silent).unwrap();
-        let report = l.contact_report(&sol).unwrap();
+        let report = l.obstacle().unwrap().report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda);
         let u = sol.extras[0];
         println!(
             "{file}: U = {u:.6e} ({:+.2} % against the box mesh's {U_BOX:.6e}), KKT {:.2e}, {} iterations, \

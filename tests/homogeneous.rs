@@ -3,7 +3,8 @@
 
 mod common;
 use common::*;
-use saddle::core::{Lagrangian, Silent, Solution, tensor::SQRT2};
+use saddle::core::problem::tensor::SQRT2;
+use saddle::core::{Lagrangian, Silent, Solution};
 
 /// The closed form of SPEC §7: (σ₃₃, U, ξ, ε₁₁, ε₃₃).
 fn closed_form(e: f64, nu: f64, k0: f64, h: f64, f: f64) -> (f64, f64, f64, f64, f64) {

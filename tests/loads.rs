@@ -2,7 +2,8 @@
 //! P1/P0, elastic and plastic, for every solver; an elastic scene without contact is one linear
 //! solve and builds no contact structures and runs no return mapping.
 
-use saddle::core::{Lagrangian, P1P0Lagrangian, Scene, Silent, Solver};
+use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solver};
+use saddle::scene::Scene;
 use std::path::Path;
 
 /// Rollers on the three coordinate planes through the origin: a body free to stretch and

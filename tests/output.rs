@@ -3,7 +3,9 @@
 
 mod common;
 use common::*;
-use saddle::core::{Lagrangian, Scene, Silent, write_vtu};
+use saddle::core::{Lagrangian, Silent};
+use saddle::output::write_vtu;
+use saddle::scene::Scene;
 
 /// The Float64 array `name` of a VTU file with raw appended data.
 fn read_array(vtu: &[u8], name: &str) -> Vec<f64> {
@@ -38,9 +40,9 @@ fn vtu_arrays_decode_to_the_solution() {
     // von Mises stress of element 0, and σ in VTK order (xx yy zz xy yz xz)
     let vm = read_array(&vtu, "von_mises");
     assert_eq!(vm.len(), l.n_points());
-    assert!((vm[0] - saddle::core::tensor::von_mises(&sol.stress.sigma[0])).abs() < 1e-15);
+    assert!((vm[0] - saddle::core::problem::tensor::von_mises(&sol.stress.sigma[0])).abs() < 1e-15);
     let sigma = read_array(&vtu, "stress");
-    let s0 = saddle::core::tensor::to_matrix(&sol.stress.sigma[0]);
+    let s0 = saddle::core::problem::tensor::to_matrix(&sol.stress.sigma[0]);
     assert!((sigma[3] - s0[(0, 1)]).abs() < 1e-15 && (sigma[4] - s0[(1, 2)]).abs() < 1e-15);
 }
 

@@ -24,7 +24,8 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
-use saddle::core::{Lagrangian, P1P0Lagrangian, Scene, Silent, Solution, Solver, StopReason, Workspace};
+use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, StopReason, Workspace};
+use saddle::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;
 

@@ -12,7 +12,9 @@ use saddle::report::tables::{
 };
 use saddle::report::transfer::{Locator, Quadrature, SampleMap, field_distance, red_children, strains};
 use saddle::report::{ReportOptions, SceneSource, convergence_study, generate};
+use saddle::scene::Scene;
 use saddle::solvers::Newton;
+use std::path::Path;
 use std::process::Command;
 
 fn record(solver: &str, setting: &str, converged: bool, errors: Option<Errors>) -> RunRecord {
@@ -221,13 +223,20 @@ fn observed_and_fitted_rates_of_synthetic_sequences() {
 
 #[test]
 fn a_mesh_that_is_not_a_box_has_no_convergence_study() {
-    let src =
-        SceneSource { path: "inline.toml".into(), text: "[mesh]\ntype = \"inline\"\nnodes = []\ntets = []\n".into() };
+    let text = "[mesh]\ntype = \"inline\"\nnodes = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], \
+                [0.0, 0.0, 1.0]]\ntets = [[0, 1, 2, 3]]\n[material]\nE = 1.0\nnu = 0.3\n";
+    let scene = Scene::from_toml(text, Path::new("inline.toml")).unwrap();
+    let src = SceneSource { path: "inline.toml".into(), scene };
     let why = src.box_cells().unwrap_err();
     assert!(why.contains("needs a `box` mesh") && why.contains("`inline`"), "{why}");
-    let src =
-        SceneSource { path: "j.toml".into(), text: std::fs::read_to_string(repo("examples/johnson.toml")).unwrap() };
+    let e = src.scene(Some([2, 2, 2])).unwrap_err().to_string();
+    assert!(e.contains("mesh.cells") && e.contains("`inline`"), "{e}");
+    let src = SceneSource::read(&repo("examples/johnson.toml")).unwrap();
     assert_eq!(src.box_cells().unwrap(), [32, 32, 16]);
+    // a refined variant is the same scene with other cells: a typed value, not edited text
+    let refined = src.scene(Some([4, 4, 2])).unwrap();
+    assert_eq!(refined.mesh.cells(), Some([4, 4, 2]));
+    assert_eq!(refined.title, src.scene.title);
 }
 
 /// The whole command on the homogeneous scene: every file, with its header, and non-empty images.
@@ -320,10 +329,7 @@ fn report_quick_on_a_small_johnson_scene() {
 /// smooth elasticity.
 #[test]
 fn theorem_2_the_stress_error_decreases_at_least_like_root_h() {
-    let src = SceneSource {
-        path: repo("examples/johnson.toml"),
-        text: std::fs::read_to_string(repo("examples/johnson.toml")).unwrap(),
-    };
+    let src = SceneSource::read(&repo("examples/johnson.toml")).unwrap();
     let levels: Vec<[usize; 3]> = [3, 4, 6, 8, 11].iter().map(|&k| [2 * k, 2 * k, k]).collect();
     let study = convergence_study(&src, &levels, None, &mut Silent, &mut 0).unwrap();
     assert!(study.levels.iter().all(|l| l.converged && l.kkt < 1e-12), "{:?}", study.levels);

@@ -2,7 +2,9 @@
 //! each run by every solver with a measured outcome. The full table (more values per case) is
 //! `cargo run --release --example stability`, which rewrites the README's stability table.
 
-use saddle::core::{P1P0Lagrangian, Scene, Silent, StopReason, Summary};
+use saddle::core::{P1P0Lagrangian, Silent, StopReason};
+use saddle::output::Summary;
+use saddle::scene::Scene;
 use saddle::stability::solver_from;
 use saddle::stability::{
     Outcome, all_solvers, first_yield_force, locking, run, scene, sliver_scene, unclamped_scene, units_check,

@@ -28,9 +28,10 @@ pub mod runs;
 pub mod tables;
 pub mod transfer;
 
+use crate::scene::Scene;
 use convergence::{ConvergenceStudy, LevelResult, mesh_size, refinement_levels};
 use runs::{RunRecord, Rung, RungKind, Timed, ladder, record, reference_solver, timed_polish, timed_solve};
-use saddle_core::{Lagrangian, Monitor, P1P0Lagrangian, Scene, SceneError, Silent, Solution, SolveError, Workspace};
+use saddle_core::{Lagrangian, Monitor, P1P0Lagrangian, SceneError, Silent, Solution, SolveError, Workspace};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use thiserror::Error;
@@ -94,50 +95,28 @@ pub const LEVELS: [f64; 6] = [0.25, 0.375, 0.5, 0.6875, 1.0, 1.375];
 /// Refinement factors with `quick` (the scene's mesh is the finest level).
 pub const QUICK_LEVELS: [f64; 3] = [0.5, 0.75, 1.0];
 
-/// A scene file's text, to build the scene and refined versions of it.
+/// A scene as loaded from its file, to build it and refined versions of it: variants are made
+/// by changing the typed [`Scene`] value (its box mesh's cells), never by editing TOML text.
 #[derive(Clone, Debug)]
 pub struct SceneSource {
     /// The file (relative mesh files are resolved against its folder).
     pub path: PathBuf,
-    /// Its TOML text.
-    pub text: String,
+    /// The scene, validated when it was read.
+    pub scene: Scene,
 }
 
 impl SceneSource {
-    /// Reads a scene file.
+    /// Reads and validates a scene file.
     pub fn read(path: &Path) -> Result<Self, ReportError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
-        Ok(Self { path: path.to_path_buf(), text })
+        Ok(Self { path: path.to_path_buf(), scene: Scene::from_file(path)? })
     }
 
-    /// The scene, validated; with `cells`, its box mesh refined to those cells.
+    /// The scene; with `cells`, its structured mesh with those cells (see [`Scene::with_cells`]).
     pub fn scene(&self, cells: Option<[usize; 3]>) -> Result<Scene, ReportError> {
-        let mut scene = match cells {
-            None => Scene::from_toml(&self.text, &self.path)?,
-            Some(c) => {
-                let mut table: toml::Table = toml::from_str(&self.text).map_err(|e| SceneError::Parse {
-                    path: self.path.clone(),
-                    message: e.to_string().trim_end().to_string(),
-                })?;
-                let cells = toml::Value::Array(c.iter().map(|&n| toml::Value::Integer(n as i64)).collect());
-                match table.get_mut("mesh").and_then(|m| m.as_table_mut()) {
-                    Some(mesh) => mesh.insert("cells".into(), cells),
-                    None => {
-                        return Err(
-                            SceneError::Parse { path: self.path.clone(), message: "no [mesh] table".into() }.into()
-                        );
-                    }
-                };
-                let text = toml::to_string(&table).map_err(|e| SceneError::Parse {
-                    path: self.path.clone(),
-                    message: format!("cannot re-serialise the scene: {e}"),
-                })?;
-                Scene::from_toml(&text, &self.path)?
-            }
-        };
-        scene.base_dir = self.path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Ok(scene)
+        Ok(match cells {
+            None => self.scene.clone(),
+            Some(c) => self.scene.with_cells(c)?,
+        })
     }
 
     /// The assembled problem (with `cells`: on the refined box mesh).
@@ -147,29 +126,21 @@ impl SceneSource {
 
     /// The title: the scene's, else the file name.
     pub fn title(&self) -> String {
-        Scene::from_toml(&self.text, &self.path)
-            .ok()
-            .and_then(|s| s.title)
+        self.scene
+            .title
+            .clone()
             .unwrap_or_else(|| self.path.file_name().map_or("scene".into(), |n| n.to_string_lossy().into_owned()))
     }
 
-    /// The cells of the scene's box mesh, or why the scene has none (mesh convergence needs a
-    /// `box` mesh).
+    /// The cells of the scene's structured mesh, or why the scene has none (mesh convergence
+    /// needs a mesh that refines by cell counts, the `box` mesh).
     pub fn box_cells(&self) -> Result<[usize; 3], String> {
-        let table: toml::Table = toml::from_str(&self.text).map_err(|e| e.message().to_string())?;
-        let mesh = table.get("mesh").and_then(|m| m.as_table()).ok_or("the scene has no [mesh] table")?;
-        let kind = mesh.get("type").and_then(|t| t.as_str()).unwrap_or("?");
-        if kind != "box" {
-            return Err(format!(
-                "mesh convergence needs a `box` mesh (refined by scaling `mesh.cells`); this scene's mesh is `{kind}`"
-            ));
-        }
-        let cells: Vec<usize> = mesh
-            .get("cells")
-            .and_then(|c| c.as_array())
-            .map(|a| a.iter().filter_map(|v| v.as_integer()).filter(|&v| v > 0).map(|v| v as usize).collect())
-            .unwrap_or_default();
-        <[usize; 3]>::try_from(cells).map_err(|_| "mesh.cells is not three positive integers".to_string())
+        self.scene.mesh.cells().ok_or_else(|| {
+            format!(
+                "mesh convergence needs a `box` mesh (refined by scaling `mesh.cells`); this scene's mesh is `{}`",
+                self.scene.mesh.name()
+            )
+        })
     }
 }
 

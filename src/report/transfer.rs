@@ -11,7 +11,7 @@
 //! centroids of the 8 children of one red refinement of each fine element: within 3 % of a
 //! 64-point sampling there.
 
-use saddle_core::stresses::energy_inner;
+use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{Lagrangian, StressField, Sym, TetMesh};
 use thiserror::Error;
 

@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests: scenes from the examples with edits.
 #![allow(dead_code)]
 
-use saddle::core::{P1P0Lagrangian, Scene, Solver};
+use saddle::core::{P1P0Lagrangian, Solver};
+use saddle::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// Path of a file in the repository.

@@ -32,7 +32,7 @@
 //! * `load`, `force`, `report` (b): [`AdmissibleDisplacements::load`] has one finite entry per
 //!   extra unknown. The kit then builds multipliers λ ≥ 0 that balance it, Hᵀλ = −f (the KKT
 //!   condition on the extras, SPEC §3; Σλ = F for the punch): the point closest to a random
-//!   λ̃ ≥ 0 on that set, found by the dense QP of `saddle_core::projection` (with a
+//!   λ̃ ≥ 0 on that set, found by the dense QP of `saddle_core::linalg::dense_qp` (with a
 //!   regularised least-squares fallback when its least-norm start is not ≥ 0). Without extras
 //!   any λ ≥ 0 will do. No such λ is a `load` failure: the discrete problem has no solution.
 //!   For this λ and random extras, a reported quantity `force` must equal Σλ (`force`); the
@@ -47,9 +47,10 @@
 //!
 //! Tolerances are relative: g is compared to 1e-9 × (max|c| + scale × the largest row norm).
 
+use crate::projection::{Projected, project_euclidean};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng, rngs::StdRng};
-use saddle_core::projection::{DenseQp, Projected, project_euclidean};
+use saddle_core::linalg::DenseQp;
 use saddle_core::{AdmissibleDisplacements, ConstraintRows, DofMap, TetMesh, contact_set};
 use thiserror::Error;
 

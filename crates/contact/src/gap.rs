@@ -10,7 +10,7 @@ use std::fmt::Debug;
 
 /// φ(x₁, x₂) ≥ 0: the initial distance between the contact face and the punch (SPEC §1).
 #[typetag::serde(tag = "type")]
-pub trait GapShape: Debug + Send + Sync {
+pub trait GapShape: Debug + Send + Sync + dyn_clone::DynClone {
     /// Checks the parameters; `path` is the table's path in the scene (`obstacle.gap`).
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
 
@@ -135,6 +135,8 @@ impl GapShape for Flat {
 pub(crate) fn validate_gap(gap: &dyn GapShape, path: &str) -> Result<(), ParameterError> {
     gap.validate(&join(path, "gap"))
 }
+
+dyn_clone::clone_trait_object!(GapShape);
 
 #[cfg(test)]
 mod tests {

@@ -52,7 +52,7 @@
 //! use serde::{Deserialize, Serialize};
 //!
 //! /// `type = "wall"`: u₃ ≥ −d on the zone.
-//! #[derive(Debug, Serialize, Deserialize)]
+//! #[derive(Clone, Debug, Serialize, Deserialize)]
 //! #[serde(deny_unknown_fields)]
 //! struct Wall {
 //!     d: f64,
@@ -109,6 +109,7 @@
 
 pub mod conformance;
 pub mod gap;
+pub mod projection;
 pub mod punch;
 pub mod zone;
 

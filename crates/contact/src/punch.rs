@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 /// zone = { all = [ { group = "zmin" }, { disc = { center = [0.0, 0.0], radius = 0.5 } } ] }
 /// gap = { type = "paraboloid", R = 5.0 }
 /// ```
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 #[allow(non_snake_case)]
 pub struct RigidPunch {
@@ -42,7 +42,7 @@ pub struct RigidPunch {
 /// `type = "rigid_punch_displacement"`: the punch of SPEC §1 moved by a prescribed U instead of
 /// a prescribed force; the rows are `g_i = u₃(x_i) + φ(x_i) − U ≥ 0`, there is no extra unknown
 /// and no load, and the contact force Σλ_i is an output.
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 #[allow(non_snake_case)]
 pub struct RigidPunchDisplacement {

@@ -43,7 +43,7 @@ enum Flaw {
 }
 
 /// A rigid punch with one deliberate flaw.
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct Broken {
     punch: RigidPunch,
     flaw: Flaw,
@@ -181,7 +181,7 @@ fn the_individual_checks_run_alone() {
 
 /// A punch that can also tilt about the x₂ axis: g_i = u₃ + φ − U − θ x₁, loaded by a force F
 /// and a moment M (H rows [−1, −x₁]; balance Σλ = F, Σλ x₁ = M).
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct TiltingPunch {
     force: f64,
     moment: f64,

@@ -1,65 +1,48 @@
 //! # saddle-core
 //!
-//! The core of *saddle*, a framework for variational inequalities in solid mechanics
-//! (`../shared/SPEC.md` is the mathematical contract; section numbers below refer to it).
+//! The core of *saddle*, a framework for variational inequalities in solid mechanics. The
+//! mathematics is in the repository's theory page, `docs/theory.md`; section numbers below
+//! (theory §N) refer to it.
 //!
-//! A problem is a saddle point of a Lagrangian **L** (§1, (1.11)) over a convex set **P** of
+//! A problem is a saddle point of a Lagrangian **L** (theory §1) over a convex set **P** of
 //! admissible generalised stresses (a yield surface, §2) and a convex set **K** of admissible
-//! displacements with its own extra unknowns (an obstacle, §1). The three are traits:
+//! displacements with its own extra unknowns (an obstacle, §1). The crate is arranged by
+//! concern, each layer using only those above it in this list:
 //!
-//! * [`AdmissibleStresses`] — P: projection onto D in the energy metric, the local law with its
-//!   consistent tangent, the energy ψ, membership, an optional cone description;
-//! * [`AdmissibleDisplacements`] — K: extra unknowns (the punch's U), a load term (F·V), and
-//!   its discretisation K_h as affine rows g(u, V) ≥ 0;
-//! * [`Lagrangian`] — L: the discrete problem every [`Solver`] consumes, able to evaluate the
-//!   energy J, the dual energy and the KKT residuals of any iterate.
+//! | module | concern | uses |
+//! |---|---|---|
+//! | [`error`] | parameter and scene errors that name the field and value | — |
+//! | [`linalg`] | sparse Cholesky, CSR, conjugate gradients, smoothed-aggregation multigrid: matrices and vectors only | `error` |
+//! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
+//! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`], **L** [`Lagrangian`], the [`Solver`] interface | `error`, `mesh` |
+//! | [`fem`] | discretisations of L: [`P1P0Lagrangian`]; loads as nodal forces | `error`, `mesh`, `problem` |
 //!
-//! [`P1P0Lagrangian`] assembles L from a tetrahedral [`TetMesh`] (P1 displacements, P0
-//! stresses, §3); [`Scene`] reads a whole problem from TOML, plugins chosen by `type`.
+//! Linear algebra knows no mesh and no mechanics (the multigrid takes its near-nullspace as
+//! vectors), and the contracts name no linear-algebra type: solvers (crate `saddle-solvers`)
+//! bring the two together. Scenes (TOML files) and output files live in the facade crate
+//! `saddle`.
 
-pub mod amg;
-pub mod box_mesh;
-pub mod csr;
-pub mod displacements;
-pub mod dofs;
-pub mod elasticity;
 pub mod error;
-#[cfg(feature = "gmsh")]
-pub mod gmsh;
-pub mod inline_mesh;
-pub mod lagrangian;
+pub mod fem;
 pub mod linalg;
-pub mod loads;
 pub mod mesh;
-pub mod output;
-pub mod p1p0;
-pub mod pcg;
-pub mod projection;
-pub mod region;
-pub mod scene;
-pub mod solver;
-pub mod stresses;
-pub mod tensor;
+pub mod problem;
 
-pub use amg::{AmgParams, DofLayout, LevelInfo, SmoothedAggregation};
-pub use box_mesh::{BoxMesh, Grading};
-pub use csr::Csr;
-pub use displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
-pub use dofs::{Component, Dirichlet, DofMap};
-pub use elasticity::Elasticity;
-pub use error::{AmgError, LinalgError, MeshError, ParameterError, PcgError, SceneError};
+pub use error::{MeshError, ParameterError, SceneError};
+pub use fem::Discretisation;
+pub use fem::loads::Load;
+pub use fem::p1p0::P1P0Lagrangian;
+pub use mesh::box_mesh::{BoxMesh, Grading};
+pub use mesh::dofs::{Component, Dirichlet, DofMap};
 #[cfg(feature = "gmsh")]
-pub use gmsh::{GmshImport, GmshMesh, PhysicalGroup};
-pub use inline_mesh::InlineMesh;
-pub use lagrangian::{Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace};
-pub use linalg::{SparseCholesky, SymmetricPattern};
-pub use loads::Load;
+pub use mesh::gmsh::{GmshImport, GmshMesh, PhysicalGroup};
+pub use mesh::inline::InlineMesh;
+pub use mesh::region::Region;
 pub use mesh::{MeshQuality, MeshSource, TetMesh};
-pub use output::{Summary, write_vtu};
-pub use p1p0::P1P0Lagrangian;
-pub use pcg::{Identity, Jacobi, Pcg, PcgReport, Preconditioner};
-pub use region::Region;
-pub use scene::Scene;
-pub use solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
-pub use stresses::{AdmissibleStresses, ConeDescription, SocBlock};
-pub use tensor::{Sym, SymOp};
+pub use problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
+pub use problem::elasticity::Elasticity;
+pub use problem::lagrangian::{Iterate, KktResiduals, Lagrangian, Material, RigidBodyModes, StressField, Workspace};
+pub use problem::pattern::SymmetricPattern;
+pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
+pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
+pub use problem::tensor::{Sym, SymOp};

@@ -20,11 +20,10 @@
 //! tangent (the fixed dofs are handled by the preconditioner as a diagonal block), to a
 //! relative tolerance the caller sets per step (inexact Newton).
 
+use crate::linear::{InSolver, lower, near_null_space};
 use nalgebra::{DMatrix, DVector};
-use saddle_core::{
-    AmgParams, ConstraintRows, Csr, Lagrangian, Material, Pcg, Preconditioner, SmoothedAggregation, SolveError,
-    SparseCholesky, SymmetricPattern,
-};
+use saddle_core::linalg::{AmgParams, Csr, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
+use saddle_core::{ConstraintRows, Lagrangian, Material, SolveError, SymmetricPattern};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
 
@@ -195,6 +194,8 @@ pub struct Step {
 /// The linearised problem for one active set, and the solver of its systems.
 pub struct ActiveSetSystem {
     slaves: SlaveRows,
+    /// The solver this system serves, for error messages.
+    solver: String,
     transpose: TransposeIndex,
     /// How the systems are solved.
     pub backend: LinearBackend,
@@ -217,13 +218,13 @@ impl ActiveSetSystem {
         let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
         let backend = match linear.resolve(l.n_dofs()) {
             LinearSolver::Amg => {
-                let layout = l.dof_layout().ok_or_else(|| SolveError::Unsupported {
+                let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
                     solver: solver.into(),
                     message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
                 })?;
                 let c = l.elasticity().stiffness_matrix();
-                let k = Csr::from_symmetric_lower(l.pattern(), &l.stiffness(Material::Uniform(&c)));
-                let amg = SmoothedAggregation::new(&k, &layout, &AmgParams::default()).map_err(|e| {
+                let k = Csr::from_symmetric_lower(lower(l.pattern()), &l.stiffness(Material::Uniform(&c)));
+                let amg = SmoothedAggregation::new(&k, &near_null, &AmgParams::default()).map_err(|e| {
                     SolveError::Unsupported { solver: solver.into(), message: format!("multigrid set-up: {e}") }
                 })?;
                 LinearBackend::Amg(Box::new(IterativeSolve {
@@ -240,10 +241,13 @@ impl ActiveSetSystem {
                     previous: Vec::new(),
                 }))
             }
-            _ => LinearBackend::Direct(Box::new(SparseCholesky::analyse(l.pattern(), "tangent stiffness")?)),
+            _ => LinearBackend::Direct(Box::new(
+                SparseCholesky::analyse(lower(l.pattern()), "tangent stiffness").in_solver(solver)?,
+            )),
         };
         Ok(Self {
             slaves,
+            solver: solver.to_string(),
             transpose: TransposeIndex::new(l.pattern()),
             backend,
             work: vec![0.0; l.pattern().nnz()],
@@ -298,7 +302,7 @@ impl ActiveSetSystem {
             }
         }
         if let LinearBackend::Direct(chol) = &mut self.backend {
-            chol.factorise(p, &self.work)?;
+            chol.factorise(&self.work).in_solver(&self.solver)?;
             self.factorisations += 1;
         }
         // prescribed values δ at the fixed dofs: column 0 for the gaps, column 1 + k for dV_k
@@ -340,7 +344,7 @@ impl ActiveSetSystem {
                     iterations,
                     unconverged,
                 } = &mut **it;
-                a.assign_symmetric_lower(p, &self.work, fill);
+                a.assign_symmetric_lower(lower(p), &self.work, fill);
                 let fixed: Vec<(usize, f64)> = (0..nr)
                     .filter(|&i| active[i])
                     .map(|i| (self.slaves.dof[i], self.work[cp[self.slaves.dof[i]]]))

@@ -11,8 +11,9 @@
 //! `w = z + Y μ`, `V₊ = Z₊ + m₊⁻¹ H₊ᵀ μ`, `V₀ = y`.
 
 use nalgebra::{DMatrix, DVector};
-use saddle_core::projection::{DenseQp, QpError};
-use saddle_core::{ConstraintRows, SolveError, SparseCholesky};
+use saddle_core::linalg::SparseCholesky;
+use saddle_core::linalg::{DenseQp, QpError};
+use saddle_core::{ConstraintRows, SolveError};
 
 /// Above this many bytes M⁻¹Gᵀ is not kept; each projection then costs one more solve.
 const MAX_STORED_BYTES: usize = 512 << 20;

@@ -11,6 +11,7 @@
 
 pub mod active_set;
 pub mod kh_projection;
+pub mod linear;
 pub mod newton;
 pub mod penalty;
 mod residual;

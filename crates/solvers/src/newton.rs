@@ -26,11 +26,13 @@
 
 use crate::active_set::{ActiveSetSystem, LinearSolver};
 use crate::kh_projection::MetricProjection;
+use crate::linear::InSolver;
 use crate::residual;
 use saddle_core::error::{ParameterError, check};
-use saddle_core::lagrangian::{Iterate, Lagrangian, StressField, Workspace, max_abs};
-use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
-use saddle_core::{Material, SparseCholesky, SymOp};
+use saddle_core::linalg::SparseCholesky;
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, StressField, Workspace, max_abs};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::{Material, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -306,7 +308,7 @@ impl Newton {
 fn elastic_contact_start(l: &dyn Lagrangian, chol: &mut SparseCholesky) -> Result<(Start, usize), SolveError> {
     let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.constraints().n_rows());
     let c = l.elasticity().stiffness_matrix();
-    chol.factorise(l.pattern(), &l.stiffness(Material::Uniform(&c)))?;
+    chol.factorise(&l.stiffness(Material::Uniform(&c))).in_solver("newton")?;
     // z = K⁻¹f_u (zero without loads on u)
     let mut z = vec![0.0; n];
     let f_u = l.nodal_load();

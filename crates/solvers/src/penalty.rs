@@ -94,13 +94,15 @@
 //! relative to ‖f‖), `mu`, and `condition_estimate` (see [`PenaltySystem`]).
 
 use crate::active_set::SlaveRows;
+use crate::linear::{InSolver, lower};
 use crate::residual;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use saddle_core::error::{ParameterError, check};
-use saddle_core::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace, max_abs, norm};
-use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
-use saddle_core::{SparseCholesky, Sym, SymOp};
+use saddle_core::linalg::SparseCholesky;
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace, max_abs, norm};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::{Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -265,7 +267,7 @@ impl PenaltySystem {
             k,
             k_v,
             c_el,
-            chol: SparseCholesky::analyse(l.pattern(), "penalty Hessian")?,
+            chol: SparseCholesky::analyse(lower(l.pattern()), "penalty Hessian").in_solver("penalty")?,
             hess: vec![0.0; kprime.len()],
             kprime,
             cols: vec![0.0; n * (1 + ne)],
@@ -367,7 +369,7 @@ impl PenaltySystem {
             (lo.min(x), hi.max(x))
         });
         self.condition_estimate = dmax / dmin;
-        self.chol.factorise(p, &self.hess)?;
+        self.chol.factorise(&self.hess).in_solver("penalty")?;
         self.factorisations += 1;
         self.chol.solve_columns(&mut self.kcols, nc);
         self.solves += nc;

@@ -45,10 +45,10 @@ use clarabel::solver::{
     ZeroConeT,
 };
 use saddle_core::error::{ParameterError, check, join};
-use saddle_core::lagrangian::{Iterate, Lagrangian, StressField, Workspace};
-use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
-use saddle_core::stresses::{MAX_HARDENING_DIM, SocBlock};
-use saddle_core::tensor::Sym;
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, StressField, Workspace};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::problem::stresses::{MAX_HARDENING_DIM, SocBlock};
+use saddle_core::problem::tensor::Sym;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

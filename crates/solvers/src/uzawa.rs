@@ -17,11 +17,13 @@
 //! iterate, never on the step length; divergence and NaN are detected and reported.
 
 use crate::kh_projection::MetricProjection;
+use crate::linear::{InSolver, lower};
 use crate::residual;
+use saddle_core::SymOp;
 use saddle_core::error::{ParameterError, check};
-use saddle_core::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace};
-use saddle_core::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
-use saddle_core::{SparseCholesky, SymOp};
+use saddle_core::linalg::SparseCholesky;
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -89,8 +91,8 @@ impl Solver for Uzawa {
         let m_values = timer.time("assembly", || l.stiffness(Material::Uniform(&metric)));
         monitor.phase("factorisation");
         let mut chol = timer.time("factorisation", || -> Result<_, SolveError> {
-            let mut chol = SparseCholesky::analyse(l.pattern(), "Uzawa metric")?;
-            chol.factorise(l.pattern(), &m_values)?;
+            let mut chol = SparseCholesky::analyse(lower(l.pattern()), "Uzawa metric").in_solver("uzawa")?;
+            chol.factorise(&m_values).in_solver("uzawa")?;
             Ok(chol)
         })?;
         drop(m_values);

@@ -4,10 +4,10 @@
 //! the equality duals, invariance to units, perfect plasticity, and parameter errors.
 
 use saddle_contact::{Flat, RigidPunch};
-use saddle_core::elasticity::Elasticity;
 use saddle_core::error::ParameterError;
-use saddle_core::stresses::AdmissibleStresses;
-use saddle_core::tensor::{Sym, SymOp, deviator};
+use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::stresses::AdmissibleStresses;
+use saddle_core::problem::tensor::{Sym, SymOp, deviator};
 use saddle_core::{
     BoxMesh, Dirichlet, Lagrangian, P1P0Lagrangian, Region, Silent, Solution, SolveError, Solver, StopReason,
     StressField, Workspace, contact_set,
@@ -214,7 +214,7 @@ fn perfect_plasticity_fixes_the_hardening_variable() {
 }
 
 /// Von Mises without its cone description.
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct NoCone(VonMises);
 
 #[typetag::serde(name = "test_von_mises_without_cone")]

@@ -29,7 +29,7 @@
 //! # Metric and tolerances
 //!
 //! Projection checks use the energy metric `[σ̂, τ̂] = Aσ:τ + q·H⁻¹r` of the plugin
-//! ([`saddle_core::stresses::energy_inner`]). The metric may be infinite in some directions
+//! ([`saddle_core::problem::stresses::energy_inner`]). The metric may be infinite in some directions
 //! (h = 0: ξ is frozen): pairs at infinite distance are not compared, and tolerances are built
 //! from the finite part of the norms only. Exact identities are checked to
 //! [`KitConfig::exact_tol`] relative to the magnitudes involved (plus a floor at the stress
@@ -39,9 +39,9 @@
 
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use saddle_core::elasticity::Elasticity;
-use saddle_core::stresses::{AdmissibleStresses, MAX_HARDENING_DIM, energy_inner};
-use saddle_core::tensor::{Sym, SymOp, deviator, identity};
+use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM, energy_inner};
+use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity};
 use thiserror::Error;
 
 /// The names of the checks, as reported in [`KitFailure::check`].
@@ -726,7 +726,7 @@ mod tests {
     use super::*;
     use crate::VonMises;
     use saddle_core::error::ParameterError;
-    use saddle_core::stresses::ConeDescription;
+    use saddle_core::problem::stresses::ConeDescription;
     use serde::{Deserialize, Serialize};
 
     /// Ways to break von Mises, each aimed at one check.
@@ -775,7 +775,7 @@ mod tests {
             self.vm.contains(sigma, q, tol)
         }
         fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-            let mean = identity() * (saddle_core::tensor::trace(sigma) / 3.0);
+            let mean = identity() * (saddle_core::problem::tensor::trace(sigma) / 3.0);
             match self.how {
                 Breakage::WrongMetric => VonMises::new(self.vm.k0, 10.0 * self.vm.h).project(law, sigma, q),
                 Breakage::Overshoots => {

@@ -1,9 +1,9 @@
 //! No yield: D is the whole space of stresses (SPEC §7, the Hertz case with yield switched off).
 
-use saddle_core::elasticity::Elasticity;
 use saddle_core::error::ParameterError;
-use saddle_core::stresses::{AdmissibleStresses, ConeDescription};
-use saddle_core::tensor::{Sym, SymOp};
+use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription};
+use saddle_core::problem::tensor::{Sym, SymOp};
 use serde::{Deserialize, Serialize};
 
 /// A linear elastic body: D = the whole space, no hardening variables, `[σ̂, τ̂] = Aσ:τ`.

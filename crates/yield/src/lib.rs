@@ -4,7 +4,7 @@
 //! ([`AdmissibleStresses`]) — and the conformance kit every implementation must pass.
 //!
 //! A generalised stress is σ̂ = (σ, q): a stress σ (Mandel vector, see
-//! [`saddle_core::tensor`]) and `hardening_dim()` hardening variables q. P is the set of
+//! [`saddle_core::problem::tensor`]) and `hardening_dim()` hardening variables q. P is the set of
 //! fields with σ̂(x) ∈ D at every point, for a closed convex set D, and the energy inner
 //! product is `[σ̂, τ̂] = Aσ:τ + q·H⁻¹r`. Everything a solver needs follows from the
 //! projection onto D in that metric (SPEC §2): the local law σ̂ = P_D(Cε, 0), its derivative
@@ -26,13 +26,13 @@
 //!
 //! ```
 //! use saddle_core::error::{ParameterError, check};
-//! use saddle_core::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+//! use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
 //! use saddle_core::{AdmissibleStresses, Elasticity};
 //! use saddle_yield::conformance::{KitConfig, check_all};
 //! use serde::{Deserialize, Serialize};
 //!
 //! /// D = {|dev σ| ≤ k}: perfect plasticity with no hardening variable.
-//! #[derive(Debug, Serialize, Deserialize)]
+//! #[derive(Clone, Debug, Serialize, Deserialize)]
 //! #[serde(deny_unknown_fields)]
 //! struct PerfectMises {
 //!     k: f64,
@@ -100,5 +100,5 @@ mod elastic;
 mod von_mises;
 
 pub use elastic::Elastic;
-pub use saddle_core::stresses::AdmissibleStresses;
+pub use saddle_core::problem::stresses::AdmissibleStresses;
 pub use von_mises::VonMises;

@@ -16,10 +16,10 @@
 //! For ξ = 0 (the local law) `t₀ = k₀ ≥ 0`, the apex is never reached and
 //! `t = (h r + 2G k₀)/(h + 2G)` is exactly SPEC §2.
 
-use saddle_core::elasticity::Elasticity;
 use saddle_core::error::{ParameterError, check};
-use saddle_core::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
-use saddle_core::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
+use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
 /// Von Mises yield with linear isotropic hardening (SPEC §1): `D = {|dev σ| ≤ k₀ + ξ}`,

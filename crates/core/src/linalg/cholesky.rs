@@ -1,8 +1,10 @@
-//! Sparse symmetric matrices stored as their lower triangle, and a sparse Cholesky
-//! factorisation split into the symbolic analysis (AMD ordering, supernodal structure: once per
-//! sparsity pattern) and the numeric factorisation (once per set of values) — faer underneath.
+//! Sparse Cholesky factorisation of a symmetric positive definite matrix given by its lower
+//! triangle in compressed columns, split into the symbolic analysis (AMD ordering, supernodal
+//! structure: once per sparsity pattern) and the numeric factorisation (once per set of values)
+//! — faer underneath.
 
-use crate::error::LinalgError;
+use super::csr::LowerCsc;
+use super::error::LinalgError;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
@@ -11,75 +13,16 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
-/// The sparsity pattern of a symmetric matrix: its lower triangle in compressed columns, rows
-/// sorted in each column, the diagonal first.
-#[derive(Clone, Debug)]
-pub struct SymmetricPattern {
-    symbolic: SymbolicSparseColMat<usize>,
-}
-
-impl SymmetricPattern {
-    /// A pattern from column pointers and sorted row indices (rows ≥ column in each column).
-    pub fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Self {
-        debug_assert!((0..n).all(|j| row_idx[col_ptr[j]..col_ptr[j + 1]].first() == Some(&j)));
-        Self { symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx) }
-    }
-
-    /// Order of the matrix.
-    pub fn n(&self) -> usize {
-        self.symbolic.nrows()
-    }
-
-    /// Number of stored entries (lower triangle).
-    pub fn nnz(&self) -> usize {
-        self.symbolic.row_idx().len()
-    }
-
-    /// Column pointers.
-    pub fn col_ptr(&self) -> &[usize] {
-        self.symbolic.col_ptr()
-    }
-
-    /// Row indices.
-    pub fn row_idx(&self) -> &[usize] {
-        self.symbolic.row_idx()
-    }
-
-    /// y = A x for the symmetric matrix with these `values`.
-    pub fn matvec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
-        let (cp, ri) = (self.col_ptr(), self.row_idx());
-        y.iter_mut().for_each(|v| *v = 0.0);
-        for j in 0..self.n() {
-            let xj = x[j];
-            let mut acc = 0.0;
-            for k in cp[j]..cp[j + 1] {
-                let i = ri[k];
-                let a = values[k];
-                if i == j {
-                    acc += a * xj;
-                } else {
-                    y[i] += a * xj;
-                    acc += a * x[i];
-                }
-            }
-            y[j] += acc;
-        }
-    }
-
-    /// The diagonal entries.
-    pub fn diagonal(&self, values: &[f64]) -> Vec<f64> {
-        self.col_ptr()[..self.n()].iter().map(|&k| values[k]).collect()
-    }
-
-    fn faer_ref<'a>(&'a self, values: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
-        SparseColMatRef::new(self.symbolic.as_ref(), values)
-    }
-}
+/// Above this order the factorisation runs on all threads (measured: slower below about 20k
+/// unknowns, where the supernodes are too small to share).
+const PARALLEL_MIN_ORDER: usize = 20_000;
 
 /// Sparse Cholesky A = LLᵀ: the symbolic analysis is done once for a pattern; `factorise` is
 /// called for each new set of values and `solve` reuses the factor as often as needed.
 pub struct SparseCholesky {
     what: String,
+    /// The analysed pattern (lower triangle, compressed columns).
+    pattern: SymbolicSparseColMat<usize>,
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     scratch: MemBuffer,
@@ -99,21 +42,24 @@ impl std::fmt::Debug for SparseCholesky {
 }
 
 impl SparseCholesky {
-    /// Symbolic analysis of `pattern` (AMD fill-reducing ordering). `what` names the matrix in
-    /// error messages ("elastic stiffness", "tangent").
-    pub fn analyse(pattern: &SymmetricPattern, what: &str) -> Result<Self, LinalgError> {
+    /// Symbolic analysis (AMD fill-reducing ordering) of the lower-triangle pattern. `what`
+    /// names the matrix in error messages ("elastic stiffness", "tangent").
+    pub fn analyse(pattern: LowerCsc<'_>, what: &str) -> Result<Self, LinalgError> {
+        let n = pattern.n;
+        let pattern = SymbolicSparseColMat::new_checked(n, n, pattern.col_ptr.to_vec(), None, pattern.row_idx.to_vec());
         let symbolic = factorize_symbolic_cholesky(
-            pattern.symbolic.as_ref(),
+            pattern.as_ref(),
             Side::Lower,
             SymmetricOrdering::Amd,
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| LinalgError::Backend { what: what.into(), message: format!("{e:?}") })?;
         // Two threads pay off only on large factors (measured: slower below ~20k unknowns).
-        let par = if pattern.n() > 20_000 { Par::rayon(0) } else { Par::Seq };
+        let par = if n > PARALLEL_MIN_ORDER { Par::rayon(0) } else { Par::Seq };
         let l_values = vec![0.0; symbolic.len_val()];
         let mut this = Self {
             what: what.into(),
+            pattern,
             symbolic,
             l_values,
             scratch: MemBuffer::new(StackReq::EMPTY),
@@ -147,9 +93,9 @@ impl SparseCholesky {
         self.l_values.len()
     }
 
-    /// Numeric factorisation of the matrix with `values` on the analysed pattern.
-    pub fn factorise(&mut self, pattern: &SymmetricPattern, values: &[f64]) -> Result<(), LinalgError> {
-        assert_eq!(pattern.n(), self.n(), "pattern does not match the analysed one");
+    /// Numeric factorisation of the matrix with `values` (one per entry of the analysed pattern).
+    pub fn factorise(&mut self, values: &[f64]) -> Result<(), LinalgError> {
+        assert_eq!(values.len(), self.pattern.row_idx().len(), "values do not match the analysed pattern");
         if values.iter().any(|v| !v.is_finite()) {
             self.factorised = false;
             return Err(LinalgError::Backend {
@@ -160,7 +106,7 @@ impl SparseCholesky {
         let stack = MemStack::new(&mut self.scratch);
         let result = self.symbolic.factorize_numeric_llt::<f64>(
             &mut self.l_values,
-            pattern.faer_ref(values),
+            SparseColMatRef::new(self.pattern.as_ref(), values),
             Side::Lower,
             LltRegularization::default(),
             self.par,
@@ -192,8 +138,8 @@ impl SparseCholesky {
 mod tests {
     use super::*;
 
-    /// The 1D Laplacian tridiag(−1, 2, −1) of order n, lower triangle.
-    fn laplacian(n: usize) -> (SymmetricPattern, Vec<f64>) {
+    /// The 1D Laplacian tridiag(−1, 2, −1) of order n, lower triangle: (col_ptr, row_idx, values).
+    fn laplacian(n: usize) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
         let mut cp = vec![0];
         let mut ri = vec![];
         let mut v = vec![];
@@ -206,38 +152,45 @@ mod tests {
             }
             cp.push(ri.len());
         }
-        (SymmetricPattern::new(n, cp, ri), v)
+        (cp, ri, v)
+    }
+
+    /// y = A x for the tridiagonal matrix with diagonal d and off-diagonal o (independent of
+    /// the compressed storage).
+    fn tridiag_times(d: f64, o: f64, x: &[f64]) -> Vec<f64> {
+        let n = x.len();
+        (0..n)
+            .map(|i| d * x[i] + if i > 0 { o * x[i - 1] } else { 0.0 } + if i + 1 < n { o * x[i + 1] } else { 0.0 })
+            .collect()
     }
 
     #[test]
     fn cholesky_solves_and_refactorises() {
         let n = 50;
-        let (p, v) = laplacian(n);
-        let mut chol = SparseCholesky::analyse(&p, "test").unwrap();
-        chol.factorise(&p, &v).unwrap();
+        let (cp, ri, v) = laplacian(n);
+        let mut chol = SparseCholesky::analyse(LowerCsc::new(n, &cp, &ri), "test").unwrap();
+        chol.factorise(&v).unwrap();
         let x_true: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).sin()).collect();
-        let mut b = vec![0.0; n];
-        p.matvec(&v, &x_true, &mut b);
+        let mut b = tridiag_times(2.0, -1.0, &x_true);
         chol.solve(&mut b);
         let err = b.iter().zip(&x_true).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         assert!(err < 1e-12, "{err}");
         // new values on the same pattern, two right-hand sides at once
         let v2: Vec<f64> = v.iter().map(|a| 3.0 * a).collect();
-        chol.factorise(&p, &v2).unwrap();
-        let mut rhs = vec![0.0; 2 * n];
-        p.matvec(&v2, &x_true, &mut rhs[..n]);
-        p.matvec(&v2, &x_true, &mut rhs[n..]);
+        chol.factorise(&v2).unwrap();
+        let mut rhs = tridiag_times(6.0, -3.0, &x_true);
+        rhs.extend(tridiag_times(6.0, -3.0, &x_true));
         chol.solve_columns(&mut rhs, 2);
         assert!(rhs.iter().zip(x_true.iter().chain(&x_true)).all(|(a, b)| (a - b).abs() < 1e-12));
     }
 
     #[test]
     fn indefinite_matrix_is_an_error_not_a_panic() {
-        let (p, mut v) = laplacian(5);
+        let (cp, ri, mut v) = laplacian(5);
         v[0] = -1.0;
-        let mut chol = SparseCholesky::analyse(&p, "stiffness").unwrap();
-        let e = chol.factorise(&p, &v).unwrap_err();
+        let mut chol = SparseCholesky::analyse(LowerCsc::new(5, &cp, &ri), "stiffness").unwrap();
+        let e = chol.factorise(&v).unwrap_err();
         assert!(matches!(e, LinalgError::NotPositiveDefinite { .. }));
-        assert!(e.to_string().contains("rigid-body"));
+        assert!(e.to_string().contains("stiffness"));
     }
 }

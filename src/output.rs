@@ -1,11 +1,8 @@
 //! Output of a solve: `summary.json` (the numbers scripts read) and `solution.vtu` (fields for
 //! ParaView: u, σ, von Mises stress, ξ, plastic flag, contact force).
 
-use crate::lagrangian::{KktResiduals, Lagrangian, Workspace};
-use crate::mesh::MeshQuality;
-use crate::p1p0::P1P0Lagrangian;
-use crate::solver::{Solution, StopReason};
-use crate::tensor::{to_vtk, von_mises};
+use saddle_core::problem::tensor::{to_vtk, von_mises};
+use saddle_core::{Discretisation, KktResiduals, MeshQuality, Solution, StopReason, Workspace};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -74,11 +71,12 @@ pub struct Summary {
 
 impl Summary {
     /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch.
-    pub fn new(l: &P1P0Lagrangian, sol: &Solution, title: Option<String>) -> Self {
+    pub fn new(l: &dyn Discretisation, sol: &Solution, title: Option<String>) -> Self {
         let mut ws = Workspace::new(l);
         let kkt = l.kkt(&sol.iterate(), &mut ws);
         let j = l.energy(&sol.u, &sol.extras, &mut ws);
-        let contact = l.contact_report(sol);
+        // the obstacle reports from its own rows, extras and multipliers
+        let contact = l.obstacle().map(|k| k.report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda));
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
         let mesh_quality = l.mesh().quality();
@@ -134,13 +132,13 @@ impl Summary {
 /// Point data: `displacement`, `contact_force` (Gᵀλ at the nodes). Cell data: `stress`
 /// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises`, `xi` (hardening variables),
 /// `plastic` (0/1).
-pub fn write_vtu(path: &Path, l: &P1P0Lagrangian, sol: &Solution) -> std::io::Result<()> {
+pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io::Result<()> {
     let mesh = l.mesh();
-    let disp = l.nodal_displacements(&sol.u);
+    let disp = l.nodal_vectors(&sol.u);
     let mut gu = vec![0.0; l.n_dofs()];
     let mut gv = vec![0.0; l.n_extras()];
     l.constraints().add_transpose(&sol.lambda, &mut gu, &mut gv);
-    let force = l.dofs().nodal(&gu);
+    let force = l.nodal_vectors(&gu);
     let mut arrays: Vec<(&str, &str, usize, Vec<u8>)> = Vec::new(); // (section, name, components, bytes)
     let f64s = |it: &mut dyn Iterator<Item = f64>| it.flat_map(f64::to_le_bytes).collect::<Vec<u8>>();
     arrays.push(("point", "displacement", 3, f64s(&mut disp.iter().flatten().copied())));

@@ -2,7 +2,6 @@
 //! (matrix–vector products in parallel over rows, transposes, and the sparse products of an
 //! algebraic multigrid set-up).
 
-use crate::linalg::SymmetricPattern;
 use rayon::prelude::*;
 
 /// A sparse matrix in compressed rows; column indices sorted within each row.
@@ -20,6 +19,31 @@ pub struct Csr {
     pub val: Vec<f64>,
 }
 
+/// The lower triangle of a symmetric matrix in compressed columns, borrowed: its order, the
+/// column pointers and the sorted row indices (the diagonal first in each column).
+#[derive(Clone, Copy, Debug)]
+pub struct LowerCsc<'a> {
+    /// Order of the matrix.
+    pub n: usize,
+    /// Column pointers, `n + 1` of them.
+    pub col_ptr: &'a [usize],
+    /// Row indices (≥ the column) of each column, sorted.
+    pub row_idx: &'a [usize],
+}
+
+impl<'a> LowerCsc<'a> {
+    /// The pattern of order `n` with these column pointers and row indices.
+    pub fn new(n: usize, col_ptr: &'a [usize], row_idx: &'a [usize]) -> Self {
+        assert_eq!(col_ptr.len(), n + 1, "one column pointer per column and one past the end");
+        Self { n, col_ptr, row_idx }
+    }
+
+    /// Stored entries.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+}
+
 /// Rows per parallel task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: usize = 2048;
 
@@ -31,15 +55,15 @@ const PRODUCT_CHUNK: usize = 256;
 /// receives (i, j) for j ≤ i in increasing j, then its own column's (i, i′) for i′ > i in
 /// increasing i′ — sorted without a sort.
 fn scatter_lower(
-    pattern: &SymmetricPattern,
+    pattern: LowerCsc<'_>,
     values: &[f64],
     ptr: &[usize],
     fill: &mut [usize],
     mut put: impl FnMut(usize, u32, f64),
 ) {
-    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-    fill.copy_from_slice(&ptr[..pattern.n()]);
-    for j in 0..pattern.n() {
+    let (cp, ri) = (pattern.col_ptr, pattern.row_idx);
+    fill.copy_from_slice(&ptr[..pattern.n]);
+    for j in 0..pattern.n {
         for k in cp[j]..cp[j + 1] {
             let i = ri[k];
             put(fill[i], j as u32, values[k]);
@@ -54,9 +78,9 @@ fn scatter_lower(
 
 impl Csr {
     /// The full symmetric matrix whose lower triangle is `values` on `pattern`.
-    pub fn from_symmetric_lower(pattern: &SymmetricPattern, values: &[f64]) -> Self {
-        let n = pattern.n();
-        let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    pub fn from_symmetric_lower(pattern: LowerCsc<'_>, values: &[f64]) -> Self {
+        let n = pattern.n;
+        let (cp, ri) = (pattern.col_ptr, pattern.row_idx);
         let mut len = vec![0usize; n];
         for j in 0..n {
             for &i in &ri[cp[j]..cp[j + 1]] {
@@ -81,8 +105,8 @@ impl Csr {
 
     /// New `values` of the lower triangle on the `pattern` this matrix was built from
     /// ([`Csr::from_symmetric_lower`]), without touching the structure; `fill` is scratch.
-    pub fn assign_symmetric_lower(&mut self, pattern: &SymmetricPattern, values: &[f64], fill: &mut Vec<usize>) {
-        assert_eq!(pattern.n(), self.nrows, "not the pattern this matrix was built from");
+    pub fn assign_symmetric_lower(&mut self, pattern: LowerCsc<'_>, values: &[f64], fill: &mut Vec<usize>) {
+        assert_eq!(pattern.n, self.nrows, "not the pattern this matrix was built from");
         fill.resize(self.nrows, 0);
         let val = &mut self.val;
         scatter_lower(pattern, values, &self.ptr, fill, |q, _, v| val[q] = v);
@@ -152,10 +176,10 @@ impl Csr {
             .collect()
     }
 
-    /// The lower triangle of a (numerically) symmetric matrix as a [`SymmetricPattern`] and its
-    /// values, for [`crate::SparseCholesky`]: column j of the lower triangle is row j's entries at
-    /// columns ≥ j. Every row must store its diagonal.
-    pub fn to_symmetric_lower(&self) -> (SymmetricPattern, Vec<f64>) {
+    /// The lower triangle of a (numerically) symmetric matrix as column pointers, row indices
+    /// and values (see [`LowerCsc`]), for [`super::SparseCholesky`]: column j of the lower
+    /// triangle is row j's entries at columns ≥ j. Every row must store its diagonal.
+    pub fn to_symmetric_lower(&self) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
         assert_eq!(self.nrows, self.ncols, "a symmetric matrix is square");
         let mut col_ptr = Vec::with_capacity(self.nrows + 1);
         col_ptr.push(0);
@@ -169,7 +193,7 @@ impl Csr {
             }
             col_ptr.push(row_idx.len());
         }
-        (SymmetricPattern::new(self.nrows, col_ptr, row_idx), values)
+        (col_ptr, row_idx, values)
     }
 
     /// α A + β B (same shape; the union of the two patterns, sorted).
@@ -320,14 +344,15 @@ mod tests {
     #[test]
     fn symmetric_lower_becomes_full_and_sorted() {
         // [[4, 1, 0], [1, 5, 2], [0, 2, 6]]
-        let p = SymmetricPattern::new(3, vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2]);
-        let a = Csr::from_symmetric_lower(&p, &[4.0, 1.0, 5.0, 2.0, 6.0]);
+        let (cp, ri) = ([0, 2, 4, 5], [0, 1, 1, 2, 2]);
+        let p = LowerCsc::new(3, &cp, &ri);
+        let a = Csr::from_symmetric_lower(p, &[4.0, 1.0, 5.0, 2.0, 6.0]);
         assert_eq!(dense(&a), vec![vec![4.0, 1.0, 0.0], vec![1.0, 5.0, 2.0], vec![0.0, 2.0, 6.0]]);
         assert!((0..3).all(|r| a.idx[a.ptr[r]..a.ptr[r + 1]].windows(2).all(|w| w[0] < w[1])));
         assert_eq!(a.diagonal(), vec![4.0, 5.0, 6.0]);
         // new values on the same pattern, structure kept
         let mut b = a.clone();
-        b.assign_symmetric_lower(&p, &[7.0, -1.0, 8.0, 3.0, 9.0], &mut Vec::new());
+        b.assign_symmetric_lower(p, &[7.0, -1.0, 8.0, 3.0, 9.0], &mut Vec::new());
         assert_eq!((&b.ptr, &b.idx), (&a.ptr, &a.idx));
         assert_eq!(dense(&b), vec![vec![7.0, -1.0, 0.0], vec![-1.0, 8.0, 3.0], vec![0.0, 3.0, 9.0]]);
     }
@@ -396,13 +421,14 @@ mod tests {
 
     #[test]
     fn lower_triangle_round_trip() {
-        let p = SymmetricPattern::new(3, vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2]);
+        let (cp, ri) = ([0, 2, 4, 5], [0, 1, 1, 2, 2]);
+        let p = LowerCsc::new(3, &cp, &ri);
         let v = [4.0, 1.0, 5.0, 2.0, 6.0];
-        let (q, w) = Csr::from_symmetric_lower(&p, &v).to_symmetric_lower();
-        assert_eq!((q.col_ptr(), q.row_idx(), w.as_slice()), (p.col_ptr(), p.row_idx(), &v[..]));
-        let (mut y1, mut y2) = (vec![0.0; 3], vec![0.0; 3]);
-        p.matvec(&v, &[1.0, 2.0, 3.0], &mut y1);
-        Csr::from_symmetric_lower(&p, &v).spmv(&[1.0, 2.0, 3.0], &mut y2);
-        assert_eq!(y1, y2);
+        let (q, r, w) = Csr::from_symmetric_lower(p, &v).to_symmetric_lower();
+        assert_eq!((q.as_slice(), r.as_slice(), w.as_slice()), (&cp[..], &ri[..], &v[..]));
+        // [[4, 1, 0], [1, 5, 2], [0, 2, 6]] · (1, 2, 3)
+        let mut y = vec![0.0; 3];
+        Csr::from_symmetric_lower(p, &v).spmv(&[1.0, 2.0, 3.0], &mut y);
+        assert_eq!(y, vec![6.0, 17.0, 22.0]);
     }
 }

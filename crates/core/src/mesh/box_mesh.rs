@@ -160,6 +160,14 @@ fn graded_axis(a: f64, b: f64, n: usize, c: f64, ratio: f64) -> Vec<f64> {
 
 #[typetag::serde(name = "box")]
 impl MeshSource for BoxMesh {
+    fn cells(&self) -> Option<[usize; 3]> {
+        Some(self.cells)
+    }
+
+    fn with_cells(&self, cells: [usize; 3]) -> Option<Box<dyn MeshSource>> {
+        Some(Box::new(Self { cells, ..self.clone() }))
+    }
+
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::finite_all(path, "min", &self.min)?;
         check::finite_all(path, "max", &self.max)?;

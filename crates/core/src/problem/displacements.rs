@@ -6,9 +6,9 @@
 //! one per contact node (SPEC §3). Rows are exactly what solvers need: projecting onto K_h in a
 //! metric (Uzawa), linearising it (it is its own linearisation), penalising its violation.
 
-use crate::dofs::DofMap;
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
+use crate::mesh::dofs::DofMap;
 use std::fmt::Debug;
 
 /// K_h as affine rows g(u, V) = G u + H V + c ≥ 0, G sparse (CSR), H dense.
@@ -121,7 +121,7 @@ impl ContactReport {
 /// K: admissible displacements with extra unknowns and a load term, chosen by `type` in the
 /// `[obstacle]` table of a scene.
 #[typetag::serde(tag = "type")]
-pub trait AdmissibleDisplacements: Debug + Send + Sync {
+pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
     /// The `type` name of the plugin in scene files.
     fn name(&self) -> &'static str {
         self.typetag_name()
@@ -148,3 +148,5 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync {
     /// What to report about a solution (U, force, contact set and radius, warnings).
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport;
 }
+
+dyn_clone::clone_trait_object!(AdmissibleDisplacements);

@@ -7,17 +7,17 @@
 //! elements around the node), and assembly over matrix columns (each column owns its slice of
 //! the values; the sparsity pattern is built once).
 
-use crate::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
-use crate::dofs::{Dirichlet, DofMap, FIXED};
-use crate::elasticity::Elasticity;
+use super::Discretisation;
 use crate::error::SceneError;
-use crate::lagrangian::{Lagrangian, Material};
-use crate::linalg::SymmetricPattern;
-use crate::loads::{Load, nodal_loads};
+use crate::fem::loads::{Load, nodal_loads};
 use crate::mesh::TetMesh;
-use crate::solver::Solution;
-use crate::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
-use crate::tensor::{SQRT2, Sym};
+use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
+use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows};
+use crate::problem::elasticity::Elasticity;
+use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
+use crate::problem::pattern::SymmetricPattern;
+use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
+use crate::problem::tensor::{SQRT2, Sym};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -119,11 +119,6 @@ impl P1P0Lagrangian {
     /// Nodal displacements (fixed components zero).
     pub fn nodal_displacements(&self, u: &[f64]) -> Vec<[f64; 3]> {
         self.dofs.nodal(u)
-    }
-
-    /// What the obstacle reports about a solution.
-    pub fn contact_report(&self, sol: &Solution) -> Option<ContactReport> {
-        self.obstacle.as_ref().map(|k| k.report(&self.mesh, &self.rows, &sol.extras, &sol.lambda))
     }
 
     /// Warnings about the set-up (P's parameters, nodes dropped from K_h).
@@ -274,18 +269,32 @@ fn stiffness_pattern(mesh: &TetMesh, dofs: &DofMap, adj_ptr: &[usize], adj: &[(u
     SymmetricPattern::new(dofs.n_free, col_ptr, row_idx)
 }
 
+impl Discretisation for P1P0Lagrangian {
+    fn mesh(&self) -> &TetMesh {
+        &self.mesh
+    }
+
+    fn nodal_vectors(&self, u: &[f64]) -> Vec<[f64; 3]> {
+        self.dofs.nodal(u)
+    }
+
+    fn obstacle(&self) -> Option<&dyn AdmissibleDisplacements> {
+        self.obstacle.as_deref()
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        P1P0Lagrangian::warnings(self)
+    }
+}
+
 impl Lagrangian for P1P0Lagrangian {
     fn n_dofs(&self) -> usize {
         self.dofs.n_free
     }
 
-    /// The P1 nodes of the free dofs (rigid-body modes for multigrid).
-    fn dof_layout(&self) -> Option<crate::amg::DofLayout> {
-        Some(crate::amg::DofLayout {
-            node: self.dof_node.clone(),
-            comp: self.dof_comp.clone(),
-            coords: self.mesh.nodes.clone(),
-        })
+    /// The rigid-body motions at the P1 nodes of the free dofs.
+    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+        Some(RigidBodyModes::new(self.dof_node.clone(), &self.dof_comp, &self.mesh.nodes))
     }
 
     fn n_points(&self) -> usize {
@@ -381,8 +390,8 @@ impl Lagrangian for P1P0Lagrangian {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::box_mesh::BoxMesh;
-    use crate::region::Region;
+    use crate::mesh::box_mesh::BoxMesh;
+    use crate::mesh::region::Region;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     fn problem() -> P1P0Lagrangian {
@@ -390,7 +399,7 @@ mod tests {
             BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [3, 4, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
         let bc = [
             Dirichlet::clamped(Region::Group("zmax".into())),
-            Dirichlet::roller(Region::Group("xmin".into()), crate::dofs::Component::X),
+            Dirichlet::roller(Region::Group("xmin".into()), crate::mesh::dofs::Component::X),
         ];
         P1P0Lagrangian::new(mesh, &bc, Elasticity::new(10.0, 0.3).unwrap(), None, None).unwrap()
     }
@@ -409,7 +418,7 @@ mod tests {
         }
         let mut eps = vec![Sym::zeros(); l.n_points()];
         l.strain(&u, &mut eps);
-        let exact = crate::tensor::from_matrix(&grad);
+        let exact = crate::problem::tensor::from_matrix(&grad);
         assert!(eps.iter().all(|e| (e - exact).norm() < 1e-14));
     }
 

@@ -3,10 +3,10 @@
 //! `J = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V` and equilibrium as `Bᵀσ = Gᵀλ + f_u` (SPEC §3 with
 //! the load term of (1.11) extended to u).
 
-use crate::dofs::DofMap;
 use crate::error::{ParameterError, SceneError, check, join};
 use crate::mesh::TetMesh;
-use crate::region::Region;
+use crate::mesh::dofs::DofMap;
+use crate::mesh::region::Region;
 use serde::{Deserialize, Serialize};
 
 /// `[[load]]`: a load on the body.
@@ -95,7 +95,7 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::box_mesh::BoxMesh;
+    use crate::mesh::box_mesh::BoxMesh;
 
     #[test]
     fn resultants_equal_traction_times_area_and_body_force_times_volume() {

@@ -10,9 +10,9 @@
 //! ψ(ε) = sup_{τ̂∈D} (ε:τ − ½[τ̂, τ̂]) with ∂ψ/∂ε = σ. Implementations must pass the
 //! conformance kit of `saddle-yield`.
 
-use crate::elasticity::Elasticity;
 use crate::error::ParameterError;
-use crate::tensor::{Sym, SymOp};
+use crate::problem::elasticity::Elasticity;
+use crate::problem::tensor::{Sym, SymOp};
 use std::fmt::Debug;
 
 /// Upper bound on `hardening_dim()`, so that hot loops keep q on the stack.
@@ -40,7 +40,7 @@ pub struct ConeDescription {
 /// P: a pointwise closed convex set D of generalised stresses with its energy metric, chosen
 /// by `type` in the `[yield]` table of a scene.
 #[typetag::serde(tag = "type")]
-pub trait AdmissibleStresses: Debug + Send + Sync {
+pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
     /// The `type` name of the plugin in scene files.
     fn name(&self) -> &'static str {
         self.typetag_name()
@@ -99,6 +99,8 @@ pub trait AdmissibleStresses: Debug + Send + Sync {
         Vec::new()
     }
 }
+
+dyn_clone::clone_trait_object!(AdmissibleStresses);
 
 /// The energy inner product [σ̂, τ̂] = Aσ:τ + q·H⁻¹r at one point (SPEC §1).
 pub fn energy_inner(

@@ -2,7 +2,7 @@
 //! inner product (SPEC §1).
 
 use crate::error::{ParameterError, check};
-use crate::tensor::{Sym, SymOp, deviatoric_projector, identity, trace, volumetric_projector};
+use crate::problem::tensor::{Sym, SymOp, deviatoric_projector, identity, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
 /// Isotropic elasticity `Cε = 2G dev ε + K_b tr(ε) I`, `Aσ = ((1+ν)σ − ν tr(σ) I)/E` (SPEC §1–§2).

@@ -35,7 +35,7 @@
 //! the node tags form one dense range mshio drops them; they are then read here from the raw
 //! `$Nodes` section, so a dense but permuted numbering is still mapped correctly.
 //!
-//! [`Region`]: crate::region::Region
+//! [`Region`]: crate::mesh::region::Region
 
 use crate::error::{MeshError, ParameterError, check, join};
 use crate::mesh::{MeshSource, TetMesh};

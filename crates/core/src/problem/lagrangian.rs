@@ -8,11 +8,11 @@
 //! primal energy J (SPEC §3 form 1), the dual energy (form 3) and the KKT residuals (form 2) of
 //! any iterate — independently of the solver that produced it.
 
-use crate::displacements::ConstraintRows;
-use crate::elasticity::Elasticity;
-use crate::linalg::SymmetricPattern;
-use crate::stresses::{AdmissibleStresses, energy_inner};
-use crate::tensor::{Sym, SymOp};
+use crate::problem::displacements::ConstraintRows;
+use crate::problem::elasticity::Elasticity;
+use crate::problem::pattern::SymmetricPattern;
+use crate::problem::stresses::{AdmissibleStresses, energy_inner};
+use crate::problem::tensor::{Sym, SymOp};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -59,6 +59,49 @@ impl StressField {
     /// Number of plastic points.
     pub fn n_plastic(&self) -> usize {
         self.plastic.iter().filter(|p| **p).count()
+    }
+}
+
+/// Number of rigid-body motions in 3D: three translations, three rotations.
+pub const RIGID_BODY_MODES: usize = 6;
+
+/// The rigid-body motions restricted to the free dofs, with the node each dof belongs to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RigidBodyModes {
+    /// The node of every free dof: the dofs of one node form a block.
+    pub node: Vec<u32>,
+    /// Row-major `n × 6`: translations e_x, e_y, e_z and rotations ω × (x − x̄) about the axes
+    /// through the centroid x̄ of the nodes.
+    pub modes: Vec<f64>,
+}
+
+impl RigidBodyModes {
+    /// The modes of the free dofs with nodes `node` and components `comp`, the nodes at `coords`.
+    pub fn new(node: Vec<u32>, comp: &[u8], coords: &[[f64; 3]]) -> Self {
+        let n = node.len();
+        let mut centroid = [0.0; 3];
+        for &nd in &node {
+            for (c, x) in centroid.iter_mut().zip(coords[nd as usize]) {
+                *c += x / n.max(1) as f64;
+            }
+        }
+        let mut modes = vec![0.0; n * RIGID_BODY_MODES];
+        for (d, row) in modes.chunks_exact_mut(RIGID_BODY_MODES).enumerate() {
+            let x = coords[node[d] as usize];
+            let [x, y, z] = [x[0] - centroid[0], x[1] - centroid[1], x[2] - centroid[2]];
+            let c = comp[d] as usize;
+            row[c] = 1.0;
+            // ω × x for ω = e_x, e_y, e_z: (0, −z, y), (z, 0, −x), (−y, x, 0)
+            row[3] = [0.0, -z, y][c];
+            row[4] = [z, 0.0, -x][c];
+            row[5] = [-y, x, 0.0][c];
+        }
+        Self { node, modes }
+    }
+
+    /// Number of free dofs.
+    pub fn n(&self) -> usize {
+        self.node.len()
     }
 }
 
@@ -179,9 +222,10 @@ pub trait Lagrangian: Sync {
     /// values = Σ_T w_T B_Tᵀ C_T B_T on [`Lagrangian::pattern`].
     fn assemble(&self, material: Material<'_>, values: &mut [f64]);
 
-    /// The node and coordinates of every free dof (for the rigid-body near-nullspace of an
-    /// algebraic multigrid); `None` when the discretisation has no nodal dofs.
-    fn dof_layout(&self) -> Option<crate::amg::DofLayout> {
+    /// The rigid-body motions on the free dofs (the near-nullspace of the elastic stiffness,
+    /// what a multigrid preconditioner must reproduce); `None` when the discretisation has no
+    /// nodal dofs.
+    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
         None
     }
 
@@ -338,7 +382,7 @@ pub trait Lagrangian: Sync {
             .map(|i| {
                 let (s0, q0) = (&ws.stress.sigma[i], ws.stress.q(i));
                 let ds = it.stress.sigma[i] - s0;
-                let dq: [f64; crate::stresses::MAX_HARDENING_DIM] =
+                let dq: [f64; crate::problem::stresses::MAX_HARDENING_DIM] =
                     std::array::from_fn(|k| if k < q0.len() { it.stress.q(i)[k] - q0[k] } else { 0.0 });
                 let dq = &dq[..q0.len()];
                 (w[i] * energy_inner(p, &law, &ds, dq, &ds, dq), w[i] * energy_inner(p, &law, s0, q0, s0, q0))

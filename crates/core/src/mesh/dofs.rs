@@ -4,7 +4,7 @@
 
 use crate::error::SceneError;
 use crate::mesh::TetMesh;
-use crate::region::Region;
+use crate::mesh::region::Region;
 use serde::{Deserialize, Serialize};
 
 /// A displacement component.
@@ -222,7 +222,7 @@ fn free_rigid_motion(mesh: &TetMesh, fixed: &[[bool; 3]]) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::box_mesh::BoxMesh;
+    use crate::mesh::box_mesh::BoxMesh;
 
     #[test]
     fn clamped_and_roller_conditions() {

@@ -2,7 +2,7 @@
 //! (its `[yield]`, `[obstacle]` and `[solver]` tables are ignored).
 //!
 //! ```text
-//! cargo run --release -p saddle-core --example amg_bench -- examples/johnson.toml [cells] [mode] [θ] [degree]
+//! cargo run --release --example amg_bench -- examples/johnson.toml [cells] [mode] [θ] [degree]
 //! #   cells: e.g. 48,48,24 (default: the scene's); mode: amg | direct | both (default amg);
 //! #   θ: strength threshold (default 0.02); degree: Chebyshev degree (default 2)
 //! ```
@@ -11,9 +11,11 @@
 //! memory is the process's high-water mark (VmHWM), so run `amg` and `direct` separately to
 //! compare memory.
 
-use saddle_core::lagrangian::{Lagrangian, Material};
-use saddle_core::{AmgParams, Csr, DofLayout, Pcg, Scene, SmoothedAggregation, SparseCholesky};
-use std::path::Path;
+use saddle::core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
+use saddle::core::mesh::dofs::FIXED;
+use saddle::core::problem::lagrangian::RIGID_BODY_MODES;
+use saddle::core::{Lagrangian, Material};
+use saddle::scene::Scene;
 use std::time::Instant;
 
 fn peak_memory_mb() -> f64 {
@@ -27,14 +29,14 @@ fn peak_memory_mb() -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let path = args.get(1).map_or("examples/johnson.toml", |s| s.as_str());
-    let mut scene: toml::Table = std::fs::read_to_string(path)?.parse()?;
-    for key in ["yield", "obstacle", "solver"] {
-        scene.remove(key);
-    }
+    let mut scene = Scene::from_file(path.as_ref())?;
+    scene.yield_surface = None;
+    scene.obstacle = None;
+    scene.solver = None;
     if let Some(cells) = args.get(2).filter(|s| *s != "-") {
-        let cells: Vec<toml::Value> =
-            cells.split(',').map(|c| c.trim().parse::<i64>().map(toml::Value::Integer)).collect::<Result<_, _>>()?;
-        scene["mesh"].as_table_mut().ok_or("no [mesh] table")?.insert("cells".into(), toml::Value::Array(cells));
+        let cells: Vec<usize> = cells.split(',').map(|c| c.trim().parse::<usize>()).collect::<Result<_, _>>()?;
+        let cells: [usize; 3] = cells.try_into().map_err(|_| "cells: three numbers, e.g. 48,48,24")?;
+        scene = scene.with_cells(cells)?;
     }
     let mode = args.get(3).map_or("amg", |s| s.as_str());
     let mut params = AmgParams::default();
@@ -46,14 +48,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let t = Instant::now();
-    let scene = Scene::from_toml(&toml::to_string(&scene)?, Path::new(path))?;
     let (l, _) = scene.into_problem()?;
+    let p = l.pattern();
+    let lower = LowerCsc::new(p.n(), p.col_ptr(), p.row_idx());
     let c = l.elasticity().stiffness_matrix();
     let values = l.stiffness(Material::Uniform(&c));
     let n = l.n_dofs();
     let mut b = vec![0.0; n];
     for d in &l.dofs().dof {
-        if d[2] != saddle_core::dofs::FIXED {
+        if d[2] != FIXED {
             b[d[2] as usize] = -1.0;
         }
     }
@@ -61,11 +64,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let amg_solution = if mode == "amg" || mode == "both" {
         let t = Instant::now();
-        let a = Csr::from_symmetric_lower(l.pattern(), &values);
-        let layout = DofLayout::new(l.dofs(), &l.mesh().nodes)?;
+        let a = Csr::from_symmetric_lower(lower, &values);
+        let modes = l.rigid_body_modes().ok_or("no rigid-body modes")?;
+        let near_null = NearNullSpace::new(modes.node, modes.modes, RIGID_BODY_MODES)?;
         let t_csr = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let amg = SmoothedAggregation::new(&a, &layout, &params)?;
+        let amg = SmoothedAggregation::new(&a, &near_null, &params)?;
         let t_setup = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut pcg = Pcg::new(n);
@@ -94,10 +98,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     if mode == "direct" || mode == "both" {
         let t = Instant::now();
-        let mut chol = SparseCholesky::analyse(l.pattern(), "stiffness")?;
+        let mut chol = SparseCholesky::analyse(lower, "stiffness")?;
         let t_an = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        chol.factorise(l.pattern(), &values)?;
+        chol.factorise(&values)?;
         let t_fac = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut y = b.clone();

@@ -31,20 +31,18 @@
 //! type = "uzawa"
 //! ```
 
-use crate::displacements::AdmissibleDisplacements;
-use crate::dofs::Dirichlet;
-use crate::elasticity::Elasticity;
-use crate::error::SceneError;
-use crate::loads::Load;
-use crate::mesh::MeshSource;
-use crate::p1p0::P1P0Lagrangian;
-use crate::solver::Solver;
-use crate::stresses::AdmissibleStresses;
+use saddle_core::error::ParameterError;
+use saddle_core::{
+    AdmissibleDisplacements, AdmissibleStresses, Dirichlet, Elasticity, Load, MeshSource, P1P0Lagrangian, SceneError,
+    Solver,
+};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// A problem as written in a scene file.
-#[derive(Debug, Serialize, Deserialize)]
+/// A problem as written in a scene file: a typed value, validated once when it is read.
+/// Variants (a refined mesh, another solver) are made by changing the value — it is `Clone`,
+/// plugins included — never by editing TOML text.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// A title for reports.
@@ -133,6 +131,20 @@ impl Scene {
         Ok(())
     }
 
+    /// The same scene on its structured mesh with `cells` per axis (a refinement study). An
+    /// error naming `mesh.cells` when the mesh source has no cell counts (a file, an inline
+    /// mesh) or a count is 0.
+    pub fn with_cells(&self, cells: [usize; 3]) -> Result<Self, SceneError> {
+        if let Some(k) = (0..3).find(|&k| cells[k] == 0) {
+            return Err(ParameterError::new(format!("mesh.cells[{k}]"), 0, "must be >= 1").into());
+        }
+        let mesh = self.mesh.with_cells(cells).ok_or_else(|| SceneError::Region {
+            field: "mesh.cells".into(),
+            message: format!("a `{}` mesh cannot be refined by cell counts; use a `box` mesh", self.mesh.name()),
+        })?;
+        Ok(Self { mesh, ..self.clone() })
+    }
+
     /// Builds the mesh and assembles L; returns it with the scene's solver (if any). A scene
     /// whose Dirichlet conditions leave a rigid-body motion free is an error here.
     pub fn into_problem(self) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
@@ -147,7 +159,7 @@ impl Scene {
 /// The first NaN or infinite number in a scene's TOML, as an error naming its path (`mesh.min[0]`).
 fn non_finite_number(v: &toml::Value, path: &mut String) -> Result<(), SceneError> {
     match v {
-        toml::Value::Float(x) if !x.is_finite() => Err(SceneError::Parameter(crate::error::ParameterError::new(
+        toml::Value::Float(x) if !x.is_finite() => Err(SceneError::Parameter(ParameterError::new(
             path.clone(),
             x,
             "a finite number (no number in a scene may be NaN or infinite)",

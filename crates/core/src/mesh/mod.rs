@@ -1,6 +1,15 @@
-//! The tetrahedral mesh T_h (SPEC §3): nodes, positively oriented tetrahedra, the boundary
-//! facets and named groups of them. Validated on construction: a zero-volume or inverted
-//! tetrahedron is an error that names the element.
+//! Meshes and what lives on them: the tetrahedral mesh T_h (theory §3) — nodes, positively
+//! oriented tetrahedra, the boundary facets and named groups of them, validated on construction
+//! (a zero-volume or inverted tetrahedron is an error that names the element) — its sources
+//! ([`box_mesh`], [`inline`], [`gmsh`]), boundary [`region`]s, and the numbering of the nodal
+//! displacement dofs with Dirichlet conditions ([`dofs`]).
+
+pub mod box_mesh;
+pub mod dofs;
+#[cfg(feature = "gmsh")]
+pub mod gmsh;
+pub mod inline;
+pub mod region;
 
 use crate::error::{MeshError, ParameterError};
 use std::collections::BTreeMap;
@@ -166,12 +175,27 @@ pub struct MeshQuality {
 /// A source of meshes chosen by `type` in the `[mesh]` table of a scene (the structured box
 /// mesher `box`; file readers).
 #[typetag::serde(tag = "type")]
-pub trait MeshSource: Debug + Send + Sync {
+pub trait MeshSource: Debug + Send + Sync + dyn_clone::DynClone {
+    /// The `type` name of the source in scene files.
+    fn name(&self) -> &'static str {
+        self.typetag_name()
+    }
     /// Checks the parameters; `path` is the table's path in the scene (`mesh`).
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
     /// Builds the mesh; relative file names are resolved against `base_dir` (the scene's folder).
     fn build(&self, base_dir: &Path) -> Result<TetMesh, MeshError>;
+    /// The cells per axis of a structured source (refinement studies scale them); `None` for a
+    /// source that cannot be refined by cell counts (a file, an inline mesh).
+    fn cells(&self) -> Option<[usize; 3]> {
+        None
+    }
+    /// The same source with `cells` per axis, where [`MeshSource::cells`] is `Some`.
+    fn with_cells(&self, _cells: [usize; 3]) -> Option<Box<dyn MeshSource>> {
+        None
+    }
 }
+
+dyn_clone::clone_trait_object!(MeshSource);
 
 /// Signed volume of the tetrahedron `t`: positive when (b−a, c−a, d−a) is right-handed.
 pub fn signed_volume(nodes: &[[f64; 3]], t: &[usize; 4]) -> f64 {

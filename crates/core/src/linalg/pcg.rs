@@ -10,8 +10,8 @@
 //! The vectors of the iteration live in [`Pcg`], allocated once and reused by every solve; the
 //! loops run in parallel over chunks of plain slices.
 
-use crate::csr::Csr;
-use crate::error::PcgError;
+use super::csr::Csr;
+use super::error::PcgError;
 use rayon::prelude::*;
 
 /// Entries per parallel task in the vector updates.

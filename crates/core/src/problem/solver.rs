@@ -2,8 +2,8 @@
 //! [`Solution`] with an honest [`SolveReport`] — residuals, per-phase wall time and why it
 //! stopped — or a typed [`SolveError`]. NaN or Inf never leaves a solver unreported.
 
-use crate::error::{LinalgError, ParameterError};
-use crate::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField};
+use crate::error::ParameterError;
+use crate::problem::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Debug;
@@ -82,9 +82,11 @@ impl Solution {
 /// Why a solve failed.
 #[derive(Debug, Error)]
 pub enum SolveError {
-    /// A factorisation failed (singular: the body is not held).
-    #[error(transparent)]
-    Linalg(#[from] LinalgError),
+    /// A linear solve failed: a factorisation met a non-positive pivot (the body is not held
+    /// against rigid-body motion, or the data make the matrix singular), an iterative solver
+    /// broke down. `source` is the linear algebra's own error.
+    #[error("{solver}: {source}")]
+    LinearAlgebra { solver: String, source: Box<dyn std::error::Error + Send + Sync> },
     /// The iteration diverged; `hint` says which parameter to change.
     #[error("{solver} diverged at iteration {iteration}: KKT residual {residual:.3e}; {hint}")]
     Diverged { solver: String, iteration: usize, residual: f64, hint: String },
@@ -97,6 +99,13 @@ pub enum SolveError {
     /// The problem is outside what this solver handles.
     #[error("{solver}: {message}")]
     Unsupported { solver: String, message: String },
+}
+
+impl SolveError {
+    /// A failure of the linear algebra inside `solver`.
+    pub fn linear_algebra(solver: &str, source: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Self::LinearAlgebra { solver: solver.to_string(), source: Box::new(source) }
+    }
 }
 
 /// Observer of a running solve (progress bars, logs).
@@ -114,7 +123,7 @@ impl Monitor for Silent {}
 
 /// A solver, chosen by `type` in the `[solver]` table of a scene or by `saddle run --solver`.
 #[typetag::serde(tag = "type")]
-pub trait Solver: Debug + Send + Sync {
+pub trait Solver: Debug + Send + Sync + dyn_clone::DynClone {
     /// The `type` name of the solver in scene files.
     fn name(&self) -> &'static str {
         self.typetag_name()
@@ -126,6 +135,8 @@ pub trait Solver: Debug + Send + Sync {
     /// Solves the discrete problem.
     fn solve(&self, problem: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError>;
 }
+
+dyn_clone::clone_trait_object!(Solver);
 
 /// Accumulates wall time per named phase.
 #[derive(Clone, Debug, Default)]

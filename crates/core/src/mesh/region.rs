@@ -184,7 +184,7 @@ impl FacetGroups {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::box_mesh::BoxMesh;
+    use crate::mesh::box_mesh::BoxMesh;
 
     #[test]
     fn gamma_one_and_contact_disc_of_the_default_scene() {

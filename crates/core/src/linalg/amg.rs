@@ -1,7 +1,9 @@
-//! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel, Brezina 1996) for the elastic
-//! stiffness of P1 tetrahedra: a V-cycle that is a symmetric positive definite preconditioner
-//! for conjugate gradients ([`crate::pcg`]), with an iteration count nearly independent of the
-//! mesh size.
+//! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel, Brezina 1996) for symmetric
+//! positive definite matrices with a known near-nullspace — the elastic stiffness with its
+//! rigid-body modes is the case it was tuned on: a V-cycle that is a symmetric positive definite
+//! preconditioner for conjugate gradients ([`super::pcg`]), with an iteration count nearly
+//! independent of the mesh size. It knows matrices, blocks and vectors only; the caller
+//! computes the near-nullspace ([`NearNullSpace`]) from whatever geometry it has.
 //!
 //! # The idea
 //!
@@ -39,11 +41,9 @@
 //! # Use
 //!
 //! ```no_run
-//! # use saddle_core::*;
-//! # fn demo(l: &P1P0Lagrangian, values: &[f64], b: &[f64]) -> Result<(), Box<dyn std::error::Error>> {
-//! let a = Csr::from_symmetric_lower(l.pattern(), values);
-//! let layout = DofLayout::new(l.dofs(), &l.mesh().nodes)?;
-//! let amg = SmoothedAggregation::new(&a, &layout, &AmgParams::default())?;
+//! # use saddle_core::linalg::*;
+//! # fn demo(a: &Csr, near_null: &NearNullSpace, b: &[f64]) -> Result<(), Box<dyn std::error::Error>> {
+//! let amg = SmoothedAggregation::new(a, near_null, &AmgParams::default())?;
 //! let mut pcg = Pcg::new(a.nrows);
 //! let mut x = vec![0.0; a.nrows];
 //! let report = pcg.solve(&a, &amg, b, &mut x, 1e-8, 200)?;
@@ -60,22 +60,19 @@
 //! the 45k-, 157k- and 378k-dof versions of the scene take 21, 28 and 28 iterations to
 //! 10⁻⁸; set-up is dominated by the two sparse products of the Galerkin operator on the two
 //! finest levels, the solve by memory traffic of the fine matrix (four passes per cycle plus
-//! the restriction and prolongation). Run `crates/core/examples/amg_bench.rs` to measure.
+//! the restriction and prolongation). Run `examples/amg_bench.rs` to measure.
 //!
 //! A new matrix with the same near-nullspace (the next Newton tangent) is taken by
 //! [`SmoothedAggregation::refresh`], which keeps the aggregates and tentative prolongators
 //! and recomputes the smoothing, the Galerkin products and the coarse factorisation.
 
-use crate::csr::Csr;
-use crate::dofs::DofMap;
-use crate::error::{AmgError, ParameterError, check};
-use crate::linalg::SparseCholesky;
-use crate::pcg::Preconditioner;
+use super::cholesky::SparseCholesky;
+use super::csr::{Csr, LowerCsc};
+use super::error::AmgError;
+use super::pcg::Preconditioner;
+use crate::error::{ParameterError, check};
 use rayon::prelude::*;
 use std::sync::Mutex;
-
-/// Dimension of the near-nullspace of 3D elasticity: 3 translations, 3 rotations.
-pub const RIGID_BODY_MODES: usize = 6;
 
 /// Rows per parallel task of the smoother.
 const CHUNK: usize = 4096;
@@ -83,72 +80,49 @@ const CHUNK: usize = 4096;
 /// The Chebyshev interval ends at this multiple of the Lanczos estimate of ρ(D⁻¹A).
 const UPPER_SAFETY: f64 = 1.1;
 
-/// Where every free dof lives: its node, its component, and the node coordinates — what the
-/// rigid-body modes need.
-#[derive(Clone, Debug)]
-pub struct DofLayout {
-    /// Node of each free dof.
-    pub node: Vec<u32>,
-    /// Component (0, 1, 2) of each free dof.
-    pub comp: Vec<u8>,
-    /// Coordinates of every node (indexed by node).
-    pub coords: Vec<[f64; 3]>,
+/// The near-nullspace of a matrix with a block structure: the vectors a coarse space must
+/// reproduce (for elasticity, the rigid-body modes), and the block of every unknown (for
+/// elasticity, its node). Linear algebra only: whoever knows the geometry computes the vectors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NearNullSpace {
+    /// Block (0, 1, …) of every unknown; unknowns of one block are aggregated together.
+    pub block: Vec<u32>,
+    /// The vectors, row-major `n × dim`: row d holds the d-th entry of every vector.
+    pub vectors: Vec<f64>,
+    /// Number of vectors.
+    pub dim: usize,
 }
 
-impl DofLayout {
-    /// The layout of a [`DofMap`] on nodes with coordinates `nodes` (as in `TetMesh::nodes`).
-    pub fn new(dofs: &DofMap, nodes: &[[f64; 3]]) -> Result<Self, AmgError> {
-        if nodes.len() != dofs.n_nodes() {
+impl NearNullSpace {
+    /// Checks the sizes: `vectors.len() == block.len() · dim`, `dim ≥ 1`.
+    pub fn new(block: Vec<u32>, vectors: Vec<f64>, dim: usize) -> Result<Self, AmgError> {
+        if dim == 0 || vectors.len() != block.len() * dim {
             return Err(AmgError::DimensionMismatch {
-                what: "node coordinates".into(),
-                expected: dofs.n_nodes(),
-                found: nodes.len(),
+                what: format!("near-nullspace ({dim} vectors)"),
+                expected: block.len() * dim.max(1),
+                found: vectors.len(),
             });
         }
-        let (node, comp) = dofs.owners();
-        Ok(Self { node, comp, coords: nodes.to_vec() })
+        Ok(Self { block, vectors, dim })
     }
 
-    /// Number of free dofs.
+    /// Number of unknowns.
     pub fn n(&self) -> usize {
-        self.node.len()
+        self.block.len()
     }
 
-    /// The rigid-body modes restricted to the free dofs, row-major n × 6: translations e_x,
-    /// e_y, e_z and rotations ω × (x − x̄) about the axes through the centroid x̄ of the nodes.
-    pub fn rigid_body_modes(&self) -> Vec<f64> {
-        let n = self.n();
-        let mut centroid = [0.0; 3];
-        for &nd in &self.node {
-            for (c, x) in centroid.iter_mut().zip(self.coords[nd as usize]) {
-                *c += x / n.max(1) as f64;
-            }
-        }
-        let mut b = vec![0.0; n * RIGID_BODY_MODES];
-        for (d, row) in b.chunks_exact_mut(RIGID_BODY_MODES).enumerate() {
-            let x = self.coords[self.node[d] as usize];
-            let [x, y, z] = [x[0] - centroid[0], x[1] - centroid[1], x[2] - centroid[2]];
-            let c = self.comp[d] as usize;
-            row[c] = 1.0;
-            // ω × x for ω = e_x, e_y, e_z: (0, −z, y), (z, 0, −x), (−y, x, 0)
-            row[3] = [0.0, -z, y][c];
-            row[4] = [z, 0.0, -x][c];
-            row[5] = [-y, x, 0.0][c];
-        }
-        b
-    }
-
-    /// The dofs grouped by node (nodes without free dofs left out).
+    /// The unknowns grouped by block (block numbers compacted, empty blocks left out).
     fn blocks(&self) -> Blocks {
-        let mut id = vec![u32::MAX; self.coords.len()];
+        let n_ids = self.block.iter().map(|&b| b as usize + 1).max().unwrap_or(0);
+        let mut id = vec![u32::MAX; n_ids];
         let mut of_dof = vec![0u32; self.n()];
         let mut nb = 0u32;
-        for (d, &nd) in self.node.iter().enumerate() {
-            if id[nd as usize] == u32::MAX {
-                id[nd as usize] = nb;
+        for (d, &b) in self.block.iter().enumerate() {
+            if id[b as usize] == u32::MAX {
+                id[b as usize] = nb;
                 nb += 1;
             }
-            of_dof[d] = id[nd as usize];
+            of_dof[d] = id[b as usize];
         }
         Blocks::from_owner(of_dof, nb as usize)
     }
@@ -295,13 +269,14 @@ pub struct LevelInfo {
 }
 
 impl SmoothedAggregation {
-    /// Builds the hierarchy for the SPD matrix `a` (free dofs only, full storage) with the
-    /// rigid-body modes of `layout` as near-nullspace.
-    pub fn new(a: &Csr, layout: &DofLayout, params: &AmgParams) -> Result<Self, AmgError> {
+    /// Builds the hierarchy for the SPD matrix `a` (full storage) with the near-nullspace
+    /// `near_null` (for elasticity: the rigid-body modes, blocks the nodes).
+    pub fn new(a: &Csr, near_null: &NearNullSpace, params: &AmgParams) -> Result<Self, AmgError> {
         params.validate()?;
-        check_square(a, layout.n())?;
-        let mut blocks = layout.blocks();
-        let mut ns = layout.rigid_body_modes();
+        check_square(a, near_null.n())?;
+        let dim = near_null.dim;
+        let mut blocks = near_null.blocks();
+        let mut ns = near_null.vectors.clone();
         let mut levels = Vec::new();
         let mut a = a.clone();
         loop {
@@ -312,7 +287,7 @@ impl SmoothedAggregation {
             let theta = params.strength_threshold;
             let graph = strength_graph(&a, &blocks, theta);
             let (agg, n_agg) = aggregate(&graph);
-            let (p_tent, ns_c, blocks_c) = tentative_prolongator(&blocks, &agg, n_agg, &ns);
+            let (p_tent, ns_c, blocks_c) = tentative_prolongator(&blocks, &agg, n_agg, &ns, dim);
             if p_tent.ncols as f64 > 0.8 * a.nrows as f64 {
                 break; // no real coarsening: stop here and factorise
             }
@@ -435,9 +410,9 @@ fn inverse_diagonal(a: &Csr, level: usize) -> Result<Vec<f64>, AmgError> {
 /// Sparse Cholesky of the coarsest matrix.
 fn factorise_coarse(a: &Csr, level: usize) -> Result<SparseCholesky, AmgError> {
     inverse_diagonal(a, level)?;
-    let (pattern, values) = a.to_symmetric_lower();
-    let mut chol = SparseCholesky::analyse(&pattern, "coarsest AMG level")?;
-    chol.factorise(&pattern, &values)?;
+    let (col_ptr, row_idx, values) = a.to_symmetric_lower();
+    let mut chol = SparseCholesky::analyse(LowerCsc::new(a.nrows, &col_ptr, &row_idx), "coarsest AMG level")?;
+    chol.factorise(&values)?;
     Ok(chol)
 }
 
@@ -542,46 +517,52 @@ fn aggregate(g: &StrengthGraph) -> (Vec<u32>, usize) {
 
 /// Local QR B_a = Q_a R_a of the near-nullspace rows `rows` of an aggregate (modified
 /// Gram–Schmidt, twice; numerically dependent columns dropped): Q column-major m × k and
-/// R row-major k × 6.
-fn local_qr(rows: &[u32], ns: &[f64]) -> (Vec<f64>, Vec<f64>, usize) {
+/// R row-major k × dim, for the `dim` near-nullspace vectors `ns` (row-major).
+fn local_qr(rows: &[u32], ns: &[f64], dim: usize) -> (Vec<f64>, Vec<f64>, usize) {
     let m = rows.len();
-    let mut q: Vec<f64> = Vec::with_capacity(m * RIGID_BODY_MODES);
-    let mut r = vec![0.0; RIGID_BODY_MODES * RIGID_BODY_MODES];
+    let mut q: Vec<f64> = Vec::with_capacity(m * dim);
+    let mut r = vec![0.0; dim * dim];
     let mut k = 0;
     let mut v = vec![0.0; m];
-    for j in 0..RIGID_BODY_MODES {
+    for j in 0..dim {
         for (v, &d) in v.iter_mut().zip(rows) {
-            *v = ns[d as usize * RIGID_BODY_MODES + j];
+            *v = ns[d as usize * dim + j];
         }
         let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         for _ in 0..2 {
             for i in 0..k {
                 let qi = &q[i * m..(i + 1) * m];
                 let h: f64 = qi.iter().zip(&v).map(|(a, b)| a * b).sum();
-                r[i * RIGID_BODY_MODES + j] += h;
+                r[i * dim + j] += h;
                 v.iter_mut().zip(qi).for_each(|(v, q)| *v -= h * q);
             }
         }
         let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         if k < m && nv > 1e-8 * norm0 && nv > 0.0 {
-            r[k * RIGID_BODY_MODES + j] = nv;
+            r[k * dim + j] = nv;
             q.extend(v.iter().map(|x| x / nv));
             k += 1;
         }
     }
-    r.truncate(k * RIGID_BODY_MODES);
+    r.truncate(k * dim);
     (q, r, k)
 }
 
 /// The tentative prolongator of the aggregates `agg` of `blocks` (one local QR of the
 /// near-nullspace `ns` per aggregate), the coarse near-nullspace (the R factors), and the
 /// coarse blocks (one per aggregate).
-fn tentative_prolongator(blocks: &Blocks, agg: &[u32], n_agg: usize, ns: &[f64]) -> (Csr, Vec<f64>, Blocks) {
+fn tentative_prolongator(
+    blocks: &Blocks,
+    agg: &[u32],
+    n_agg: usize,
+    ns: &[f64],
+    dim: usize,
+) -> (Csr, Vec<f64>, Blocks) {
     let n = blocks.of_dof.len();
     let owner: Vec<u32> = blocks.of_dof.iter().map(|&b| agg[b as usize]).collect();
     let members = Blocks::from_owner(owner, n_agg);
     let qr: Vec<(Vec<f64>, Vec<f64>, usize)> =
-        (0..n_agg).into_par_iter().map(|a| local_qr(members.of(a), ns)).collect();
+        (0..n_agg).into_par_iter().map(|a| local_qr(members.of(a), ns, dim)).collect();
     let mut cptr = vec![0usize; n_agg + 1];
     for a in 0..n_agg {
         cptr[a + 1] = cptr[a] + qr[a].2;
@@ -593,7 +574,7 @@ fn tentative_prolongator(blocks: &Blocks, agg: &[u32], n_agg: usize, ns: &[f64])
     }
     let mut idx = vec![0u32; ptr[n]];
     let mut val = vec![0.0; ptr[n]];
-    let mut ns_c = vec![0.0; nc * RIGID_BODY_MODES];
+    let mut ns_c = vec![0.0; nc * dim];
     for (a, (q, r, k)) in qr.iter().enumerate() {
         let rows = members.of(a);
         let m = rows.len();
@@ -603,7 +584,7 @@ fn tentative_prolongator(blocks: &Blocks, agg: &[u32], n_agg: usize, ns: &[f64])
                 val[ptr[d as usize] + c] = q[c * m + t];
             }
         }
-        ns_c[cptr[a] * RIGID_BODY_MODES..cptr[a + 1] * RIGID_BODY_MODES].copy_from_slice(r);
+        ns_c[cptr[a] * dim..cptr[a + 1] * dim].copy_from_slice(r);
     }
     let coarse_owner: Vec<u32> = (0..n_agg).flat_map(|a| std::iter::repeat_n(a as u32, qr[a].2)).collect();
     (Csr { nrows: n, ncols: nc, ptr, idx, val }, ns_c, Blocks::from_owner(coarse_owner, n_agg))
@@ -727,124 +708,99 @@ fn add_to(x: &mut [f64], d: &[f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dofs::FIXED;
-    use crate::lagrangian::{Lagrangian, Material};
-    use crate::linalg::SymmetricPattern;
-    use crate::pcg::{Jacobi, Pcg};
-    use crate::{P1P0Lagrangian, Scene};
-    use std::path::Path;
 
-    /// The elastic block of the default scene (graded, clamped but for the bottom square).
-    fn problem(cells: [usize; 3]) -> P1P0Lagrangian {
-        let toml = format!(
-            r#"
-            [mesh]
-            type = "box"
-            min = [-1.0, -1.0, 0.0]
-            max = [1.0, 1.0, 1.0]
-            cells = {cells:?}
-            grading = {{ toward = [0.0, 0.0, 0.0], ratio = 4.0 }}
-            align = [[-0.75, 0.75], [-0.75, 0.75], []]
-            [material]
-            E = 100.0
-            nu = 0.3
-            [[dirichlet]]
-            on = {{ not = {{ all = [ {{ group = "zmin" }}, {{ box = {{ min = [-0.75, -0.75, -1.0], max = [0.75, 0.75, 1.0] }} }} ] }} }}
-            "#
-        );
-        Scene::from_toml(&toml, Path::new("test.toml")).unwrap().into_problem().unwrap().0
-    }
-
-    fn stiffness(l: &P1P0Lagrangian) -> (Vec<f64>, Csr) {
-        let c = l.elasticity().stiffness_matrix();
-        let v = l.stiffness(Material::Uniform(&c));
-        let a = Csr::from_symmetric_lower(l.pattern(), &v);
-        (v, a)
-    }
-
-    fn layout(l: &P1P0Lagrangian) -> DofLayout {
-        DofLayout::new(l.dofs(), &l.mesh().nodes).unwrap()
-    }
-
-    /// A load: a smooth body force plus a point-like push, so that all scales are present.
-    fn rhs(n: usize) -> Vec<f64> {
-        (0..n).map(|i| if i % 3 == 2 { -1.0 } else { 0.3 * (i as f64 * 0.01).sin() } + 0.2 * pseudo_random(i)).collect()
-    }
-
-    #[test]
-    fn csr_from_the_assembled_stiffness_multiplies_like_the_pattern() {
-        let l = problem([4, 4, 2]);
-        let (v, a) = stiffness(&l);
-        let x: Vec<f64> = (0..a.nrows).map(pseudo_random).collect();
-        let (mut y1, mut y2) = (vec![0.0; a.nrows], vec![0.0; a.nrows]);
-        l.pattern().matvec(&v, &x, &mut y1);
-        a.spmv(&x, &mut y2);
-        let scale = y1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        assert!(y1.iter().zip(&y2).all(|(p, q)| (p - q).abs() <= 1e-13 * scale));
-        assert_eq!(a.diagonal(), l.pattern().diagonal(&v));
-        // back to the lower triangle: the same pattern and values
-        let (p, w) = a.to_symmetric_lower();
-        assert_eq!((p.col_ptr(), p.row_idx()), (l.pattern().col_ptr(), l.pattern().row_idx()));
-        assert_eq!(w, v);
-        let _: &SymmetricPattern = &p;
-    }
-
-    #[test]
-    fn rigid_body_modes_are_in_the_kernel_away_from_the_dirichlet_boundary() {
-        let l = problem([4, 4, 4]);
-        let (_, a) = stiffness(&l);
-        let lay = layout(&l);
-        let b = lay.rigid_body_modes();
-        // nodes none of whose elements touches a fixed component
-        let dofs = l.dofs();
-        let mut near_fixed = vec![false; dofs.n_nodes()];
-        for t in &l.mesh().tets {
-            if t.iter().any(|&n| dofs.dof[n].contains(&FIXED)) {
-                t.iter().for_each(|&n| near_fixed[n] = true);
-            }
-        }
-        let n = a.nrows;
-        let norm_a = a.val.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let mut interior = 0;
-        for k in 0..RIGID_BODY_MODES {
-            let col: Vec<f64> = (0..n).map(|d| b[d * RIGID_BODY_MODES + k]).collect();
-            let mut y = vec![0.0; n];
-            a.spmv(&col, &mut y);
-            let size = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let mut boundary_max = 0.0f64;
-            for d in 0..n {
-                if near_fixed[lay.node[d] as usize] {
-                    boundary_max = boundary_max.max(y[d].abs());
-                } else {
-                    interior += 1;
-                    assert!(y[d].abs() <= 1e-12 * norm_a * size, "mode {k}, dof {d}: {}", y[d]);
+    /// A vector Laplacian (three unknowns per grid point, the 7-point stencil per component plus
+    /// a weak coupling of the components) on an nx × ny × nz grid with the first plane held:
+    /// SPD, with one block per point, and the six rigid-body vectors of the grid coordinates as
+    /// near-nullspace — linear-algebra data only, no mesh.
+    fn grid_problem(nx: usize, ny: usize, nz: usize) -> (Csr, NearNullSpace) {
+        let id = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+        let np = nx * ny * nz;
+        let mut ptr = vec![0];
+        let (mut idx, mut val) = (vec![], vec![]);
+        for i in 0..nx {
+            for j in 0..ny {
+                for k in 0..nz {
+                    for c in 0..3 {
+                        let mut row: Vec<(u32, f64)> = vec![];
+                        let p = id(i, j, k);
+                        // held first plane: a larger diagonal
+                        let diag = 6.0 + if i == 0 { 6.0 } else { 0.0 };
+                        row.push(((3 * p + c) as u32, diag));
+                        for c2 in 0..3 {
+                            if c2 != c {
+                                row.push(((3 * p + c2) as u32, 0.1));
+                            }
+                        }
+                        let mut nb = |q: usize| row.push(((3 * q + c) as u32, -1.0));
+                        if i > 0 {
+                            nb(id(i - 1, j, k))
+                        }
+                        if i + 1 < nx {
+                            nb(id(i + 1, j, k))
+                        }
+                        if j > 0 {
+                            nb(id(i, j - 1, k))
+                        }
+                        if j + 1 < ny {
+                            nb(id(i, j + 1, k))
+                        }
+                        if k > 0 {
+                            nb(id(i, j, k - 1))
+                        }
+                        if k + 1 < nz {
+                            nb(id(i, j, k + 1))
+                        }
+                        row.sort_by_key(|e| e.0);
+                        idx.extend(row.iter().map(|e| e.0));
+                        val.extend(row.iter().map(|e| e.1));
+                        ptr.push(idx.len());
+                    }
                 }
             }
-            // and the modes are not trivially in the kernel: the Dirichlet condition shows
-            assert!(boundary_max > 1e-3 * norm_a * size, "mode {k}");
         }
-        assert!(interior > 0);
+        let a = Csr { nrows: 3 * np, ncols: 3 * np, ptr, idx, val };
+        let mut vectors = vec![0.0; 3 * np * 6];
+        let mut block = vec![0u32; 3 * np];
+        for i in 0..nx {
+            for j in 0..ny {
+                for k in 0..nz {
+                    let (x, y, z) = (i as f64, j as f64, k as f64);
+                    for c in 0..3 {
+                        let d = 3 * id(i, j, k) + c;
+                        block[d] = id(i, j, k) as u32;
+                        let row = &mut vectors[6 * d..6 * d + 6];
+                        row[c] = 1.0;
+                        row[3] = [0.0, -z, y][c];
+                        row[4] = [z, 0.0, -x][c];
+                        row[5] = [-y, x, 0.0][c];
+                    }
+                }
+            }
+        }
+        (a, NearNullSpace::new(block, vectors, 6).unwrap())
     }
 
     #[test]
-    fn tentative_prolongator_reproduces_the_rigid_body_modes() {
-        let l = problem([10, 10, 6]);
-        let (_, a) = stiffness(&l);
-        let lay = layout(&l);
-        let mut blocks = lay.blocks();
-        let mut ns = lay.rigid_body_modes();
+    fn near_nullspace_sizes_are_checked() {
+        let e = NearNullSpace::new(vec![0, 0, 1], vec![1.0; 5], 2).unwrap_err();
+        assert!(matches!(e, AmgError::DimensionMismatch { expected: 6, found: 5, .. }), "{e}");
+        assert!(NearNullSpace::new(vec![0], vec![], 0).is_err());
+    }
+
+    #[test]
+    fn tentative_prolongator_reproduces_the_near_nullspace() {
+        let (a, nns) = grid_problem(10, 10, 6);
+        let dim = nns.dim;
+        let mut blocks = nns.blocks();
+        let mut ns = nns.vectors.clone();
         let mut a = a;
         for level in 0..2 {
             let graph = strength_graph(&a, &blocks, AmgParams::default().strength_threshold);
             let (agg, n_agg) = aggregate(&graph);
             assert!(agg.iter().all(|&g| (g as usize) < n_agg));
-            let ratio = if level == 0 { 8 } else { 2 };
-            assert!(
-                n_agg > 1 && n_agg * ratio <= blocks.len(),
-                "level {level}: {n_agg} aggregates of {}",
-                blocks.len()
-            );
-            let (pt, ns_c, blocks_c) = tentative_prolongator(&blocks, &agg, n_agg, &ns);
+            assert!(n_agg > 1 && n_agg * 2 <= blocks.len(), "level {level}: {n_agg} aggregates of {}", blocks.len());
+            let (pt, ns_c, blocks_c) = tentative_prolongator(&blocks, &agg, n_agg, &ns, dim);
             // orthonormal columns: P_tentᵀ P_tent = I
             let ptp = pt.transpose().matmul(&pt);
             for r in 0..ptp.nrows {
@@ -855,12 +811,12 @@ mod tests {
             }
             // P_tent B_c = B, column by column
             let scale = ns.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for k in 0..RIGID_BODY_MODES {
-                let bc: Vec<f64> = (0..pt.ncols).map(|i| ns_c[i * RIGID_BODY_MODES + k]).collect();
+            for k in 0..dim {
+                let bc: Vec<f64> = (0..pt.ncols).map(|i| ns_c[i * dim + k]).collect();
                 let mut y = vec![0.0; pt.nrows];
                 pt.spmv(&bc, &mut y);
                 for d in 0..pt.nrows {
-                    assert!((y[d] - ns[d * RIGID_BODY_MODES + k]).abs() < 1e-12 * scale, "level {level} mode {k}");
+                    assert!((y[d] - ns[d * dim + k]).abs() < 1e-12 * scale, "level {level} mode {k}");
                 }
             }
             let (level, a_c) = Level::build(a, pt, level, &AmgParams::default()).unwrap();
@@ -869,11 +825,11 @@ mod tests {
             let big = a_c.val.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             assert_eq!((at.ptr.clone(), at.idx.clone()), (a_c.ptr.clone(), a_c.idx.clone()));
             assert!(at.val.iter().zip(&a_c.val).all(|(x, y)| (x - y).abs() <= 1e-12 * big));
-            assert!(level.lambda_max > 1.0 && level.lambda_max < 10.0, "{}", level.lambda_max);
+            // ρ(D⁻¹A) ≤ 2 for a diagonally dominant matrix (Gershgorin), and > 1
+            assert!(level.lambda_max > 1.0 && level.lambda_max <= 2.0 + 1e-9, "{}", level.lambda_max);
             (a, blocks, ns) = (a_c, blocks_c, ns_c);
         }
     }
-
     #[test]
     fn lanczos_estimates_the_spectral_radius() {
         // D⁻¹A of the 1D Laplacian has ρ = 1 + cos(π/(n+1)) ≈ 2
@@ -895,88 +851,14 @@ mod tests {
         assert!(rho <= exact * (1.0 + 1e-12) && rho > 0.95 * exact, "{rho} vs {exact}");
     }
 
-    /// PCG with AMG and with Jacobi on the default scene's elastic stiffness, compared with
-    /// sparse Cholesky. Returns the AMG iteration count.
-    fn solve_and_compare(cells: [usize; 3]) -> usize {
-        let l = problem(cells);
-        let (v, a) = stiffness(&l);
-        let n = a.nrows;
-        let b = rhs(n);
-        // a small coarse size, so that even the small meshes have three levels or more
-        let params = AmgParams { coarse_size: 50, ..AmgParams::default() };
-        let amg = SmoothedAggregation::new(&a, &layout(&l), &params).unwrap();
-        assert!(amg.level_info().len() >= if n > 1000 { 3 } else { 2 }, "{:?}", amg.level_info());
-        let mut pcg = Pcg::new(n);
-        let mut x = vec![0.0; n];
-        let rep = pcg.solve(&a, &amg, &b, &mut x, 1e-8, 200).unwrap();
-        assert!(rep.converged && rep.relative_residual <= 1e-8, "{rep:?}");
-        let mut chol = SparseCholesky::analyse(l.pattern(), "test").unwrap();
-        chol.factorise(l.pattern(), &v).unwrap();
-        let mut x_direct = b.clone();
-        chol.solve(&mut x_direct);
-        let err = x.iter().zip(&x_direct).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt()
-            / x_direct.iter().map(|q| q * q).sum::<f64>().sqrt();
-        let mut y = vec![0.0; n];
-        let jac = pcg.solve(&a, &Jacobi::new(&a).unwrap(), &b, &mut y, 1e-8, 5000).unwrap();
-        println!(
-            "cells {cells:?}: {n} dofs, levels {:?}, operator complexity {:.2}; AMG-PCG {} iterations \
-             (residual {:.1e}, error vs Cholesky {err:.1e}); Jacobi-PCG {} iterations",
-            amg.level_info().iter().map(|i| i.n).collect::<Vec<_>>(),
-            amg.operator_complexity(),
-            rep.iterations,
-            rep.relative_residual,
-            jac.iterations,
-        );
-        assert!(jac.converged);
-        assert!(err < 1e-7, "relative error {err:e} against Cholesky");
-        assert!(rep.iterations * 3 < jac.iterations, "AMG {} vs Jacobi {}", rep.iterations, jac.iterations);
-        rep.iterations
-    }
-
-    #[test]
-    fn amg_pcg_matches_cholesky_with_bounded_iterations_under_refinement() {
-        let coarse = solve_and_compare([8, 8, 4]);
-        let fine = solve_and_compare([16, 16, 8]);
-        assert!(fine <= 40, "{fine} iterations on the fine mesh");
-        assert!(fine <= coarse + 8, "iterations grow from {coarse} to {fine}");
-    }
-
-    #[test]
-    fn refresh_takes_new_values_on_the_same_hierarchy() {
-        let l = problem([8, 8, 4]);
-        let (_, a) = stiffness(&l);
-        let n = a.nrows;
-        let b = rhs(n);
-        let params = AmgParams { coarse_size: 100, ..AmgParams::default() };
-        let mut amg = SmoothedAggregation::new(&a, &layout(&l), &params).unwrap();
-        let mut pcg = Pcg::new(n);
-        // a softer material (E/10 with ν = 0.45: nearly incompressible) on the same pattern
-        let soft = crate::Elasticity::new(10.0, 0.45).unwrap().stiffness_matrix();
-        let a2 = Csr::from_symmetric_lower(l.pattern(), &l.stiffness(Material::Uniform(&soft)));
-        amg.refresh(&a2).unwrap();
-        let mut x = vec![0.0; n];
-        let rep = pcg.solve(&a2, &amg, &b, &mut x, 1e-8, 200).unwrap();
-        assert!(rep.converged, "{rep:?}");
-        let mut r = vec![0.0; n];
-        a2.residual(&b, &x, &mut r);
-        let rel = r.iter().map(|v| v * v).sum::<f64>().sqrt() / b.iter().map(|v| v * v).sum::<f64>().sqrt();
-        assert!(rel <= 1e-8, "{rel}");
-        // the old hierarchy on the new matrix would be a poor (but SPD) preconditioner; a wrong
-        // size is an error
-        let e = amg.refresh(&Csr { nrows: 3, ncols: 3, ptr: vec![0; 4], idx: vec![], val: vec![] }).unwrap_err();
-        assert!(matches!(e, AmgError::DimensionMismatch { .. }), "{e}");
-    }
-
     #[test]
     fn bad_input_is_an_error() {
-        let l = problem([4, 4, 2]);
-        let (_, mut a) = stiffness(&l);
-        let lay = layout(&l);
+        let (mut a, nns) = grid_problem(4, 4, 2);
         let params = AmgParams { coarse_size: 10, ..AmgParams::default() };
         a.val[a.ptr[5]..a.ptr[6]].iter_mut().for_each(|v| *v = -v.abs());
-        let e = SmoothedAggregation::new(&a, &lay, &params).unwrap_err();
+        let e = SmoothedAggregation::new(&a, &nns, &params).unwrap_err();
         assert!(matches!(e, AmgError::NonPositiveDiagonal { level: 0, row: 5, .. }), "{e}");
-        let e = SmoothedAggregation::new(&a, &lay, &AmgParams { smoother_degree: 0, ..params }).unwrap_err();
+        let e = SmoothedAggregation::new(&a, &nns, &AmgParams { smoother_degree: 0, ..params }).unwrap_err();
         assert!(e.to_string().contains("amg.smoother_degree"), "{e}");
     }
 }

@@ -1,0 +1,18 @@
+//! The contracts: what a problem is, independent of how it is discretised or solved.
+//!
+//! * [`stresses`] — **P**, the admissible generalised stresses (a yield surface, theory §1–§2);
+//! * [`displacements`] — **K**, the admissible displacements with their extra unknowns (an
+//!   obstacle, theory §1, §3, §8);
+//! * [`lagrangian`] — **L**, the discrete saddle problem every solver consumes (theory §3), with
+//!   the energies and KKT residuals of any iterate;
+//! * [`solver`] — the solver interface: [`solver::Solver`], [`solver::Solution`], the report;
+//! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
+//! * [`pattern`] — the sparsity pattern of assembled matrices, as plain data.
+
+pub mod displacements;
+pub mod elasticity;
+pub mod lagrangian;
+pub mod pattern;
+pub mod solver;
+pub mod stresses;
+pub mod tensor;
