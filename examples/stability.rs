@@ -27,16 +27,17 @@ fn main() {
             Outcome::SceneError(_) => "scene error".into(),
             Outcome::SolveError(_) => "error".into(),
         };
-        eprintln!("[{done}/{n}] case {} {} / {}: {what}", r.case.group, r.case.label, r.solver.replace('\n', ", "));
+        eprintln!("[{done}/{n}] case {} {} / {}: {what}", r.case.group, r.case.label, r.solver);
     });
     let table = markdown(&rows);
     eprintln!("locking study (Newton, two meshes)...");
     let lock = locking_markdown(&locking(&[0.3, 0.49, 0.499, 0.4999]));
-    let units: Vec<_> = all_solvers().iter().map(|s| units_check(s, 1e9, 1e-3).expect("units case runs")).collect();
+    let units: Vec<_> =
+        all_solvers().iter().map(|s| units_check(s.as_ref(), 1e9, 1e-3).expect("units case runs")).collect();
     let units = units_markdown(&units);
     let block = format!(
         "Measured by `cargo run --release --example stability` ({:.0} s on this machine) on the small \
-         default scene (12×12×6 cells graded 3, 5 184 tetrahedra, SPEC §6 with the edit in the case column). \
+         default scene (12×12×6 cells graded 3, 5 184 tetrahedra, theory §6 with the edit in the case column). \
          KKT is the relative residual recomputed from the returned solution; \"U vs Newton\" is the relative \
          difference from Newton's U on the same case.\n\n{table}\n**Units** (case 3: stresses ×1e9, lengths ×1e-3, \
          force ×1e3): relative deviation of u/10⁻³ and σ/10⁹ from the solution in the default units.\n\n{units}\n\

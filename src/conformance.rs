@@ -1,5 +1,5 @@
 //! The solver conformance kit: runs any [`Solver`] on small scenes — homogeneous compression
-//! (closed form, SPEC §7), an elastic Hertz contact, and the default scene of SPEC §6 with
+//! (closed form, theory §7), an elastic Hertz contact, and the default scene of theory §6 with
 //! plasticity and contact, with weak hardening and with an off-centre elliptic punch — and
 //! checks, for each:
 //!
@@ -8,6 +8,10 @@
 //! * homogeneous compression matches the closed form;
 //! * the solution agrees with a reference solver's: U, σ̂ in the energy norm, the contact set,
 //!   and the plastic set except elements within 1e-8 of the yield surface.
+//!
+//! The scenes are typed [`Scene`] values built in code ([`Johnson`], [`homogeneous`], [`hertz`]),
+//! with the values of the example files; a variant is another value of the parameters
+//! (`Johnson { h: 0.5, ..Johnson::default() }`), never edited TOML text.
 //!
 //! ```no_run
 //! use saddle::conformance::{Tolerances, check_solver};
@@ -21,11 +25,14 @@
 //! ```
 
 use crate::scene::Scene;
+use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid, RigidPunch};
 use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{
-    Lagrangian, P1P0Lagrangian, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
+    AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, P1P0Lagrangian, Region, SceneError,
+    Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
 };
-use std::path::Path;
+use saddle_yield::VonMises;
+use std::path::PathBuf;
 use thiserror::Error;
 
 /// A failed check: which scene, which check, with the numbers.
@@ -92,53 +99,173 @@ pub struct KitScene {
     pub exact_u: Option<f64>,
 }
 
-const JOHNSON: &str = include_str!("../examples/johnson.toml");
-const HOMOGENEOUS: &str = include_str!("../examples/homogeneous.toml");
-const HERTZ: &str = include_str!("../examples/hertz.toml");
-
-/// `text` (a scene) with `edits` applied (dotted paths, e.g. `("yield.h", 0.5)`), as TOML text.
-pub fn edited(text: &str, edits: &[(&str, toml::Value)]) -> String {
-    let mut table: toml::Table = toml::from_str(text).expect("kit scenes parse");
-    for (path, value) in edits {
-        let mut keys: Vec<&str> = path.split('.').collect();
-        let last = keys.pop().unwrap();
-        let mut cur = &mut table;
-        for k in keys {
-            cur = cur.get_mut(k).and_then(|v| v.as_table_mut()).expect("kit edits name existing tables");
-        }
-        cur.insert(last.to_string(), value.clone());
-    }
-    toml::to_string(&table).unwrap()
+/// The default scene of theory §6 (`examples/johnson.toml`) by its parameters: a hardening
+/// von Mises block length·(−1,1)²×(0,height), clamped off Γ₁ = zmin ∩ {|x₁|, |x₂| ≤ 0.75·length}
+/// (grid lines aligned on its edges), pushed from below by a rigid punch with force F on the
+/// candidate contact disc Γ₀ = zmin ∩ {r ≤ 0.5·length}. [`Default`] is the kit's small mesh
+/// (12×12×6 cells graded 3, 5 184 tetrahedra) of the example's problem;
+/// `Johnson { cells: [32, 32, 16], ratio: 4.0, ..Johnson::default() }` is the example file's
+/// scene (without its title and solver). A variant is a struct update:
+///
+/// ```
+/// use saddle::conformance::Johnson;
+/// let weak = Johnson { h: 0.5, ..Johnson::default() }.scene();
+/// assert_eq!(weak.mesh.cells(), Some([12, 12, 6]));
+/// ```
+#[derive(Clone, Debug)]
+pub struct Johnson {
+    /// Cells of the box mesh per axis.
+    pub cells: [usize; 3],
+    /// Grading toward the punch centre: largest over smallest cell.
+    pub ratio: f64,
+    /// Young's modulus E.
+    pub young: f64,
+    /// Poisson's ratio ν.
+    pub nu: f64,
+    /// Von Mises yield radius k₀.
+    pub k0: f64,
+    /// Hardening modulus h (0: perfect plasticity).
+    pub h: f64,
+    /// The force F on the punch.
+    pub force: f64,
+    /// The punch's gap φ, in the scene's own lengths (not scaled by `length`).
+    pub gap: Box<dyn GapShape>,
+    /// Height of the block in units of `length` (1; 0.03 is a layer of slivers).
+    pub height: f64,
+    /// Clamped off Γ₁; `false` leaves the body without Dirichlet conditions, so rigid-body
+    /// motion is free (a scene error of [`Scene::into_problem`]).
+    pub clamped: bool,
+    /// The unit of length: the block, Γ₁, the contact disc and the aligned grid lines scale
+    /// with it (1; stresses and forces are given as they are).
+    pub length: f64,
 }
 
-/// A scene from TOML text with `edits` applied, or the error that makes it invalid.
-pub fn try_scene_with(text: &str, edits: &[(&str, toml::Value)]) -> Result<P1P0Lagrangian, SceneError> {
-    let scene = Scene::from_toml(&edited(text, edits), Path::new("kit.toml"))?;
+impl Default for Johnson {
+    /// The small default scene: 12×12×6 cells graded 3, otherwise `examples/johnson.toml`.
+    fn default() -> Self {
+        Self {
+            cells: [12, 12, 6],
+            ratio: 3.0,
+            young: 100.0,
+            nu: 0.3,
+            k0: 1.0,
+            h: 5.0,
+            force: 0.3,
+            gap: Box::new(Paraboloid::new(5.0)),
+            height: 1.0,
+            clamped: true,
+            length: 1.0,
+        }
+    }
+}
+
+impl Johnson {
+    /// The scene (no title, no solver).
+    pub fn scene(&self) -> Scene {
+        let s = self.length;
+        let mesh = BoxMesh::new([-s, -s, 0.0], [s, s, self.height * s], self.cells)
+            .graded([0.0; 3], self.ratio)
+            .aligned(0, &[-0.75 * s, 0.75 * s])
+            .aligned(1, &[-0.75 * s, 0.75 * s]);
+        let gamma1 = Region::All(vec![
+            group("zmin"),
+            Region::Box { min: [-0.75 * s, -0.75 * s, -s], max: [0.75 * s, 0.75 * s, s] },
+        ]);
+        let zone = Region::All(vec![group("zmin"), Region::Disc { center: [0.0, 0.0], radius: 0.5 * s }]);
+        Scene {
+            dirichlet: if self.clamped { vec![Dirichlet::clamped(Region::Not(Box::new(gamma1)))] } else { vec![] },
+            ..base_scene(
+                mesh,
+                Elasticity { young: self.young, poisson: self.nu },
+                Some(Box::new(VonMises::new(self.k0, self.h))),
+                RigidPunch::new(self.force, zone, self.gap.clone()),
+            )
+        }
+    }
+
+    /// The assembled problem.
+    pub fn problem(&self) -> P1P0Lagrangian {
+        assemble(self.scene()).expect("kit scenes are valid")
+    }
+}
+
+/// The facet group `name`.
+fn group(name: &str) -> Region {
+    Region::Group(name.into())
+}
+
+/// A scene of the kit: no title, no Dirichlet condition, load or solver yet.
+fn base_scene(
+    mesh: BoxMesh,
+    material: Elasticity,
+    yield_surface: Option<Box<dyn AdmissibleStresses>>,
+    obstacle: RigidPunch,
+) -> Scene {
+    Scene {
+        title: None,
+        mesh: Box::new(mesh),
+        material,
+        yield_surface,
+        dirichlet: vec![],
+        load: vec![],
+        obstacle: Some(Box::new(obstacle)),
+        solver: None,
+        base_dir: PathBuf::new(),
+    }
+}
+
+/// Homogeneous compression of theory §7 (`examples/homogeneous.toml` with force `f`): the unit
+/// cube (3×3×3 cells) on rollers (u₁ = 0 on x₁ = 0, u₂ = 0 on x₂ = 0, u₃ = 0 on x₃ = 1), a flat
+/// punch on the whole bottom face; E = 100, ν = 0.3, k₀ = 1, h = 5.
+pub fn homogeneous(f: f64) -> Scene {
+    Scene {
+        dirichlet: vec![
+            Dirichlet::roller(group("xmin"), Component::X),
+            Dirichlet::roller(group("ymin"), Component::Y),
+            Dirichlet::roller(group("zmax"), Component::Z),
+        ],
+        ..base_scene(
+            BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]),
+            Elasticity { young: 100.0, poisson: 0.3 },
+            Some(Box::new(VonMises::new(1.0, 5.0))),
+            RigidPunch::new(f, group("zmin"), Box::new(Flat::default())),
+        )
+    }
+}
+
+/// The elastic Hertz contact of theory §7 (`examples/hertz.toml`) with `cells` graded `ratio`
+/// toward the contact centre: a quarter of the block (0,6)³ on symmetry rollers, the far faces
+/// clamped, E = 100, ν = 0.3, the quarter's force F = 0.075 on a paraboloid punch R = 5 over
+/// the disc of radius 0.45.
+pub fn hertz(cells: [usize; 3], ratio: f64) -> Scene {
+    let zone = Region::All(vec![group("zmin"), Region::Disc { center: [0.0, 0.0], radius: 0.45 }]);
+    Scene {
+        dirichlet: vec![
+            Dirichlet::roller(group("xmin"), Component::X),
+            Dirichlet::roller(group("ymin"), Component::Y),
+            Dirichlet::clamped(Region::Any(vec![group("xmax"), group("ymax"), group("zmax")])),
+        ],
+        ..base_scene(
+            BoxMesh::new([0.0; 3], [6.0; 3], cells).graded([0.0; 3], ratio),
+            Elasticity { young: 100.0, poisson: 0.3 },
+            None,
+            RigidPunch::new(0.075, zone, Box::new(Paraboloid::new(5.0))),
+        )
+    }
+}
+
+/// Validates `scene` (as reading a file does) and assembles L, or the scene error — among them
+/// the rigid-body motion a scene's Dirichlet conditions leave free ([`Scene::into_problem`]).
+pub fn assemble(scene: Scene) -> Result<P1P0Lagrangian, SceneError> {
+    scene.validate()?;
     Ok(scene.into_problem()?.0)
 }
 
-/// A scene from TOML text with `edits` applied (dotted paths, e.g. `("yield.h", 0.5)`).
-pub fn scene_with(text: &str, edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
-    try_scene_with(text, edits).expect("kit scenes are valid")
+fn kit_problem(scene: Scene) -> P1P0Lagrangian {
+    assemble(scene).expect("kit scenes are valid")
 }
 
-fn cells(c: [i64; 3]) -> toml::Value {
-    toml::Value::Array(c.iter().map(|&x| toml::Value::Integer(x)).collect())
-}
-
-/// The TOML text of the small default scene of SPEC §6 (12×12×6 cells graded 3) with `edits`.
-pub fn small_johnson_text(edits: &[(&str, toml::Value)]) -> String {
-    let mut all = vec![("mesh.cells", cells([12, 12, 6])), ("mesh.grading.ratio", toml::Value::Float(3.0))];
-    all.extend(edits.iter().cloned());
-    edited(JOHNSON, &all)
-}
-
-/// The small default scene of SPEC §6 (12×12×6 cells graded 3): plasticity and contact.
-pub fn small_johnson(edits: &[(&str, toml::Value)]) -> P1P0Lagrangian {
-    scene_with(&small_johnson_text(edits), &[])
-}
-
-/// U of homogeneous compression (SPEC §7) for E = 100, ν = 0.3, k₀ = 1, h = 5.
+/// U of homogeneous compression (theory §7) for E = 100, ν = 0.3, k₀ = 1, h = 5.
 pub fn homogeneous_u(f: f64) -> f64 {
     let (e, k0, h) = (100.0, 1.0, 5.0);
     let s = (2.0f64 / 3.0).sqrt() * f;
@@ -147,37 +274,28 @@ pub fn homogeneous_u(f: f64) -> f64 {
 
 /// The kit's scenes.
 pub fn scenes() -> Vec<KitScene> {
-    let float = toml::Value::Float;
-    let elliptic: toml::Value = toml::from_str::<toml::Table>(
-        "g = { type = \"elliptic_paraboloid\", R1 = 4.0, R2 = 6.5, c1 = 0.08, c2 = -0.05 }",
-    )
-    .unwrap()["g"]
-        .clone();
+    let elliptic = EllipticParaboloid { R1: 4.0, R2: 6.5, c1: 0.08, c2: -0.05 };
     vec![
         KitScene {
             name: "homogeneous, elastic (F = 1)",
-            problem: scene_with(HOMOGENEOUS, &[("obstacle.F", float(1.0))]),
+            problem: kit_problem(homogeneous(1.0)),
             exact_u: Some(homogeneous_u(1.0)),
         },
         KitScene {
             name: "homogeneous, plastic (F = 2)",
-            problem: scene_with(HOMOGENEOUS, &[]),
+            problem: kit_problem(homogeneous(2.0)),
             exact_u: Some(homogeneous_u(2.0)),
         },
-        KitScene {
-            name: "Hertz, elastic",
-            problem: scene_with(HERTZ, &[("mesh.cells", cells([8, 8, 8])), ("mesh.grading.ratio", float(20.0))]),
-            exact_u: None,
-        },
-        KitScene { name: "Johnson (SPEC §6)", problem: small_johnson(&[]), exact_u: None },
+        KitScene { name: "Hertz, elastic", problem: kit_problem(hertz([8, 8, 8], 20.0)), exact_u: None },
+        KitScene { name: "Johnson (SPEC §6)", problem: Johnson::default().problem(), exact_u: None },
         KitScene {
             name: "Johnson, weak hardening h = 0.5",
-            problem: small_johnson(&[("yield.h", float(0.5))]),
+            problem: Johnson { h: 0.5, ..Johnson::default() }.problem(),
             exact_u: None,
         },
         KitScene {
             name: "Johnson, off-centre elliptic punch",
-            problem: small_johnson(&[("obstacle.gap", elliptic)]),
+            problem: Johnson { gap: Box::new(elliptic), ..Johnson::default() }.problem(),
             exact_u: None,
         },
     ]
@@ -212,7 +330,7 @@ pub fn agreement(l: &dyn Lagrangian, a: &Solution, b: &Solution) -> Agreement {
     Agreement { u_rel, stress_rel, contact_mismatch, plastic_mismatch }
 }
 
-/// [σ̂_a − σ̂_b] / [σ̂_b] in the energy norm of SPEC §1.
+/// [σ̂_a − σ̂_b] / [σ̂_b] in the energy norm of theory §1.
 pub fn energy_distance(l: &dyn Lagrangian, a: &StressField, b: &StressField) -> f64 {
     let law = *l.elasticity();
     let p = l.plasticity();
@@ -292,4 +410,68 @@ pub fn check_solver(
         out.push(SceneResult { scene: s.name, iterations: sol.report.iterations, kkt, agreement });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// The example file's scene without its title and solver, as data.
+    fn example(name: &str) -> Scene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(name);
+        Scene { title: None, solver: None, base_dir: PathBuf::new(), ..Scene::from_file(&path).unwrap() }
+    }
+
+    /// The scenes as plain data: every field and plugin parameter.
+    fn data(scene: &Scene) -> serde_json::Value {
+        serde_json::to_value(scene).unwrap()
+    }
+
+    /// Dofs, elements, contact rows and extras of the assembled problem.
+    fn sizes(scene: Scene) -> [usize; 4] {
+        let l = assemble(scene).unwrap();
+        [l.n_dofs(), l.n_points(), l.constraints().n_rows(), l.n_extras()]
+    }
+
+    /// The scenes built in code are the example files' problems: the same data, field for field,
+    /// and the same assembled sizes.
+    #[test]
+    fn builders_match_the_example_files() {
+        let cases = [
+            ("johnson.toml", Johnson { cells: [32, 32, 16], ratio: 4.0, ..Johnson::default() }.scene()),
+            ("homogeneous.toml", homogeneous(2.0)),
+            ("hertz.toml", hertz([25, 25, 25], 79.5)),
+        ];
+        for (file, built) in cases {
+            let file_scene = example(file);
+            assert_eq!(data(&built), data(&file_scene), "{file}");
+            assert_eq!(sizes(built), sizes(file_scene), "{file}");
+        }
+        // the small default differs from the example by its mesh only
+        let (mut small, file) =
+            (data(&Johnson::default().scene()), data(&example("johnson.toml").with_cells([12, 12, 6]).unwrap()));
+        assert_eq!(small["mesh"]["grading"]["ratio"], 3.0);
+        small["mesh"]["grading"]["ratio"] = file["mesh"]["grading"]["ratio"].clone();
+        assert_eq!(small, file);
+    }
+
+    #[test]
+    fn variants_are_struct_updates_and_assemble() {
+        let l = Johnson::default().problem();
+        assert_eq!(l.n_points(), 12 * 12 * 6 * 6);
+        // no clamped node: the typed scene error naming the free motion
+        match assemble(Johnson { clamped: false, ..Johnson::default() }.scene()) {
+            Err(SceneError::Region { field, message }) => {
+                assert_eq!(field, "dirichlet");
+                assert!(message.contains("rigid-body motion free ("), "{message}");
+            }
+            other => panic!("an unclamped body must be a scene error: {:?}", other.map(|l| l.n_dofs())),
+        }
+        // a bad parameter is caught as when reading a file
+        let e = assemble(Johnson { nu: 0.5, ..Johnson::default() }.scene()).unwrap_err().to_string();
+        assert!(e.contains("material.nu = 0.5"), "{e}");
+        let thin = Johnson { height: 0.03, ..Johnson::default() }.scene();
+        assert!(thin.mesh.build(Path::new(".")).unwrap().quality().max_aspect_ratio > 90.0);
+    }
 }

@@ -130,7 +130,7 @@ impl Summary {
 
 /// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data.
 /// Point data: `displacement`, `contact_force` (Gᵀλ at the nodes). Cell data: `stress`
-/// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises`, `xi` (hardening variables),
+/// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises`, the hardening variables under the names the yield surface gives them (`xi` for von Mises),
 /// `plastic` (0/1).
 pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io::Result<()> {
     let mesh = l.mesh();
@@ -145,9 +145,14 @@ pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io
     arrays.push(("point", "contact_force", 3, f64s(&mut force.iter().flatten().copied())));
     arrays.push(("cell", "stress", 6, f64s(&mut sol.stress.sigma.iter().flat_map(to_vtk))));
     arrays.push(("cell", "von_mises", 1, f64s(&mut sol.stress.sigma.iter().map(von_mises))));
-    if sol.stress.q_dim > 0 {
-        let xi = (0..sol.stress.len()).flat_map(|i| sol.stress.q(i).to_vec());
-        arrays.push(("cell", "xi", sol.stress.q_dim, f64s(&mut xi.into_iter())));
+    // the hardening variables, one cell field per name the yield surface gives them
+    if let Some(p) = l.plasticity() {
+        let mut first = 0;
+        for (name, comps) in p.hardening_fields() {
+            let field = (0..sol.stress.len()).flat_map(|i| sol.stress.q(i)[first..first + comps].to_vec());
+            arrays.push(("cell", name, comps, f64s(&mut field.into_iter())));
+            first += comps;
+        }
     }
     arrays.push(("cell", "plastic", 1, sol.stress.plastic.iter().map(|p| *p as u8).collect()));
     arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));

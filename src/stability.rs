@@ -1,4 +1,4 @@
-//! The stability study (issue 5): stiff and extreme variants of the default scene of SPEC §6,
+//! The stability study (issue 5): stiff and extreme variants of the default scene of theory §6,
 //! each run by every solver, with a measured outcome — converged to tolerance (iterations, the
 //! independently recomputed KKT residual, U against Newton), a flagged stop, or the typed error
 //! it gives. [`study`] runs the whole table; `tests/stability.rs` asserts each case; the README's
@@ -8,15 +8,44 @@
 //! cargo run --release --example stability            # prints the table and rewrites README.md's
 //! ```
 //!
-//! The scenes are the small default scene of the conformance kit (12×12×6 cells graded 3,
-//! 5 184 tetrahedra) with edits, so that the whole table takes about a minute.
+//! The scenes are typed values: the small default scene of the conformance kit
+//! ([`Johnson::default`]: 12×12×6 cells graded 3, 5 184 tetrahedra) with one parameter changed,
+//! so that the whole table takes about a minute; the solvers are typed values too.
 
-use crate::conformance::{edited, small_johnson_text};
+use crate::conformance::{Johnson, assemble};
 use crate::output::Summary;
+use crate::run::solver_by_type;
 use crate::scene::Scene;
-use saddle_core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, StopReason, Workspace};
-use std::path::Path;
+use saddle_contact::{Flat, Paraboloid};
+use saddle_core::{
+    Lagrangian, P1P0Lagrangian, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace,
+};
+use saddle_solvers::{Penalty, Uzawa};
+use std::sync::Arc;
 use std::time::Instant;
+
+/// A solver as the study runs it, with its label in the table's solver column.
+#[derive(Clone, Debug)]
+pub struct Setting {
+    /// `newton`, or for a special setting `uzawa, rho = 2.5`.
+    pub label: String,
+    /// The solver.
+    pub solver: Box<dyn Solver>,
+}
+
+impl Setting {
+    /// `solver` labelled `label`.
+    pub fn new(label: impl Into<String>, solver: impl Solver + 'static) -> Self {
+        Self { label: label.into(), solver: Box::new(solver) }
+    }
+}
+
+impl From<Box<dyn Solver>> for Setting {
+    /// The solver labelled by its type name.
+    fn from(solver: Box<dyn Solver>) -> Self {
+        Self { label: solver.name().to_string(), solver }
+    }
+}
 
 /// One variant of the default scene.
 #[derive(Clone, Debug)]
@@ -25,93 +54,61 @@ pub struct Case {
     pub group: u8,
     /// What is varied, e.g. `h/E = 1e-8`.
     pub label: String,
-    /// The scene as TOML text.
-    pub text: String,
+    /// The scene.
+    pub scene: Scene,
     /// The solvers to run: the four defaults, or one special setting.
-    pub solvers: Vec<String>,
+    pub solvers: Vec<Setting>,
 }
 
 impl Case {
-    fn new(group: u8, label: impl Into<String>, text: String) -> Self {
-        Self { group, label: label.into(), text, solvers: all_solvers() }
+    fn new(group: u8, label: impl Into<String>, scene: Scene) -> Self {
+        Self { group, label: label.into(), scene, solvers: all_solvers().into_iter().map(Setting::from).collect() }
     }
 
-    /// The case run by one solver setting only (a `[solver]` table).
-    fn only(mut self, solver: &str) -> Self {
-        self.solvers = vec![solver.to_string()];
+    /// The case run by one solver setting only.
+    fn only(mut self, setting: Setting) -> Self {
+        self.solvers = vec![setting];
         self
     }
 }
 
-/// The scene types of the four solvers (SOCP when the feature is on).
-pub fn all_solvers() -> Vec<String> {
-    let mut s: Vec<String> = ["uzawa", "newton", "penalty"].map(String::from).to_vec();
+/// The four solvers with their default parameters, by type (SOCP when the feature is on).
+pub fn all_solvers() -> Vec<Box<dyn Solver>> {
+    let mut names = vec!["uzawa", "newton", "penalty"];
     if cfg!(feature = "socp") {
-        s.push("socp".into());
+        names.push("socp");
     }
-    s
+    names.into_iter().map(default_solver).collect()
 }
 
-/// A solver from its `[solver]` table as TOML text (`type = "uzawa"\nrho = 2.5`).
-pub fn solver_from(table: &str) -> Box<dyn Solver> {
-    toml::from_str(table).unwrap_or_else(|e| panic!("bad solver table {table:?}: {e}"))
+/// The solver of type `name` with its default parameters.
+pub fn default_solver(name: &str) -> Box<dyn Solver> {
+    solver_by_type(name).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn f(x: f64) -> toml::Value {
-    toml::Value::Float(x)
+/// The default scene.
+pub fn scene() -> Scene {
+    Johnson::default().scene()
 }
 
-/// The small default scene with `edits` (dotted paths).
-pub fn scene(edits: &[(&str, toml::Value)]) -> String {
-    small_johnson_text(edits)
-}
-
-/// The default scene in other units: stresses (E, k₀, h) times `stress`, lengths times
-/// `length`, so the force scales by `stress·length²` (SPEC §6 scene, issue 5 case 3).
-pub fn scaled_units(text: &str, stress: f64, length: f64) -> String {
-    let table: toml::Table = toml::from_str(text).expect("scene parses");
-    let get = |path: &str| -> toml::Value {
-        let mut cur = toml::Value::Table(table.clone());
-        for part in path.split('.') {
-            cur = cur.get(part).unwrap_or_else(|| panic!("no {path}")).clone();
-        }
-        cur
-    };
-    let scale = |v: toml::Value, s: f64| -> toml::Value {
-        match v {
-            toml::Value::Float(x) => f(x * s),
-            toml::Value::Integer(i) => f(i as f64 * s),
-            toml::Value::Array(a) => toml::Value::Array(
-                a.into_iter()
-                    .map(|x| match x {
-                        toml::Value::Array(b) => {
-                            toml::Value::Array(b.into_iter().map(|y| f(y.as_float().unwrap() * s)).collect())
-                        }
-                        other => f(other.as_float().or(other.as_integer().map(|i| i as f64)).unwrap() * s),
-                    })
-                    .collect(),
-            ),
-            other => panic!("cannot scale {other}"),
-        }
-    };
-    let mut edits: Vec<(String, toml::Value)> = vec![];
-    for p in ["material.E", "yield.k0", "yield.h"] {
-        edits.push((p.into(), scale(get(p), stress)));
+/// The default scene in other units: stresses (E, k₀, h) times `stress`, lengths (the block,
+/// the regions, the punch's R) times `length`, so the force scales by `stress·length²`
+/// (theory §6 scene, issue 5 case 3).
+pub fn scaled_units(stress: f64, length: f64) -> Johnson {
+    let d = Johnson::default();
+    Johnson {
+        young: d.young * stress,
+        k0: d.k0 * stress,
+        h: d.h * stress,
+        force: d.force * (stress * length * length),
+        // the default paraboloid, R = 5
+        gap: Box::new(Paraboloid::new(5.0 * length)),
+        length: d.length * length,
+        ..d
     }
-    for p in ["mesh.min", "mesh.max", "mesh.align", "mesh.grading.toward", "obstacle.gap.R"] {
-        edits.push((p.into(), scale(get(p), length)));
-    }
-    edits.push(("obstacle.F".into(), scale(get("obstacle.F"), stress * length * length)));
-    let mut text = edited(text, &edits.iter().map(|(p, v)| (p.as_str(), v.clone())).collect::<Vec<_>>());
-    // the regions: Γ₁'s box and the contact disc
-    text = text
-        .replace("-0.75", &format!("{:e}", -0.75 * length))
-        .replace("0.75", &format!("{:e}", 0.75 * length))
-        .replace("radius = 0.5", &format!("radius = {:e}", 0.5 * length));
-    text
 }
 
-/// The first-yield force of the default scene's punch from Hertz's formulas (SPEC §7):
+/// The first-yield force of the default scene's punch from Hertz's formulas (theory §7):
 /// p₀ = 1.98 k₀ at first yield (ν = 0.3), F_y = π³R²p₀³/(6E*²).
 pub fn first_yield_force(young: f64, nu: f64, k0: f64, radius: f64) -> f64 {
     let e_star = young / (1.0 - nu * nu);
@@ -121,44 +118,52 @@ pub fn first_yield_force(young: f64, nu: f64, k0: f64, radius: f64) -> f64 {
 
 /// Every case of issue 5 (1–7) on the small default scene.
 pub fn cases() -> Vec<Case> {
+    let d = Johnson::default;
     let mut c = vec![];
     // 1. near-perfect plasticity (E = 100)
     for h_rel in [1e-1, 1e-2, 1e-4, 1e-6, 1e-8, 0.0] {
         let label = if h_rel == 0.0 { "h = 0 (perfect plasticity)".to_string() } else { format!("h/E = {h_rel:e}") };
-        c.push(Case::new(1, label, scene(&[("yield.h", f(100.0 * h_rel))])));
+        c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..d() }.scene()));
     }
     // 2. near-incompressibility
     for nu in [0.49, 0.499, 0.4999] {
-        c.push(Case::new(2, format!("ν = {nu}"), scene(&[("material.nu", f(nu))])));
+        c.push(Case::new(2, format!("ν = {nu}"), Johnson { nu, ..d() }.scene()));
     }
     // 3. units: SI-like stresses ×1e9, lengths ×1e-3
-    c.push(Case::new(3, "stresses ×1e9, lengths ×1e-3", scaled_units(&scene(&[]), 1e9, 1e-3)));
+    c.push(Case::new(3, "stresses ×1e9, lengths ×1e-3", scaled_units(1e9, 1e-3).scene()));
     // 4. loads
-    c.push(Case::new(4, "F = 1e-8 × default", scene(&[("obstacle.F", f(0.3e-8))])));
+    c.push(Case::new(4, "F = 1e-8 × default", Johnson { force: 0.3e-8, ..d() }.scene()));
     let f_y = first_yield_force(100.0, 0.3, 1.0, 5.0);
-    c.push(Case::new(4, "F = 100 × first yield", scene(&[("obstacle.F", f(100.0 * f_y))])));
+    c.push(Case::new(4, "F = 100 × first yield", Johnson { force: 100.0 * f_y, ..d() }.scene()));
     // 5. flat punch
-    let flat: toml::Value = toml::from_str::<toml::Table>("v = { type = \"flat\" }").unwrap()["v"].clone();
-    c.push(Case::new(5, "flat punch (φ ≡ 0)", scene(&[("obstacle.gap", flat)])));
+    c.push(Case::new(5, "flat punch (φ ≡ 0)", Johnson { gap: Box::new(Flat::default()), ..d() }.scene()));
     // 6. the penalty's smallest μ, Uzawa's step above its bound
-    c.push(Case::new(6, "μ = 1e-14", scene(&[])).only("type = \"penalty\"\nmu = 1e-14"));
-    c.push(Case::new(6, "ρ = 2.5 > 2", scene(&[])).only("type = \"uzawa\"\nrho = 2.5"));
+    c.push(Case::new(6, "μ = 1e-14", scene()).only(tiny_penalty()));
+    c.push(Case::new(6, "ρ = 2.5 > 2", scene()).only(unstable_uzawa()));
     // 7. meshes: slivers (a layer 0.03 thick: aspect ratio ≈ 100), no clamped node
     c.push(Case::new(7, "slivers (aspect ratio ~100)", sliver_scene()));
     c.push(Case::new(7, "no clamped node", unclamped_scene()));
     c
 }
 
+/// Case 6: the penalty at μ = 1e-14.
+pub fn tiny_penalty() -> Setting {
+    Setting::new("penalty, mu = 1e-14", Penalty { mu: 1e-14, ..Penalty::default() })
+}
+
+/// Case 6: Uzawa with the step ρ = 2.5 above its stable bound 2.
+pub fn unstable_uzawa() -> Setting {
+    Setting::new("uzawa, rho = 2.5", Uzawa { rho: 2.5, ..Uzawa::default() })
+}
+
 /// The default scene on a layer of thickness 0.03: cells 2/12 wide, 0.005 high near Γ₀.
-pub fn sliver_scene() -> String {
-    scene(&[("mesh.max", toml::Value::Array(vec![f(1.0), f(1.0), f(0.03)]))])
+pub fn sliver_scene() -> Scene {
+    Johnson { height: 0.03, ..Johnson::default() }.scene()
 }
 
 /// The default scene without its Dirichlet condition: rigid-body motion is free.
-pub fn unclamped_scene() -> String {
-    let mut t: toml::Table = toml::from_str(&scene(&[])).unwrap();
-    t.remove("dirichlet");
-    toml::to_string(&t).unwrap()
+pub fn unclamped_scene() -> Scene {
+    Johnson { clamped: false, ..Johnson::default() }.scene()
 }
 
 /// What one run gave.
@@ -167,10 +172,11 @@ pub enum Outcome {
     /// The solver returned (converged or flagged): its summary, the recomputed KKT residual
     /// and the wall time.
     Returned { summary: Box<Summary>, recomputed_kkt: f64, wall_s: f64 },
-    /// The scene was rejected before solving (scene error).
-    SceneError(String),
+    /// The scene was rejected before solving: the typed error of validation or
+    /// [`Scene::into_problem`].
+    SceneError(Arc<SceneError>),
     /// The solver returned a typed error.
-    SolveError(String),
+    SolveError(Arc<SolveError>),
 }
 
 /// One row of the table.
@@ -178,7 +184,7 @@ pub enum Outcome {
 pub struct Row {
     /// The case.
     pub case: Case,
-    /// The solver's `[solver]` table (`type = "newton"`, or a special setting).
+    /// The solver's label (`newton`, or a special setting `uzawa, rho = 2.5`).
     pub solver: String,
     /// What happened.
     pub outcome: Outcome,
@@ -194,23 +200,20 @@ impl Row {
     }
 }
 
-/// Builds the scene; the error text if it is rejected.
-pub fn problem(text: &str) -> Result<P1P0Lagrangian, String> {
-    let scene = Scene::from_toml(text, Path::new("stability.toml")).map_err(|e| e.to_string())?;
-    Ok(scene.into_problem().map_err(|e| e.to_string())?.0)
+/// Validates and assembles the scene; its typed error if it is rejected.
+pub fn problem(scene: &Scene) -> Result<P1P0Lagrangian, SceneError> {
+    assemble(scene.clone())
 }
 
-/// Runs `solver` (a `[solver]` table or a bare type name) on `text`.
-pub fn run(text: &str, solver: &str) -> (Outcome, Option<Solution>) {
-    let table = if solver.contains('=') { solver.to_string() } else { format!("type = \"{solver}\"") };
-    let l = match problem(text) {
+/// Runs `solver` on `scene`.
+pub fn run(scene: &Scene, solver: &dyn Solver) -> (Outcome, Option<Solution>) {
+    let l = match problem(scene) {
         Ok(l) => l,
-        Err(e) => return (Outcome::SceneError(e), None),
+        Err(e) => return (Outcome::SceneError(Arc::new(e)), None),
     };
-    let s = solver_from(&table);
     let t0 = Instant::now();
-    match s.solve(&l, &mut Silent) {
-        Err(e) => (Outcome::SolveError(e.to_string()), None),
+    match solver.solve(&l, &mut Silent) {
+        Err(e) => (Outcome::SolveError(Arc::new(e)), None),
         Ok(sol) => {
             let wall_s = t0.elapsed().as_secs_f64();
             let recomputed_kkt = l.kkt(&sol.iterate(), &mut Workspace::new(&l)).max();
@@ -224,9 +227,9 @@ pub fn run(text: &str, solver: &str) -> (Outcome, Option<Solution>) {
 pub fn study(cases: &[Case], mut progress: impl FnMut(&Row)) -> Vec<Row> {
     let mut rows = vec![];
     for case in cases {
-        for solver in &case.solvers {
-            let (outcome, _) = run(&case.text, solver);
-            let row = Row { case: case.clone(), solver: solver.clone(), outcome };
+        for setting in &case.solvers {
+            let (outcome, _) = run(&case.scene, setting.solver.as_ref());
+            let row = Row { case: case.clone(), solver: setting.label.clone(), outcome };
             progress(&row);
             rows.push(row);
         }
@@ -259,7 +262,7 @@ pub fn markdown(rows: &[Row]) -> String {
          |---|---|---|---|---:|---:|---:|---:|---|\n",
     );
     for r in rows {
-        let solver = r.solver.replace("type = ", "").replace('"', "").replace('\n', ", ");
+        let solver = &r.solver;
         let (outcome, it, kkt, du, time, notes) = match &r.outcome {
             Outcome::Returned { summary: s, recomputed_kkt, wall_s } => {
                 let outcome = if s.converged { "converged".to_string() } else { format!("**{:?}**", s.stop_reason) };
@@ -292,10 +295,10 @@ pub fn markdown(rows: &[Row]) -> String {
                 )
             }
             Outcome::SceneError(e) => {
-                ("scene error".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(e, 110))
+                ("scene error".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(&e.to_string(), 110))
             }
             Outcome::SolveError(e) => {
-                ("**error**".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(e, 110))
+                ("**error**".into(), "–".into(), "–".into(), "–".into(), "–".into(), short(&e.to_string(), 110))
             }
         };
         out += &format!(
@@ -307,10 +310,9 @@ pub fn markdown(rows: &[Row]) -> String {
 }
 
 /// U of Newton on the default scene with Poisson ratio `nu` at `cells` (for the locking study).
-pub fn newton_u(nu: f64, cells: [i64; 3]) -> f64 {
-    let cells = toml::Value::Array(cells.iter().map(|&c| toml::Value::Integer(c)).collect());
-    let text = scene(&[("material.nu", f(nu)), ("mesh.cells", cells)]);
-    match run(&text, "newton").0 {
+pub fn newton_u(nu: f64, cells: [usize; 3]) -> f64 {
+    let scene = Johnson { nu, cells, ..Johnson::default() }.scene();
+    match run(&scene, default_solver("newton").as_ref()).0 {
         Outcome::Returned { summary, .. } if summary.converged => summary.U.expect("the punch reports U"),
         other => panic!("newton failed at nu = {nu}: {other:?}"),
     }
@@ -347,13 +349,12 @@ pub struct UnitsCheck {
 }
 
 /// Runs case 3 (stresses × `stress`, lengths × `length`) for `solver`.
-pub fn units_check(solver: &str, stress: f64, length: f64) -> Result<UnitsCheck, String> {
-    let base = scene(&[]);
-    let (_, a) = run(&base, solver);
-    let (outcome, b) = run(&scaled_units(&base, stress, length), solver);
+pub fn units_check(solver: &dyn Solver, stress: f64, length: f64) -> Result<UnitsCheck, String> {
+    let (_, a) = run(&scene(), solver);
+    let (outcome, b) = run(&scaled_units(stress, length).scene(), solver);
     let (a, b) = match (a, b) {
         (Some(a), Some(b)) => (a, b),
-        _ => return Err(format!("{solver} did not return: {outcome:?}")),
+        _ => return Err(format!("{} did not return: {outcome:?}", solver.name())),
     };
     let max_dev = |x: &mut dyn Iterator<Item = (f64, f64)>| {
         let (num, den) = x.fold((0.0f64, 0.0f64), |(n, d), (p, q)| (n.max((p - q).abs()), d.max(q.abs())));
@@ -364,7 +365,7 @@ pub fn units_check(solver: &str, stress: f64, length: f64) -> Result<UnitsCheck,
         &mut a.stress.sigma.iter().zip(&b.stress.sigma).flat_map(|(p, q)| (0..6).map(move |k| (q[k] / stress, p[k]))),
     );
     Ok(UnitsCheck {
-        solver: solver.to_string(),
+        solver: solver.name().to_string(),
         iterations: a.report.iterations,
         scaled_iterations: b.report.iterations,
         u_deviation,

@@ -6,10 +6,15 @@
 //! * converged, with the KKT residual recomputed from the solution by L (independently of the
 //!   solver) within the solver's tolerance;
 //! * a clearly flagged result: `converged = false` with a stop reason other than `Converged`;
-//! * a typed error (`SolveError`) with a message;
+//! * a typed error (`SolveError`) with a message, of a kind expected for the draw: a numerical
+//!   failure (`NonFinite`, `Diverged`, `LinearAlgebra`) only for perfect plasticity (h = 0,
+//!   where beyond the limit load there is no solution), never `Parameter` or `Unsupported`
+//!   (`Case::extreme`);
 //!
 //! and in every case without a panic and without NaN or Inf anywhere in the returned solution
-//! (u, U, σ, ξ, λ, the reported KKT residuals and the residual history).
+//! (u, U, σ, ξ, λ, the reported KKT residuals and the residual history). Each solver must also
+//! converge on a stated fraction of the draws (`property`), so that a solver that always stops
+//! short or always fails does not pass.
 //!
 //! Ranges: E log-uniform in [1e-3, 1e12]; ν uniform in [−0.9, 0.4999]; k₀/E log-uniform in
 //! [1e-6, 1e-1]; h/E log-uniform in [1e-6, 10], or 0 (perfect plasticity) one time in six; one
@@ -24,7 +29,7 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, StopReason, Workspace};
+use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, SolveError, Solver, StopReason, Workspace};
 use saddle::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -66,6 +71,17 @@ impl Case {
             std::f64::consts::PI.powi(3) * self.radius.powi(2) * p0.powi(3) / (6.0 * e_star * e_star)
         };
         hertz.min(p0 * zone_area)
+    }
+
+    /// Why this draw may legitimately end in a typed numerical error (`NonFinite`, `Diverged`,
+    /// `LinearAlgebra`), or `None` where every solver must return a solution, converged or
+    /// flagged. Perfect plasticity (h = 0) is the one such draw: beyond the limit load J is
+    /// unbounded below and there is no solution (theory §10), the hardening block of the cone
+    /// programme degenerates and the consistent tangent is singular along the flow direction.
+    /// Measured (6 × 300 draws per solver, seeds 1–6): 7 errors, all SOCP `NonFinite` with
+    /// h = 0; none for the CI seed.
+    fn extreme(&self) -> Option<&'static str> {
+        (!self.elastic && self.h_rel == 0.0).then_some("perfect plasticity (h = 0)")
     }
 
     fn force(&self) -> f64 {
@@ -167,6 +183,25 @@ struct Tally {
     converged: usize,
     flagged: BTreeMap<String, usize>,
     errors: BTreeMap<String, usize>,
+    /// The draws that ended in an error, with the error (printed at the end).
+    failed_draws: Vec<String>,
+}
+
+impl Tally {
+    fn total(&self) -> usize {
+        self.converged + self.flagged.values().sum::<usize>() + self.errors.values().sum::<usize>()
+    }
+}
+
+/// The variant of a solve error, without its fields.
+fn kind(e: &SolveError) -> &'static str {
+    match e {
+        SolveError::LinearAlgebra { .. } => "LinearAlgebra",
+        SolveError::Diverged { .. } => "Diverged",
+        SolveError::NonFinite { .. } => "NonFinite",
+        SolveError::Parameter(_) => "Parameter",
+        SolveError::Unsupported { .. } => "Unsupported",
+    }
 }
 
 /// Runs `solver` on `case` and checks the three honest outcomes (module docs).
@@ -199,17 +234,33 @@ fn check(solver: &dyn Solver, case: &Case, tally: &mut Tally) -> Result<(), Test
         Err(e) => {
             let message = e.to_string();
             prop_assert!(!message.is_empty());
-            // the error's kind, without the numbers
-            let kind = format!("{e:?}").split([' ', '(', '{']).next().unwrap_or_default().to_string();
-            *tally.errors.entry(kind).or_default() += 1;
+            let legitimate = match &e {
+                SolveError::LinearAlgebra { .. } | SolveError::Diverged { .. } | SolveError::NonFinite { .. } => {
+                    case.extreme().is_some()
+                }
+                // the solvers' parameters are fixed and valid, and every solver handles these
+                // problems (one contact row per x₃ dof, a von Mises cone)
+                SolveError::Parameter(_) | SolveError::Unsupported { .. } => false,
+            };
+            prop_assert!(
+                legitimate,
+                "{}: a {} error where none is expected: {message}\nfor {:?}",
+                solver.name(),
+                kind(&e),
+                case
+            );
+            *tally.errors.entry(kind(&e).to_string()).or_default() += 1;
+            tally.failed_draws.push(format!("{message} ({}) for {case:?}", case.extreme().unwrap_or_default()));
         }
     }
     Ok(())
 }
 
-/// Runs the property for `solver` over `default_cases` drawn cases (module docs) and prints the
-/// outcome counts.
-fn property(solver: &dyn Solver, default_cases: u32) {
+/// Runs the property for `solver` over `default_cases` drawn cases (module docs), prints the
+/// outcome counts and checks that at least the fraction `min_converged` of the draws converged
+/// (the rest are flagged or errors of the kinds `check` allows): a solver that always stopped
+/// short or always failed would otherwise pass.
+fn property(solver: &dyn Solver, default_cases: u32, min_converged: f64) {
     let mut config = Config { failure_persistence: None, max_shrink_iters: 40, ..Config::default() };
     if std::env::var_os("PROPTEST_CASES").is_none() {
         config.cases = default_cases;
@@ -232,33 +283,56 @@ fn property(solver: &dyn Solver, default_cases: u32) {
         tally.flagged,
         tally.errors
     );
+    for d in &tally.failed_draws {
+        println!("  {}: {d}", solver.name());
+    }
     if let Err(e) = result {
         panic!("{}: {e}", solver.name());
     }
+    // every drawn case was run once and counted (a passing run neither shrinks nor rejects)
+    assert_eq!(tally.total(), cases_run as usize, "{}: {tally:?}", solver.name());
+    let fraction = tally.converged as f64 / cases_run as f64;
+    assert!(
+        fraction >= min_converged,
+        "{}: {} of {cases_run} draws converged ({:.0} %), fewer than the {:.0} % required; flagged {:?}, errors {:?}",
+        solver.name(),
+        tally.converged,
+        100.0 * fraction,
+        100.0 * min_converged,
+        tally.flagged,
+        tally.errors
+    );
 }
+
+// The converged fractions required below, against those measured over 6 × 300 draws (seeds 1–6)
+// and the CI seed's draws: Newton 99.7–100 % (CI 64/64), the penalty 100 % (64/64), SOCP
+// 99–100 % (32/32), Uzawa 93–96 % (47/48; the rest flagged `max_iterations`). Each threshold
+// leaves a margin of about 5 to 10 points.
 
 /// Uzawa with an explicit budget: 3000 iterations (the tiny mesh converges in tens to hundreds
 /// where the problem is well conditioned; the rest is flagged `max_iterations` or `stagnated`).
+/// At least 85 % converge.
 #[test]
 fn uzawa_never_lets_nan_escape() {
-    property(&saddle::solvers::Uzawa { max_iter: 3000, ..Default::default() }, 48);
+    property(&saddle::solvers::Uzawa { max_iter: 3000, ..Default::default() }, 48, 0.85);
 }
 
-/// Newton with its default budget of 50 iterations.
+/// Newton with its default budget of 50 iterations. At least 95 % converge.
 #[test]
 fn newton_never_lets_nan_escape() {
-    property(&saddle::solvers::Newton { max_iter: 50, ..Default::default() }, 64);
+    property(&saddle::solvers::Newton { max_iter: 50, ..Default::default() }, 64, 0.95);
 }
 
-/// The penalty with its default μ = 1e-12 and budget of 50 Newton iterations.
+/// The penalty with its default μ = 1e-12 and budget of 50 Newton iterations. At least 95 %
+/// converge.
 #[test]
 fn penalty_never_lets_nan_escape() {
-    property(&saddle::solvers::Penalty { max_iter: 50, ..Default::default() }, 64);
+    property(&saddle::solvers::Penalty { max_iter: 50, ..Default::default() }, 64, 0.95);
 }
 
-/// SOCP with 100 interior-point iterations and 20 polish iterations.
+/// SOCP with 100 interior-point iterations and 20 polish iterations. At least 90 % converge.
 #[cfg(feature = "socp")]
 #[test]
 fn socp_never_lets_nan_escape() {
-    property(&saddle::solvers::Socp { ipm_max_iter: 100, polish_max_iter: 20, ..Default::default() }, 32);
+    property(&saddle::solvers::Socp { ipm_max_iter: 100, polish_max_iter: 20, ..Default::default() }, 32, 0.90);
 }

@@ -1,69 +1,70 @@
-//! Issue 5, cases 1–7: stiff and extreme variants of the default scene (SPEC §6, small mesh),
+//! Issue 5, cases 1–7: stiff and extreme variants of the default scene (theory §6, small mesh),
 //! each run by every solver with a measured outcome. The full table (more values per case) is
 //! `cargo run --release --example stability`, which rewrites the README's stability table.
+//!
+//! The scenes and solvers are typed values ([`Johnson`] with one parameter changed); a case
+//! that must fail is checked for its kind of error, so that a failure for another reason fails.
 
-use saddle::core::{P1P0Lagrangian, Silent, StopReason};
+use saddle::conformance::Johnson;
+use saddle::core::linalg::error::LinalgError;
+use saddle::core::{Lagrangian, P1P0Lagrangian, SceneError, Silent, SolveError, Solver, StopReason};
 use saddle::output::Summary;
 use saddle::scene::Scene;
-use saddle::stability::solver_from;
 use saddle::stability::{
-    Outcome, all_solvers, first_yield_force, locking, run, scene, sliver_scene, unclamped_scene, units_check,
+    Outcome, all_solvers, default_solver, first_yield_force, locking, run, scene, sliver_scene, tiny_penalty,
+    unclamped_scene, units_check, unstable_uzawa,
 };
 use std::path::Path;
 
-fn f(x: f64) -> toml::Value {
-    toml::Value::Float(x)
-}
-
-/// Runs `solver` on `text`; asserts it converged with the recomputed KKT residual within its
+/// Runs `solver` on `scene`; asserts it converged with the recomputed KKT residual within its
 /// tolerance and returns the summary.
-fn converged(text: &str, solver: &str) -> Box<Summary> {
-    match run(text, solver).0 {
+fn converged(scene: &Scene, solver: &dyn Solver) -> Box<Summary> {
+    let name = solver.name();
+    match run(scene, solver).0 {
         Outcome::Returned { summary, recomputed_kkt, .. } => {
             assert!(
                 summary.converged,
-                "{solver}: stopped {:?} after {} iterations",
+                "{name}: stopped {:?} after {} iterations",
                 summary.stop_reason, summary.iterations
             );
             assert_eq!(summary.stop_reason, StopReason::Converged);
             assert!(
                 recomputed_kkt <= summary.tolerance,
-                "{solver}: recomputed KKT {recomputed_kkt:e} > tolerance {:e}",
+                "{name}: recomputed KKT {recomputed_kkt:e} > tolerance {:e}",
                 summary.tolerance
             );
             assert!(summary.U.unwrap().is_finite());
             summary
         }
-        other => panic!("{solver}: {other:?}"),
+        other => panic!("{name}: {other:?}"),
     }
 }
 
-/// Every solver converges on `text` and agrees with Newton's U to `rel`; returns Newton's summary.
-fn all_agree(text: &str, solvers: &[String], rel: f64) -> Box<Summary> {
-    let reference = converged(text, "newton");
-    for s in solvers.iter().filter(|s| *s != "newton") {
-        let u = converged(text, s).U.unwrap();
+/// Every solver converges on `scene` and agrees with Newton's U to `rel`; returns Newton's summary.
+fn all_agree(scene: &Scene, solvers: &[Box<dyn Solver>], rel: f64) -> Box<Summary> {
+    let reference = converged(scene, default_solver("newton").as_ref());
+    for s in solvers.iter().filter(|s| s.name() != "newton") {
+        let u = converged(scene, s.as_ref()).U.unwrap();
         let r = reference.U.unwrap();
-        assert!(((u - r) / r).abs() <= rel, "{s}: U = {u:e}, Newton's {r:e}");
+        assert!(((u - r) / r).abs() <= rel, "{}: U = {u:e}, Newton's {r:e}", s.name());
     }
     reference
 }
 
 /// The solvers without the slow SOCP (run on fewer variants to keep CI short).
-fn fast_solvers() -> Vec<String> {
-    all_solvers().into_iter().filter(|s| s != "socp").collect()
+fn fast_solvers() -> Vec<Box<dyn Solver>> {
+    all_solvers().into_iter().filter(|s| s.name() != "socp").collect()
 }
 
 /// Case 1: h/E down to 1e-8 and h = 0 — all solvers converge and agree; h = 0 warns.
 #[test]
 fn near_perfect_plasticity() {
     for h_rel in [1e-2, 1e-8] {
-        let s = all_agree(&scene(&[("yield.h", f(100.0 * h_rel))]), &fast_solvers(), 1e-6);
+        let s = all_agree(&Johnson { h: 100.0 * h_rel, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
         assert!(s.plastic_elements > 0, "h/E = {h_rel}: the case must be plastic");
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     }
-    let text = scene(&[("yield.h", f(0.0))]);
-    let s = all_agree(&text, &all_solvers(), 1e-6);
+    let s = all_agree(&Johnson { h: 0.0, ..Johnson::default() }.scene(), &all_solvers(), 1e-6);
     assert!(s.warnings.iter().any(|w| w.contains("yield.h = 0") && w.contains("unique")), "{:?}", s.warnings);
 }
 
@@ -71,8 +72,8 @@ fn near_perfect_plasticity() {
 /// further below the fine mesh's as ν → ½.
 #[test]
 fn near_incompressibility_and_locking() {
-    all_agree(&scene(&[("material.nu", f(0.49))]), &fast_solvers(), 1e-6);
-    all_agree(&scene(&[("material.nu", f(0.4999))]), &all_solvers(), 1e-6);
+    all_agree(&Johnson { nu: 0.49, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
+    all_agree(&Johnson { nu: 0.4999, ..Johnson::default() }.scene(), &all_solvers(), 1e-6);
     let lock = locking(&[0.3, 0.4999]);
     let ratio = |i: usize| lock[i].1 / lock[i].2;
     assert!(ratio(0) > 0.9 && ratio(0) < 1.0, "ν = 0.3: coarse/fine = {}", ratio(0));
@@ -84,8 +85,8 @@ fn near_incompressibility_and_locking() {
 #[test]
 fn units_scale_exactly() {
     for s in all_solvers() {
-        let c = units_check(&s, 1e9, 1e-3).unwrap();
-        assert_eq!(c.iterations, c.scaled_iterations, "{s}");
+        let c = units_check(s.as_ref(), 1e9, 1e-3).unwrap();
+        assert_eq!(c.iterations, c.scaled_iterations, "{}", s.name());
         assert!(c.u_deviation < 1e-9 && c.sigma_deviation < 1e-9, "{c:?}");
     }
 }
@@ -93,9 +94,9 @@ fn units_scale_exactly() {
 /// Case 4: a tiny force touches at a node or two; a huge force reaches the rim of Γ₀ and warns.
 #[test]
 fn tiny_and_huge_loads() {
-    let tiny = all_agree(&scene(&[("obstacle.F", f(0.3e-8))]), &fast_solvers(), 1e-6);
+    let tiny = all_agree(&Johnson { force: 0.3e-8, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
     assert!((1..=2).contains(&tiny.contact_nodes), "{} contact nodes", tiny.contact_nodes);
-    let huge = scene(&[("obstacle.F", f(100.0 * first_yield_force(100.0, 0.3, 1.0, 5.0)))]);
+    let huge = Johnson { force: 100.0 * first_yield_force(100.0, 0.3, 1.0, 5.0), ..Johnson::default() }.scene();
     let s = all_agree(&huge, &fast_solvers(), 1e-6);
     assert!(
         s.warnings.iter().any(|w| w.contains("rim of obstacle.zone") && w.contains("too small")),
@@ -108,27 +109,34 @@ fn tiny_and_huge_loads() {
 /// (rim pressure over mean > 1), and no "zone too small" warning (the zone is the punch face).
 #[test]
 fn flat_punch() {
-    let flat: toml::Value = toml::from_str::<toml::Table>("v = { type = \"flat\" }").unwrap()["v"].clone();
-    let s = all_agree(&scene(&[("obstacle.gap", flat)]), &all_solvers(), 1e-6);
+    let flat = Johnson { gap: Box::new(saddle::contact::Flat::default()), ..Johnson::default() }.scene();
+    let s = all_agree(&flat, &all_solvers(), 1e-6);
     let ratio = s.contact["rim_pressure_ratio"];
     assert!(ratio > 1.1, "rim/mean pressure {ratio}");
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
 }
 
 /// Case 6: the penalty at μ = 1e-14 reports its conditioning; Uzawa with ρ above 2 stops early
-/// with an error naming the bound.
+/// with the divergence error naming the bound it broke.
 #[test]
 fn tiny_penalty_and_unstable_uzawa_step() {
-    let text = scene(&[]);
-    let s = converged(&text, "type = \"penalty\"\nmu = 1e-14");
+    let scene = scene();
+    let s = converged(&scene, tiny_penalty().solver.as_ref());
     let cond = s.counters["condition_estimate"];
     assert!(cond.is_finite() && cond > 1e13, "condition estimate {cond:e}");
-    match run(&text, "type = \"uzawa\"\nrho = 2.5").0 {
-        Outcome::SolveError(e) => {
-            assert!(e.contains("diverged") && e.contains("stable bound 2"), "{e}");
-            let at: usize = e.split("iteration ").nth(1).unwrap().split(':').next().unwrap().parse().unwrap();
-            assert!(at <= 50, "divergence detected only at iteration {at}");
-        }
+    match run(&scene, unstable_uzawa().solver.as_ref()).0 {
+        Outcome::SolveError(e) => match e.as_ref() {
+            SolveError::Diverged { solver, iteration, residual, hint } => {
+                assert_eq!(solver, "uzawa");
+                assert!(
+                    hint.contains("solver.rho = 2.5 is at or above the stable bound 2") && hint.contains("rho < 2"),
+                    "{hint}"
+                );
+                assert!(*iteration <= 50, "divergence detected only at iteration {iteration}");
+                assert!(residual.is_finite(), "{e}");
+            }
+            other => panic!("ρ = 2.5 must be reported as divergence, not: {other}"),
+        },
         other => panic!("ρ = 2.5 must be reported as divergence: {other:?}"),
     }
 }
@@ -141,20 +149,37 @@ fn slivers_and_unclamped_body() {
     assert!(s.mesh_quality.max_aspect_ratio > 90.0, "aspect ratio {}", s.mesh_quality.max_aspect_ratio);
     assert!(s.warnings.iter().any(|w| w.contains("aspect ratio")), "{:?}", s.warnings);
     for solver in all_solvers() {
-        match run(&unclamped_scene(), &solver).0 {
-            Outcome::SceneError(e) => assert!(e.contains("dirichlet") && e.contains("rigid-body motion"), "{e}"),
-            other => panic!("{solver}: {other:?}"),
+        match run(&unclamped_scene(), solver.as_ref()).0 {
+            Outcome::SceneError(e) => match e.as_ref() {
+                SceneError::Region { field, message } => {
+                    assert_eq!(field, "dirichlet", "{e}");
+                    assert!(
+                        message.contains("rigid-body motion free (a translation along")
+                            || message.contains("rigid-body motion free (a rotation about"),
+                        "{e}"
+                    );
+                }
+                other => panic!("{}: the scene error must name the free rigid-body motion: {other}", solver.name()),
+            },
+            other => panic!("{}: {other:?}", solver.name()),
         }
     }
-    // the same L assembled in code (no scene check): every solver returns a typed error
-    let scene = Scene::from_toml(&unclamped_scene(), Path::new("unclamped.toml")).unwrap();
+    // the same L assembled in code (no scene check): every solver reports the singular
+    // stiffness as a typed linear-algebra error naming itself, not a panic or a NaN
+    let scene = unclamped_scene();
     let mesh = scene.mesh.build(Path::new(".")).unwrap();
     let l = P1P0Lagrangian::new(mesh, &[], scene.material, scene.yield_surface, scene.obstacle).unwrap();
     for solver in all_solvers() {
-        let s = solver_from(&format!("type = \"{solver}\""));
-        match s.solve(&l, &mut Silent) {
-            Err(e) => assert!(!e.to_string().is_empty()),
-            Ok(sol) => panic!("{solver}: an unrestrained body solved: converged = {}", sol.report.converged),
+        match solver.solve(&l, &mut Silent) {
+            Err(SolveError::LinearAlgebra { solver: name, source }) => {
+                assert_eq!(name, solver.name());
+                match source.downcast_ref::<LinalgError>() {
+                    Some(LinalgError::NotPositiveDefinite { n, .. }) => assert_eq!(*n, l.n_dofs(), "{source}"),
+                    _ => panic!("{name}: the singular stiffness must be reported as such: {source}"),
+                }
+            }
+            Err(e) => panic!("{}: the singular stiffness must be a linear-algebra error, not: {e}", solver.name()),
+            Ok(sol) => panic!("{}: an unrestrained body solved: converged = {}", solver.name(), sol.report.converged),
         }
     }
 }

@@ -19,7 +19,13 @@ use std::time::Instant;
 /// The reference: semismooth Newton to a relative KKT residual of 1e-13.
 pub fn reference_solver() -> Newton {
     // the direct backend: exact linear solves down to round-off
-    Newton { tol: 1e-13, max_iter: 50, line_search: true, linear: saddle_solvers::LinearSolver::Direct }
+    Newton {
+        tol: 1e-13,
+        max_iter: 50,
+        line_search: true,
+        linear: saddle_solvers::LinearSolver::Direct,
+        ..Newton::default()
+    }
 }
 
 /// What a rung runs.

@@ -1,5 +1,5 @@
 //! The conformance kit: what every K plugin ([`AdmissibleDisplacements`]) must satisfy on a
-//! mesh for the solvers of SPEC §4 to be right about it. A plugin author calls [`check_all`]
+//! mesh for the solvers of theory §4 to be right about it. A plugin author calls [`check_all`]
 //! from a test with a mesh, its Dirichlet conditions, a seed and a displacement scale (the
 //! size of the random displacements and extras, comparable to the gaps φ in the zone):
 //!
@@ -26,12 +26,12 @@
 //!   [`AdmissibleDisplacements::gap`] at the reference configuration (u, V) = (0, 0). Central
 //!   finite differences of `gap()` along random directions in u, then in V, equal G·du and
 //!   H·dV; the offsets equal gap(0, 0); and at random (u, V) of the given scale the rows and
-//!   `gap()` agree to round-off (an affine gap, the polyhedral K_h of SPEC §3) or at least to
+//!   `gap()` agree to round-off (an affine gap, the polyhedral K_h of theory §3) or at least to
 //!   second order: the difference must drop by 8 or more when (u, V) is quartered (a curved
 //!   gap; a first-order disagreement drops by 4 only).
 //! * `load`, `force`, `report` (b): [`AdmissibleDisplacements::load`] has one finite entry per
 //!   extra unknown. The kit then builds multipliers λ ≥ 0 that balance it, Hᵀλ = −f (the KKT
-//!   condition on the extras, SPEC §3; Σλ = F for the punch): the point closest to a random
+//!   condition on the extras, theory §3; Σλ = F for the punch): the point closest to a random
 //!   λ̃ ≥ 0 on that set, found by the dense QP of `saddle_core::linalg::dense_qp` (with a
 //!   regularised least-squares fallback when its least-norm start is not ≥ 0). Without extras
 //!   any λ ≥ 0 will do. No such λ is a `load` failure: the discrete problem has no solution.
@@ -467,7 +467,7 @@ impl<'a> Ctx<'a> {
                 check: "load",
                 message: format!(
                     "no multipliers λ ≥ 0 balance the load f = {f:?}: the best found leaves |Hᵀλ + f| = {:.3e} (tolerance \
-                     {tol:.1e}); the KKT condition Hᵀλ = −f on the extra unknowns (SPEC §3) cannot hold, so the discrete \
+                     {tol:.1e}); the KKT condition Hᵀλ = −f on the extra unknowns (theory §3) cannot hold, so the discrete \
                      problem has no solution",
                     res.amax()
                 ),

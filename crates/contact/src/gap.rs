@@ -1,4 +1,4 @@
-//! The gap function φ of the punch (SPEC §1): the punch occupies {x : −x₃ ≥ φ(x₁, x₂)} below
+//! The gap function φ of the punch (theory §1): the punch occupies {x : −x₃ ≥ φ(x₁, x₂)} below
 //! the plane of the contact face, with φ ≥ 0 and φ(x̄) = 0 at its lowest point x̄
 //! ([`GapShape::center`]). Shapes are plugins chosen by `type` in the `gap` table of the
 //! obstacle, e.g. `gap = { type = "paraboloid", R = 5.0 }`.
@@ -8,13 +8,13 @@ use saddle_core::error::{check, join};
 use serde::{Deserialize, Serialize};
 use std::fmt::Debug;
 
-/// φ(x₁, x₂) ≥ 0: the initial distance between the contact face and the punch (SPEC §1).
+/// φ(x₁, x₂) ≥ 0: the initial distance between the contact face and the punch (theory §1).
 #[typetag::serde(tag = "type")]
 pub trait GapShape: Debug + Send + Sync + dyn_clone::DynClone {
     /// Checks the parameters; `path` is the table's path in the scene (`obstacle.gap`).
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
 
-    /// φ(x₁, x₂) (SPEC §1).
+    /// φ(x₁, x₂) (theory §1).
     fn phi(&self, x1: f64, x2: f64) -> f64;
 
     /// Where φ is smallest (the first point of contact x̄); the contact radius is measured from
@@ -30,7 +30,7 @@ pub trait GapShape: Debug + Send + Sync + dyn_clone::DynClone {
 }
 
 /// `type = "paraboloid"`: the sphere of radius R near its apex,
-/// φ = ((x₁ − c₁)² + (x₂ − c₂)²)/(2R) (SPEC §6, R = 5 in the default scene).
+/// φ = ((x₁ − c₁)² + (x₂ − c₂)²)/(2R) (theory §6, R = 5 in the default scene).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 #[allow(non_snake_case)]
@@ -102,7 +102,7 @@ impl GapShape for EllipticParaboloid {
     }
 }
 
-/// `type = "flat"`: a flat punch, φ ≡ 0 (the homogeneous compression test of SPEC §7). The
+/// `type = "flat"`: a flat punch, φ ≡ 0 (the homogeneous compression test of theory §7). The
 /// optional `center` (default [0, 0]) is where the contact radius is measured from.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -1,14 +1,14 @@
 //! # saddle-contact
 //!
-//! Obstacles: the convex sets **K** of admissible displacements of *saddle* (SPEC §1, §3; the
+//! Obstacles: the convex sets **K** of admissible displacements of *saddle* (theory §1, §3; the
 //! trait is [`saddle_core::AdmissibleDisplacements`]).
 //!
 //! K is a closed convex set of displacements v together with the obstacle's own extra unknowns
-//! V and a load term f·V in the Lagrangian (1.11). For the rigid punch of SPEC §1,
+//! V and a load term f·V in the Lagrangian (1.11). For the rigid punch of theory §1,
 //! `K = { (v, V) ∈ W × R : v₃ + φ − V ≥ 0 on Γ₀ }`, V is the punch's displacement U and the load
 //! is F·V. On a mesh, K_h is polyhedral: one affine row per contact node,
-//! `g_i(u, U) = u₃(x_i) + φ(x_i) − U ≥ 0` (SPEC §3), returned by `discretise` as
-//! [`saddle_core::ConstraintRows`] — exactly what every solver of SPEC §4 consumes.
+//! `g_i(u, U) = u₃(x_i) + φ(x_i) − U ≥ 0` (theory §3), returned by `discretise` as
+//! [`saddle_core::ConstraintRows`] — exactly what every solver of theory §4 consumes.
 //!
 //! This crate provides
 //!
@@ -20,7 +20,7 @@
 //!   [`zone::rim_rows`]) in [`zone`];
 //! * the [`conformance`] kit every K plugin must pass ([`conformance::check_all`]).
 //!
-//! The scene table of the default scene (SPEC §6):
+//! The scene table of the default scene (theory §6):
 //!
 //! ```toml
 //! [obstacle]

@@ -1,9 +1,9 @@
-//! The rigid punch of SPEC §1: a rigid body below the contact face, moving only vertically by U,
+//! The rigid punch of theory §1: a rigid body below the contact face, moving only vertically by U,
 //! with gap function φ. K = { (v, V) : v₃ + φ − V ≥ 0 on Γ₀ }; on a mesh one row per contact
-//! node, `g_i = u₃(x_i) + φ(x_i) − U ≥ 0` (SPEC §3).
+//! node, `g_i = u₃(x_i) + φ(x_i) − U ≥ 0` (theory §3).
 //!
 //! * [`RigidPunch`] (`type = "rigid_punch"`): force control, U is an extra unknown loaded by F
-//!   (the term F·V of the Lagrangian (1.11)); at a solution Σλ_i = F (SPEC §3, KKT form).
+//!   (the term F·V of the Lagrangian (1.11)); at a solution Σλ_i = F (theory §3, KKT form).
 //! * [`RigidPunchDisplacement`] (`type = "rigid_punch_displacement"`): U prescribed, no extra
 //!   unknown; the resulting force Σλ_i is reported.
 //!
@@ -18,7 +18,7 @@ use saddle_core::{
 };
 use serde::{Deserialize, Serialize};
 
-/// `type = "rigid_punch"`: the force-controlled punch of SPEC §1, pushed up by F > 0.
+/// `type = "rigid_punch"`: the force-controlled punch of theory §1, pushed up by F > 0.
 ///
 /// ```toml
 /// [obstacle]
@@ -31,15 +31,15 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 #[allow(non_snake_case)]
 pub struct RigidPunch {
-    /// The upward force F > 0 on the punch (SPEC §1).
+    /// The upward force F > 0 on the punch (theory §1).
     pub F: f64,
-    /// The candidate contact zone Γ₀ (boundary nodes; SPEC §1, §3).
+    /// The candidate contact zone Γ₀ (boundary nodes; theory §1, §3).
     pub zone: Region,
     /// The gap function φ.
     pub gap: Box<dyn GapShape>,
 }
 
-/// `type = "rigid_punch_displacement"`: the punch of SPEC §1 moved by a prescribed U instead of
+/// `type = "rigid_punch_displacement"`: the punch of theory §1 moved by a prescribed U instead of
 /// a prescribed force; the rows are `g_i = u₃(x_i) + φ(x_i) − U ≥ 0`, there is no extra unknown
 /// and no load, and the contact force Σλ_i is an output.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -92,7 +92,7 @@ impl Punch<'_> {
         self.gap.phi(x[0], x[1])
     }
 
-    /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0 at the contact nodes of the zone (SPEC §3), for validated
+    /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0 at the contact nodes of the zone (theory §3), for validated
     /// parameters.
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
         let zone = candidate_nodes(self.zone, mesh, dofs, path)?;
@@ -195,12 +195,12 @@ impl AdmissibleDisplacements for RigidPunch {
         vec!["U".into()]
     }
 
-    /// F·V (SPEC §1, (1.11)).
+    /// F·V (theory §1, (1.11)).
     fn load(&self) -> Vec<f64> {
         vec![self.F]
     }
 
-    /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0: G = e₃ at the node, H = −1, c = φ(x_i) (SPEC §3).
+    /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0: G = e₃ at the node, H = −1, c = φ(x_i) (theory §3).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
         self.validate(path)?;
         self.punch().discretise(mesh, dofs, path)

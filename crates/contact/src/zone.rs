@@ -1,4 +1,4 @@
-//! The candidate contact zone Γ₀ on a mesh (SPEC §1, §3): which boundary nodes carry a contact
+//! The candidate contact zone Γ₀ on a mesh (theory §1, §3): which boundary nodes carry a contact
 //! row, and where the contact set meets the rim of the zone. Shared by every node-based
 //! obstacle (the punches of this crate, and plugins: see the crate docs).
 
@@ -8,21 +8,21 @@ use saddle_core::{ConstraintRows, DofMap, Region, SceneError, TetMesh};
 /// The contact nodes selected by a zone, with what the user should know about the selection.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CandidateNodes {
-    /// Boundary nodes of the zone whose u₃ is free, sorted: one contact row each (SPEC §3).
+    /// Boundary nodes of the zone whose u₃ is free, sorted: one contact row each (theory §3).
     pub nodes: Vec<usize>,
     /// Nodes dropped because a Dirichlet condition fixes their u₃, a non-planar zone, ...
     pub warnings: Vec<String>,
 }
 
-/// The contact nodes x_i ∈ Γ₀ of `zone` (SPEC §3). `path` is the obstacle's table; errors and
+/// The contact nodes x_i ∈ Γ₀ of `zone` (theory §3). `path` is the obstacle's table; errors and
 /// warnings name `{path}.zone`.
 ///
 /// Errors ([`SceneError::Region`]): a zone naming a facet group the mesh lacks (the message
 /// lists the mesh's groups), a zone selecting no boundary node, and a zone whose every node has
 /// u₃ fixed. Nodes with u₃ fixed by a Dirichlet condition cannot be contact nodes — Γ₀ must lie
-/// strictly inside Γ₁ (SPEC §1) — so they are dropped with a warning. A zone whose nodes do not
+/// strictly inside Γ₁ (theory §1) — so they are dropped with a warning. A zone whose nodes do not
 /// share one x₃ level gets a warning: the gap u₃ + φ − U measures vertical distance from a flat
-/// contact face (SPEC §1: Γ₁ lies in a plane).
+/// contact face (theory §1: Γ₁ lies in a plane).
 pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<CandidateNodes, SceneError> {
     let field = join(path, "zone");
     let missing = zone.missing_groups(mesh);
@@ -55,11 +55,11 @@ pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str)
         if nodes.is_empty() {
             return Err(SceneError::Region {
                 field,
-                message: format!("all {what}; no contact node is left (Γ₀ must lie strictly inside Γ₁, SPEC §1)"),
+                message: format!("all {what}; no contact node is left (Γ₀ must lie strictly inside Γ₁, theory §1)"),
             });
         }
         warnings.push(format!(
-            "{field}: {what} and were dropped: clamped nodes cannot be contact nodes (Γ₀ must lie strictly inside Γ₁, SPEC §1); \
+            "{field}: {what} and were dropped: clamped nodes cannot be contact nodes (Γ₀ must lie strictly inside Γ₁, theory §1); \
              {} contact nodes remain",
             nodes.len()
         ));
@@ -70,7 +70,7 @@ pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str)
     if hi - lo > 1e-9 * mesh.diameter() {
         warnings.push(format!(
             "{field}: the contact nodes span x₃ ∈ [{lo}, {hi}]; the gap u₃ + φ − U assumes a flat contact face \
-             (SPEC §1: Γ₁ lies in a plane), so the zone should select one horizontal face"
+             (theory §1: Γ₁ lies in a plane), so the zone should select one horizontal face"
         ));
     }
     Ok(CandidateNodes { nodes, warnings })

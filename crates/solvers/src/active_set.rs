@@ -1,4 +1,4 @@
-//! The linearised problem of active-set Newton methods (SPEC §3–§4): for a set A of active
+//! The linearised problem of active-set Newton methods (theory §3–§4.2): for a set A of active
 //! contact rows, solve
 //!
 //! ```text
@@ -20,7 +20,7 @@
 //! tangent (the fixed dofs are handled by the preconditioner as a diagonal block), to a
 //! relative tolerance the caller sets per step (inexact Newton).
 
-use crate::linear::{InSolver, lower, near_null_space};
+use crate::linear::{self, InSolver, lower, near_null_space};
 use nalgebra::{DMatrix, DVector};
 use saddle_core::linalg::{AmgParams, Csr, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
 use saddle_core::{ConstraintRows, Lagrangian, Material, SolveError, SymmetricPattern};
@@ -35,20 +35,24 @@ pub enum LinearSolver {
     Direct,
     /// CG with smoothed-aggregation AMG of the elastic stiffness: memory ~ N, inexact.
     Amg,
-    /// Direct up to [`AUTO_AMG_DOFS`] free dofs, AMG above (the default).
+    /// Direct up to a number of free dofs (Newton's `auto_amg_dofs`, default
+    /// [`AUTO_AMG_DOFS`]), AMG above (the default).
     #[default]
     Auto,
 }
 
-/// Above this many free dofs `auto` picks AMG (measured crossover on the default scene family,
-/// `saddle bench`).
+/// The default of Newton's `auto_amg_dofs`: above this many free dofs `auto` picks AMG. It is
+/// the crossover measured with `saddle bench` on the default scene family (2 cores): there the
+/// direct and the AMG Newton cost the same wall time; below it the factorisation is cheaper
+/// than the CG iterations, above it the factorisation's N^1.5 memory and time take over.
 pub const AUTO_AMG_DOFS: usize = 20_000;
 
 impl LinearSolver {
-    /// Direct or AMG for a problem with `n` free dofs.
-    pub fn resolve(self, n: usize) -> LinearSolver {
+    /// Direct or AMG for a problem with `n` free dofs, `auto` switching to AMG above
+    /// `auto_amg_dofs`.
+    pub fn resolve(self, n: usize, auto_amg_dofs: usize) -> LinearSolver {
         match self {
-            LinearSolver::Auto if n > AUTO_AMG_DOFS => LinearSolver::Amg,
+            LinearSolver::Auto if n > auto_amg_dofs => LinearSolver::Amg,
             LinearSolver::Auto => LinearSolver::Direct,
             other => other,
         }
@@ -73,8 +77,6 @@ pub struct IterativeSolve {
     fill: Vec<usize>,
     scratch: Mutex<Vec<f64>>,
     col: Vec<f64>,
-    /// Relative residual tolerance of the next solves.
-    pub tol: f64,
     /// CG iteration budget per solve.
     pub max_iter: usize,
     /// CG iterations so far.
@@ -200,6 +202,8 @@ pub struct ActiveSetSystem {
     /// How the systems are solved.
     pub backend: LinearBackend,
     work: Vec<f64>,
+    /// Symbolic analyses of L's pattern so far (one for the direct backend, none for AMG).
+    pub symbolic_analyses: usize,
     /// Numeric factorisations so far.
     pub factorisations: usize,
     /// Triangular solve pairs (direct) or CG solves (AMG) so far.
@@ -207,53 +211,64 @@ pub struct ActiveSetSystem {
 }
 
 impl ActiveSetSystem {
-    /// Symbolic analysis of L's pattern, once (the direct backend).
+    /// The direct backend: the symbolic analysis of L's pattern, once; `solver` names the
+    /// solver this system serves in errors.
     pub fn new(l: &dyn Lagrangian, solver: &str) -> Result<Self, SolveError> {
-        Self::with_backend(l, solver, LinearSolver::Direct)
+        let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
+        let mut symbolic_analyses = 0;
+        let chol = linear::analyse(l.pattern(), "tangent stiffness", solver, &mut symbolic_analyses)?;
+        let mut system = Self::with(l, solver, slaves, LinearBackend::Direct(Box::new(chol)));
+        system.symbolic_analyses = symbolic_analyses;
+        Ok(system)
     }
 
-    /// With the backend `linear` (resolved for L's size): the direct one analyses L's pattern;
-    /// the iterative one builds the multigrid hierarchy of the elastic stiffness.
-    pub fn with_backend(l: &dyn Lagrangian, solver: &str, linear: LinearSolver) -> Result<Self, SolveError> {
+    /// The iterative backend: the multigrid hierarchy of the elastic stiffness with the
+    /// parameters `amg`, and CG with at most `cg_max_iter` iterations per solve.
+    pub fn multigrid(
+        l: &dyn Lagrangian,
+        solver: &str,
+        amg: &AmgParams,
+        cg_max_iter: usize,
+    ) -> Result<Self, SolveError> {
         let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
-        let backend = match linear.resolve(l.n_dofs()) {
-            LinearSolver::Amg => {
-                let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
-                    solver: solver.into(),
-                    message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
-                })?;
-                let c = l.elasticity().stiffness_matrix();
-                let k = Csr::from_symmetric_lower(lower(l.pattern()), &l.stiffness(Material::Uniform(&c)));
-                let amg = SmoothedAggregation::new(&k, &near_null, &AmgParams::default()).map_err(|e| {
-                    SolveError::Unsupported { solver: solver.into(), message: format!("multigrid set-up: {e}") }
-                })?;
-                LinearBackend::Amg(Box::new(IterativeSolve {
-                    amg,
-                    pcg: Pcg::new(l.n_dofs()),
-                    a: k,
-                    fill: Vec::new(),
-                    scratch: Mutex::new(vec![0.0; l.n_dofs()]),
-                    col: vec![0.0; l.n_dofs()],
-                    tol: 1e-10,
-                    max_iter: 2000,
-                    iterations: 0,
-                    unconverged: 0,
-                    previous: Vec::new(),
-                }))
-            }
-            _ => LinearBackend::Direct(Box::new(
-                SparseCholesky::analyse(lower(l.pattern()), "tangent stiffness").in_solver(solver)?,
-            )),
+        let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
+            solver: solver.into(),
+            message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
+        })?;
+        let c = l.elasticity().stiffness_matrix();
+        let k = Csr::from_symmetric_lower(lower(l.pattern()), &l.stiffness(Material::Uniform(&c)));
+        let amg = SmoothedAggregation::new(&k, &near_null, amg).map_err(|e| SolveError::Unsupported {
+            solver: solver.into(),
+            message: format!("multigrid set-up: {e}"),
+        })?;
+        let n = l.n_dofs();
+        let iterative = IterativeSolve {
+            amg,
+            pcg: Pcg::new(n),
+            a: k,
+            fill: Vec::new(),
+            scratch: Mutex::new(vec![0.0; n]),
+            col: vec![0.0; n],
+            max_iter: cg_max_iter,
+            iterations: 0,
+            unconverged: 0,
+            previous: Vec::new(),
         };
-        Ok(Self {
+        Ok(Self::with(l, solver, slaves, LinearBackend::Amg(Box::new(iterative))))
+    }
+
+    /// The system for the rows' `slaves` on `backend`.
+    fn with(l: &dyn Lagrangian, solver: &str, slaves: SlaveRows, backend: LinearBackend) -> Self {
+        Self {
             slaves,
             solver: solver.to_string(),
             transpose: TransposeIndex::new(l.pattern()),
             backend,
             work: vec![0.0; l.pattern().nnz()],
+            symbolic_analyses: 0,
             factorisations: 0,
             solves: 0,
-        })
+        }
     }
 
     /// The Cholesky factor of the direct backend, if that is the one in use.
@@ -278,8 +293,9 @@ impl ActiveSetSystem {
     }
 
     /// The step for active set `active`, tangent `k` (values on L's pattern), internal force
-    /// `grad` = ∇E(u) and current gaps `gap`. The extras' system must be regular: every extra
-    /// with a load needs an active row.
+    /// `grad` = ∇E(u) and current gaps `gap`; the iterative backend solves to the relative
+    /// residual `cg_tol` (the direct one is exact). The extras' system must be regular: every
+    /// extra with a load needs an active row.
     pub fn step(
         &mut self,
         l: &dyn Lagrangian,
@@ -287,6 +303,7 @@ impl ActiveSetSystem {
         active: &[bool],
         grad: &[f64],
         gap: &[f64],
+        cg_tol: f64,
     ) -> Result<Step, SolveError> {
         let p = l.pattern();
         let rows = l.constraints();
@@ -331,19 +348,8 @@ impl ActiveSetSystem {
         match &mut self.backend {
             LinearBackend::Direct(chol) => chol.solve_columns(&mut x, nc),
             LinearBackend::Amg(it) => {
-                let IterativeSolve {
-                    amg,
-                    pcg,
-                    a,
-                    fill,
-                    scratch,
-                    col,
-                    previous,
-                    tol,
-                    max_iter,
-                    iterations,
-                    unconverged,
-                } = &mut **it;
+                let IterativeSolve { amg, pcg, a, fill, scratch, col, previous, max_iter, iterations, unconverged } =
+                    &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
                 let fixed: Vec<(usize, f64)> = (0..nr)
                     .filter(|&i| active[i])
@@ -358,10 +364,11 @@ impl ActiveSetSystem {
                         0 => col.iter_mut().for_each(|v| *v = 0.0),
                         _ => col.copy_from_slice(&previous[(c - 1) * n..c * n]),
                     }
-                    let report = pcg.solve(a, &pre, b, col, *tol, *max_iter).map_err(|e| SolveError::Unsupported {
-                        solver: "newton".into(),
-                        message: format!("CG on the tangent: {e}"),
-                    })?;
+                    let report =
+                        pcg.solve(a, &pre, b, col, cg_tol, *max_iter).map_err(|e| SolveError::Unsupported {
+                            solver: self.solver.clone(),
+                            message: format!("CG on the tangent: {e}"),
+                        })?;
                     *iterations += report.iterations;
                     *unconverged += !report.converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(col);
@@ -395,7 +402,7 @@ impl ActiveSetSystem {
             let rhs = -DVector::from_column_slice(l.load()) - h.transpose() * DVector::from_column_slice(&lam0);
             let sol = s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| {
                 SolveError::Unsupported {
-                    solver: "newton".into(),
+                    solver: self.solver.clone(),
                     message: "an extra unknown with a load has no active contact row (the obstacle does not touch)"
                         .into(),
                 }

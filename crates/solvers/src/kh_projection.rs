@@ -1,5 +1,6 @@
-//! Step (ii) of Uzawa (SPEC §4): the projection onto K_h in the metric diag(M, m), solved
-//! exactly for the contact rows.
+//! Step 2 of Uzawa (theory §4.1): the projection onto K_h in the metric diag(M, m), solved
+//! exactly for the contact rows. Newton's exact elastic start (theory §4.2) is one such
+//! projection in the energy metric; errors name the solver that asked for it.
 //!
 //! With Y = M⁻¹Gᵀ computed once (one multi-column solve with the factor of M) the projection of
 //! a trial (z, Z) is the dense QP over the row multipliers μ ≥ 0
@@ -15,8 +16,17 @@ use saddle_core::linalg::SparseCholesky;
 use saddle_core::linalg::{DenseQp, QpError};
 use saddle_core::{ConstraintRows, SolveError};
 
-/// Above this many bytes M⁻¹Gᵀ is not kept; each projection then costs one more solve.
-const MAX_STORED_BYTES: usize = 512 << 20;
+/// Above this many bytes M⁻¹Gᵀ is not kept; each projection then costs one more triangular
+/// solve pair (theory §4.1). Keeping Y saves that pair, about half of an Uzawa iteration's
+/// linear algebra, for n × rows doubles. 512 MiB is a memory budget, not a measured optimum:
+/// Y grows like the number of dofs times the number of contact rows; the budget bounds what a
+/// scene with very many contact rows adds to the memory of the factor.
+pub const MAX_STORED_BYTES: usize = 512 << 20;
+
+/// Right-hand sides per multi-column solve when Y = M⁻¹Gᵀ is set up: enough columns for the
+/// blocked triangular solves to run at matrix–matrix speed, few enough that the block
+/// (n × 64 doubles) stays small beside the factor.
+pub const SETUP_BLOCK: usize = 64;
 
 /// Exact projection onto K_h in the metric diag(M, m).
 #[derive(Debug)]
@@ -36,17 +46,21 @@ pub struct MetricProjection {
     gv: Vec<f64>,
     /// Triangular solve pairs spent in set-up.
     pub setup_solves: usize,
+    /// The solver this projection serves, for error messages.
+    solver: String,
 }
 
 impl MetricProjection {
     /// Set-up for rows `rows` with the factor `chol` of M, extras' weights `m_rel` relative to
-    /// their natural stiffness H_kᵀ (G M⁻¹ Gᵀ)⁻¹ H_k, step `rho` and load `f`.
+    /// their natural stiffness H_kᵀ (G M⁻¹ Gᵀ)⁻¹ H_k, step `rho` and load `f`; errors name
+    /// `solver`.
     pub fn new(
         rows: &ConstraintRows,
         chol: &mut SparseCholesky,
         m_rel: f64,
         rho: f64,
         f: &[f64],
+        solver: &str,
     ) -> Result<Self, SolveError> {
         let n = chol.n();
         let nr = rows.n_rows();
@@ -55,7 +69,7 @@ impl MetricProjection {
         let keep = n * nr * 8 <= MAX_STORED_BYTES;
         let mut y = keep.then(|| vec![0.0; n * nr]);
         // Y = M⁻¹Gᵀ in blocks of columns; S = G Y
-        let block = 64;
+        let block = SETUP_BLOCK;
         let mut buf = vec![0.0; n * block.min(nr.max(1))];
         let mut setup_solves = 0;
         for c0 in (0..nr).step_by(block) {
@@ -86,8 +100,8 @@ impl MetricProjection {
         // natural stiffness of each extra: H_kᵀ S⁻¹ H_k (all rows active)
         let mut m = vec![0.0; ne];
         if m_rel > 0.0 && nr > 0 {
-            let chol_s = s.clone().cholesky().ok_or(SolveError::Unsupported {
-                solver: "uzawa".into(),
+            let chol_s = s.clone().cholesky().ok_or_else(|| SolveError::Unsupported {
+                solver: solver.into(),
                 message: "the contact rows are linearly dependent (singular Delassus matrix)".into(),
             })?;
             for (k, mk) in m.iter_mut().enumerate() {
@@ -104,7 +118,7 @@ impl MetricProjection {
         }
         let e_mat = DMatrix::from_fn(zero.len(), nr, |r, i| h[(i, zero[r])]);
         let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);
-        let qp = DenseQp::new(s, e_mat, e_rhs).map_err(qp_error)?;
+        let qp = DenseQp::new(s, e_mat, e_rhs).map_err(|e| qp_error(solver, e))?;
         let gtmu = if keep { vec![] } else { vec![0.0; n] };
         let step_load = f.iter().map(|fk| rho * fk).collect();
         Ok(Self {
@@ -118,6 +132,7 @@ impl MetricProjection {
             gtmu,
             gv: vec![0.0; ne],
             setup_solves,
+            solver: solver.to_string(),
         })
     }
 
@@ -159,7 +174,7 @@ impl MetricProjection {
             self.zv[k] = if *m == 0.0 { 0.0 } else { v[k] + self.step_load[k] / m };
         }
         rows.gap(z, &self.zv, self.q.as_mut_slice());
-        let sol = self.qp.solve(&self.q).map_err(qp_error)?;
+        let sol = self.qp.solve(&self.q).map_err(|e| qp_error(&self.solver, e))?;
         mu.copy_from_slice(sol.x.as_slice());
         let y = sol.y;
         // V₊ = Z₊ + m⁻¹ H₊ᵀ μ, V₀ = y
@@ -198,6 +213,7 @@ impl MetricProjection {
     }
 }
 
-fn qp_error(e: QpError) -> SolveError {
-    SolveError::Unsupported { solver: "uzawa".into(), message: format!("projection onto K_h failed: {e}") }
+/// A failure of the dense QP of the projection, attributed to `solver`.
+fn qp_error(solver: &str, e: QpError) -> SolveError {
+    SolveError::Unsupported { solver: solver.into(), message: format!("projection onto K_h failed: {e}") }
 }

@@ -1,9 +1,9 @@
 //! # saddle-solvers
 //!
-//! Interchangeable solvers of the discrete saddle problem of SPEC §3, all consuming the
+//! Interchangeable solvers of the discrete saddle problem of theory §3, all consuming the
 //! Lagrangian trait of `saddle-core` and none knowing which yield surface or obstacle it holds:
 //!
-//! * [`Uzawa`] (`type = "uzawa"`) — the paper's Uzawa / Arrow–Hurwicz method (SPEC §4);
+//! * [`Uzawa`] (`type = "uzawa"`) — the paper's Uzawa / Arrow–Hurwicz method (theory §4.1);
 //! * [`Newton`] (`type = "newton"`) — semismooth Newton with a primal–dual active set;
 //! * [`Penalty`] (`type = "penalty"`) — the regularised Lagrangian of the existence proof;
 //! * `Socp` (`type = "socp"`, cargo feature `socp`, on by default) — the cone form handed to

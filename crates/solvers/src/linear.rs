@@ -2,13 +2,26 @@
 //! sparsity pattern as the factorisation takes it, L's rigid-body modes as the multigrid's
 //! near-nullspace, and linear-algebra failures as [`SolveError`]s that name the solver.
 
-use saddle_core::linalg::{LowerCsc, NearNullSpace};
+use saddle_core::linalg::{LowerCsc, NearNullSpace, SparseCholesky};
 use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
 use saddle_core::{Lagrangian, SolveError, SymmetricPattern};
 
 /// The lower triangle of L's matrices (theory §3) as the linear algebra takes it.
 pub fn lower(p: &SymmetricPattern) -> LowerCsc<'_> {
     LowerCsc::new(p.n(), p.col_ptr(), p.row_idx())
+}
+
+/// The symbolic Cholesky analysis of L's pattern for the matrix `what`, counted in `analyses`
+/// (the `symbolic_analyses` counter of the report: counted here, where the analysis runs).
+pub fn analyse(
+    p: &SymmetricPattern,
+    what: &str,
+    solver: &str,
+    analyses: &mut usize,
+) -> Result<SparseCholesky, SolveError> {
+    let chol = SparseCholesky::analyse(lower(p), what).in_solver(solver)?;
+    *analyses += 1;
+    Ok(chol)
 }
 
 /// The near-nullspace of L's elastic stiffness for a multigrid: the rigid-body modes, one

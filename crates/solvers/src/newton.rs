@@ -1,42 +1,54 @@
-//! Semismooth Newton with a primal–dual active set (SPEC §4, beyond the paper; deal.II's
+//! Semismooth Newton with a primal–dual active set (theory §4.2, beyond the paper; deal.II's
 //! step-42 is the classic relative).
 //!
-//! Newton on the primal form min J(u, V) = Σ_T |T| ψ(ε_T(u)) − f·V over K_h (SPEC §3 form 1):
+//! Newton on the primal form min J(u, V) = Σ_T |T| ψ(ε_T(u)) − f·V over K_h (theory §3.3, form 1), in
+//! named stages (one method of the private `Run` each):
 //!
-//! 0. from a cold start, first the *elastic* contact problem, solved exactly with one
-//!    factorisation of the elastic stiffness K: the projection of K⁻¹f onto K_h in the energy
-//!    metric (Uzawa's step (ii) of SPEC §4, see `elastic_contact_start`). Plasticity is then
-//!    switched on. (Plastic steps from the first touching node alone push it through the body
-//!    and drive everything plastic.) Should that projection be unavailable (dependent rows),
-//!    the elastic problem is solved by full active-set steps with the elastic tangent from
-//!    every candidate row active until the active set settles.
-//! 1. the local law with its consistent tangent at every element (SPEC §2);
-//! 2. the active set A = {i : λ_i − c_i g_i > 0} (c_i: the elastic stiffness at the row's dof,
-//!    so that forces and gaps are compared in the units of the problem);
-//! 3. the linearised problem for A ([`ActiveSetSystem`]): one numeric factorisation on the
-//!    pattern analysed once, one solve with 1 + n_extras right-hand sides;
-//! 4. a backtracking (Armijo) line search on J plus ν Σ_{i∈A} |g_i|, the violation of the active
-//!    rows that the Newton step removes; rows that a step drives into the obstacle join A at the
-//!    next iteration instead of blocking the step. Once the active rows touch, it is a line
-//!    search on J alone.
+//! 0. **start** (`Run::set_up`): from a cold start, first the *elastic* contact problem, solved
+//!    exactly with one factorisation of the elastic stiffness K: the projection of K⁻¹f onto K_h
+//!    in the energy metric (Uzawa's step 2 of theory §4.1, see `elastic_contact_start`).
+//!    Plasticity is then switched on. (Plastic steps from the first touching node alone push it
+//!    through the body and drive everything plastic.) Should that projection be unavailable
+//!    (dependent rows, or the AMG backend), the elastic problem is solved by full active-set
+//!    steps with the elastic tangent from every candidate row active until the active set
+//!    settles (the *elastic phase*);
+//! 1. **local law** (`Run::local_law`): the local law with its consistent tangent at every
+//!    element (theory §2.5) and the KKT residual of the iterate (theory §3.4);
+//! 2. **convergence** (`Newton::stop`): stop on the relative KKT residual (theory §4.5);
+//! 3. **active set** (`Run::update_active_set`): A = {i : λ_i − c_i g_i > 0} (c_i: the
+//!    elastic stiffness at the row's dof, so that forces and gaps are compared in the units of
+//!    the problem);
+//! 4. **assembly** (`Run::assemble`): the tangent and the gradient of J;
+//! 5. **solve** (`Run::solve`): the linearised problem for A ([`ActiveSetSystem`]): one numeric
+//!    factorisation on the pattern analysed once, or CG to the forcing term, with 1 + n_extras
+//!    right-hand sides;
+//! 6. **line search** (`Run::line_search`): a backtracking (Armijo) line search on J plus
+//!    ν Σ_{i∈A} |g_i|, the violation of the active rows that the Newton step removes; rows that a
+//!    step drives into the obstacle join A at the next iteration instead of blocking the step.
+//!    Once the active rows touch, it is a line search on J alone;
+//! 7. **update** (`Run::advance`).
 //!
-//! It stops on the relative KKT residual of the iterate. Once the active set and the plastic
-//! set settle, convergence is quadratic. [`Newton::solve_from`] starts from another solver's
-//! iterate (SOCP polishing).
+//! Once the active set and the plastic set settle, convergence is quadratic.
+//! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
-use crate::active_set::{ActiveSetSystem, LinearSolver};
+use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::residual;
-use saddle_core::error::{ParameterError, check};
-use saddle_core::linalg::SparseCholesky;
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, StressField, Workspace, max_abs};
+use saddle_core::error::{ParameterError, check, join};
+use saddle_core::linalg::{AmgParams, SparseCholesky};
+use saddle_core::problem::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField, Workspace, max_abs};
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
-use saddle_core::{Material, SymOp};
+use saddle_core::{Material, Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// `type = "newton"`: semismooth Newton with a primal–dual active set.
+/// `type = "newton"`: semismooth Newton with a primal–dual active set (theory §4.2).
+///
+/// Every field has a default, so a scene names only what it changes; the settings of the
+/// iterative backend (`auto_amg_dofs`, `cg_forcing`, `cg_max_iter`, `[solver.amg]`) matter only
+/// when it is chosen. The line search's constants are [`ARMIJO`], [`MAX_HALVINGS`] and
+/// [`NU_FACTOR`]; the CG tolerances' floors [`CG_TOL_FLOOR`] and [`CG_TOL_MIN`].
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Newton {
@@ -47,16 +59,72 @@ pub struct Newton {
     /// Backtracking line search on J (off: full Newton steps).
     pub line_search: bool,
     /// How the linearised systems are solved: `direct` (Cholesky per iteration), `amg` (CG
-    /// with the elastic multigrid, inexact Newton) or `auto` (direct up to 20 000 dofs, where
-    /// the two cost the same; measured with `saddle bench`).
+    /// with the elastic multigrid, inexact Newton) or `auto` (direct up to `auto_amg_dofs`
+    /// free dofs, AMG above).
     pub linear: LinearSolver,
+    /// `linear = "auto"` picks AMG above this many free dofs (default [`AUTO_AMG_DOFS`], the
+    /// crossover measured with `saddle bench`).
+    pub auto_amg_dofs: usize,
+    /// The forcing term of inexact Newton with AMG (theory §4.2): each CG solve stops at the
+    /// relative residual `cg_forcing · min(r, 1)`, r the current KKT residual (floored at
+    /// [`CG_TOL_FLOOR`]). 1e-2 keeps the outer convergence quadratic to the end on the default
+    /// scene while the first steps, far from the solution, cost few CG iterations.
+    pub cg_forcing: f64,
+    /// CG iterations per solve before giving up on the forcing term (the last iterate is used
+    /// and counted in `pcg_unconverged`). On the default scene a solve takes about ten (README:
+    /// 263 for 12 Newton steps of two solves each): 2000 is a safety net, not a working limit.
+    pub cg_max_iter: usize,
+    /// The smoothed-aggregation multigrid of `linear = "amg"` (`[solver.amg]`: fields
+    /// `strength_threshold`, `smoother_degree`, `smoother_range`, `eigen_steps`, `coarse_size`,
+    /// `max_levels`; defaults those of [`AmgParams`]).
+    pub amg: AmgParams,
 }
 
 impl Default for Newton {
     fn default() -> Self {
-        Self { tol: 1e-10, max_iter: 50, line_search: true, linear: LinearSolver::Auto }
+        Self {
+            tol: 1e-10,
+            max_iter: 50,
+            line_search: true,
+            linear: LinearSolver::Auto,
+            auto_amg_dofs: AUTO_AMG_DOFS,
+            cg_forcing: 1e-2,
+            cg_max_iter: 2000,
+            amg: AmgParams::default(),
+        }
     }
 }
+
+/// The Armijo constant of the line search (theory §4.2 step 4): a step is accepted when it
+/// achieves this fraction of the decrease predicted by the slope. 1e-4 is the textbook value
+/// (Nocedal & Wright): it rejects only steps that barely decrease the merit function.
+pub const ARMIJO: f64 = 1e-4;
+
+/// Halvings of the step before the line search gives up and takes the last one: 2⁻⁴⁰ ≈ 1e-12
+/// is below any step that changes J measurably.
+pub const MAX_HALVINGS: usize = 40;
+
+/// The merit weight ν of the line search is at least this multiple of max|λ| (theory §4.2
+/// step 4): an exact penalty of the active rows' violation needs ν > max|λ|; the factor 2 is
+/// the margin.
+pub const NU_FACTOR: f64 = 2.0;
+
+/// A slope below this fraction of |J| is round-off: the line search takes the full step
+/// instead of testing decreases it cannot measure.
+pub const SLOPE_ROUND_OFF: f64 = 1e-13;
+
+/// The floor of the inexact-Newton CG tolerance (theory §4.2): the forcing term would ask for
+/// ever smaller residuals near the solution, but CG's relative residual stalls near the
+/// round-off of its matrix–vector products; 1e-13 stays above that and still makes the final
+/// steps three orders more accurate than Newton's default `tol` = 1e-10.
+pub const CG_TOL_FLOOR: f64 = 1e-13;
+
+/// A linear problem (no plasticity, no contact) is solved in one step with CG to this fraction
+/// of `tol`, so that its recomputed KKT residual meets `tol` with a margin …
+pub const LINEAR_CG_MARGIN: f64 = 0.1;
+
+/// … but never below this relative residual, the round-off limit of CG in double precision.
+pub const CG_TOL_MIN: f64 = 1e-14;
 
 /// A starting point: displacements, extras and contact forces.
 #[derive(Clone, Debug)]
@@ -74,6 +142,10 @@ impl Solver for Newton {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
         check::at_least_one(path, "max_iter", self.max_iter)?;
+        check::open_interval(path, "cg_forcing", self.cg_forcing, 0.0, 1.0)?;
+        check::at_least_one(path, "cg_max_iter", self.cg_max_iter)?;
+        // AmgParams names its fields `amg.<field>`: under this table's path
+        self.amg.validate().map_err(|e| ParameterError { field: join(path, &e.field), ..e })?;
         Ok(())
     }
 
@@ -97,218 +169,387 @@ impl Newton {
         timer: &mut PhaseTimer,
         name: &str,
     ) -> Result<Solution, SolveError> {
-        self.validate("solver")?;
-        let rows = l.constraints();
-        let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
-        let mut start_is_cold = start.is_none();
-        let linear = self.linear.resolve(n);
+        let mut run = Run::set_up(self, l, start, name, monitor, timer)?;
+        monitor.phase("iterations");
+        let (stop, kkt) = loop {
+            let kkt = run.local_law(timer);
+            let r = kkt.max();
+            residual::record(name, run.state.it, r, self.tol, &mut run.history, monitor)?;
+            if let Some(stop) = self.stop(r, run.state.it) {
+                break (stop, kkt);
+            }
+            run.update_active_set();
+            run.assemble(timer);
+            let step = run.solve(r, timer)?;
+            let alpha = run.line_search(&step, timer);
+            run.advance(&step, alpha);
+        };
+        Ok(run.finish(stop, kkt, timer))
+    }
+
+    /// Stage 2 (theory §4.5): converged when the relative KKT residual `r` meets `tol`, else
+    /// out of budget after `max_iter` iterations, else `None` (go on).
+    fn stop(&self, r: f64, it: usize) -> Option<StopReason> {
+        if r <= self.tol {
+            Some(StopReason::Converged)
+        } else if it >= self.max_iter {
+            Some(StopReason::MaxIterations)
+        } else {
+            None
+        }
+    }
+
+    /// The CG tolerance of the step from an iterate with KKT residual `r` (theory §4.2, linear
+    /// backends): the forcing term, or a margin below `tol` for a linear problem.
+    fn cg_tol(&self, r: f64, linear_problem: bool) -> f64 {
+        if linear_problem {
+            (LINEAR_CG_MARGIN * self.tol).max(CG_TOL_MIN)
+        } else {
+            (self.cg_forcing * r.min(1.0)).max(CG_TOL_FLOOR)
+        }
+    }
+}
+
+/// The iteration state of Newton (theory §4.2): the iterate and what the method carries from
+/// one iteration to the next.
+struct State {
+    /// u.
+    u: Vec<f64>,
+    /// V.
+    v: Vec<f64>,
+    /// λ.
+    lambda: Vec<f64>,
+    /// σ̂ = P_D(Cε(u), 0), from the last local law.
+    stress: StressField,
+    /// The active set A.
+    active: Vec<bool>,
+    /// Iterations done.
+    it: usize,
+    /// The weight ν of the merit function J + ν Σ_A |g_i| (non-decreasing).
+    nu: f64,
+    /// In the elastic phase: the elastic tangent and full steps until A settles.
+    elastic_phase: bool,
+}
+
+/// What a Newton run counts for its report.
+#[derive(Default)]
+struct Counts {
+    /// Halvings of the line search.
+    backtracks: usize,
+    /// Rows that entered or left A.
+    active_changes: usize,
+    /// Points at which P's return mapping ran, as the local law reports them.
+    return_mappings: usize,
+    /// Iterations of the elastic phase.
+    elastic_phase_steps: usize,
+    /// Triangular solve pairs of the exact elastic start (0 without it).
+    elastic_contact_solves: usize,
+}
+
+/// Scratch of the stages, allocated once per solve.
+struct Scratch {
+    ws: Workspace,
+    /// Consistent tangents per point.
+    tangents: Vec<SymOp>,
+    /// The tangent stiffness on L's pattern.
+    k: Vec<f64>,
+    /// ∇J(u) (the elastic one in the elastic phase).
+    grad: Vec<f64>,
+    /// g(u, V).
+    gap: Vec<f64>,
+    /// The line search's trial point and its gaps.
+    u_trial: Vec<f64>,
+    v_trial: Vec<f64>,
+    g_trial: Vec<f64>,
+    /// Cε in the elastic phase (empty without one).
+    elastic_sigma: Vec<Sym>,
+}
+
+/// One Newton solve: what it reads, its linear system, state, counters and scratch.
+struct Run<'a> {
+    settings: &'a Newton,
+    l: &'a dyn Lagrangian,
+    name: &'a str,
+    system: ActiveSetSystem,
+    /// The elastic stiffness C.
+    c_elastic: SymOp,
+    /// c_i of the active-set test (theory §4.2 step 2): the elastic stiffness at row i's dof.
+    row_stiffness: Vec<f64>,
+    /// No start was given and no exact elastic start was found: every candidate row starts
+    /// active.
+    cold: bool,
+    state: State,
+    count: Counts,
+    work: Scratch,
+    /// The KKT residual of every iterate.
+    history: Vec<f64>,
+}
+
+impl<'a> Run<'a> {
+    /// Stage 0 (theory §4.2, elastic start): the linear backend (symbolic analysis or multigrid
+    /// set-up), the exact elastic start from a cold start with the direct backend, the state
+    /// and the scratch.
+    fn set_up(
+        settings: &'a Newton,
+        l: &'a dyn Lagrangian,
+        start: Option<Start>,
+        name: &'a str,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+    ) -> Result<Self, SolveError> {
+        let nr = l.constraints().n_rows();
+        let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs);
         monitor.phase("analysis");
-        let phase = if linear == LinearSolver::Amg { "multigrid set-up" } else { "analysis" };
-        let mut system = timer.time(phase, || ActiveSetSystem::with_backend(l, name, linear))?;
-        let mut elastic_start = None;
+        let mut system = if linear == LinearSolver::Amg {
+            timer
+                .time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))?
+        } else {
+            timer.time("analysis", || ActiveSetSystem::new(l, name))?
+        };
+        let mut count = Counts::default();
         // (with the iterative backend the Delassus columns would cost a CG solve per row: the
-        // elastic contact set is then found by the active-set phase below)
-        if let Some(chol) = system.direct().filter(|_| start_is_cold && nr > 0) {
-            // 0. the elastic contact problem, exactly, with one factorisation of K on the
-            //    tangents' symbolic analysis
+        // elastic contact set is then found by the elastic phase)
+        let mut elastic_start = None;
+        if let Some(chol) = system.direct().filter(|_| start.is_none() && nr > 0) {
             monitor.phase("elastic contact");
-            match timer.time("elastic contact", || elastic_contact_start(l, chol)) {
-                Ok(s) => elastic_start = Some(s),
-                // dependent rows and the like: fall back on the elastic active-set phase
+            match timer.time("elastic contact", || elastic_contact_start(l, chol, name)) {
+                Ok((s, solves)) => {
+                    elastic_start = Some(s);
+                    count.elastic_contact_solves = solves;
+                }
+                // dependent rows and the like: fall back on the elastic phase
                 Err(SolveError::Unsupported { .. }) => {}
                 Err(e) => return Err(e),
             }
         }
-        let elastic_solves = elastic_start.as_ref().map_or(0, |(_, solves)| *solves);
-        let start = match elastic_start {
-            Some((s, _)) => {
-                start_is_cold = false;
-                Some(s)
-            }
-            None => start,
+        let cold = start.is_none() && elastic_start.is_none();
+        let (n, ne, np) = (l.n_dofs(), l.n_extras(), l.n_points());
+        let Start { u, extras: v, lambda } =
+            elastic_start.or(start).unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
+        let elastic_phase = cold && l.plasticity().is_some();
+        let state = State {
+            u,
+            v,
+            lambda,
+            stress: StressField::new(np, l.hardening_dim()),
+            active: vec![false; nr],
+            it: 0,
+            nu: 0.0,
+            elastic_phase,
         };
-        let Start { mut u, extras: mut v, mut lambda } =
-            start.unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
-        let mut ws = Workspace::new(l);
-        let mut stress = StressField::new(l.n_points(), l.hardening_dim());
-        let mut tangents = vec![SymOp::zeros(); l.n_points()];
-        let mut k = vec![0.0; l.pattern().nnz()];
-        let mut gap = vec![0.0; nr];
-        let (mut u_trial, mut v_trial, mut g_trial) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
-        let mut active = vec![false; nr];
-        let mut history = Vec::new();
-        let mut nu: f64 = 0.0;
-        let mut counters = BTreeMap::new();
-        let (mut backtracks, mut active_changes, mut return_mappings) = (0usize, 0usize, 0usize);
-        let mut elastic_steps = 0usize;
-        monitor.phase("iterations");
-        let mut it = 0;
+        let work = Scratch {
+            ws: Workspace::new(l),
+            tangents: vec![SymOp::zeros(); np],
+            k: vec![0.0; l.pattern().nnz()],
+            grad: vec![0.0; n],
+            gap: vec![0.0; nr],
+            u_trial: vec![0.0; n],
+            v_trial: vec![0.0; ne],
+            g_trial: vec![0.0; nr],
+            elastic_sigma: vec![Sym::zeros(); if elastic_phase { np } else { 0 }],
+        };
         let c_elastic = l.elasticity().stiffness_matrix();
-        // PDAS compares forces with gaps through each row's elastic stiffness (units force/length)
+        // PDAS compares forces with gaps through each row's elastic stiffness (force/length)
         let row_stiffness: Vec<f64> = {
             let diag = l.pattern().diagonal(&l.stiffness(Material::Uniform(&c_elastic)));
             system.slaves().dof.iter().map(|&s| diag[s]).collect()
         };
-        let mut elastic_phase = start_is_cold && l.plasticity().is_some();
-        let (mut elastic_grad, mut grad) = (vec![0.0; n], vec![0.0; n]);
-        let mut elastic_sigma = vec![saddle_core::Sym::zeros(); if elastic_phase { l.n_points() } else { 0 }];
-        let (stop, kkt) = loop {
-            // 1. local law with tangents; the residual of the iterate
-            timer.time("local law", || {
-                l.strain(&u, &mut ws.eps);
-                l.local_law(&ws.eps, &mut stress, Some(&mut tangents));
-                ws.stress.clone_from(&stress);
-            });
-            if l.plasticity().is_some() {
-                return_mappings += l.n_points();
-            }
-            let kkt = timer.time("residual", || {
-                l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
-            });
-            let r = kkt.max();
-            residual::record(name, it, r, self.tol, &mut history, monitor)?;
-            if r <= self.tol {
-                break (StopReason::Converged, kkt);
-            }
-            if it >= self.max_iter {
-                break (StopReason::MaxIterations, kkt);
-            }
-            // 2. active set, scaled by the (fixed) elastic stiffness of each row's dof
-            rows.gap(&u, &v, &mut gap);
-            let mut changed = 0;
-            // cold start: every candidate row active (the punch imprints its shape), tensile
-            // rows are released at the next iteration
-            let cold = start_is_cold && it == 0;
-            for i in 0..nr {
-                let a = cold || lambda[i] - row_stiffness[i] * gap[i] > 0.0;
-                changed += (a != active[i]) as usize;
-                active[i] = a;
-            }
-            // an extra with a load needs a touching row: the one with the smallest gap
-            for (kx, f) in l.load().iter().enumerate() {
-                let touching = (0..nr).filter(|&i| rows.extra_row(i)[kx] != 0.0);
-                if *f != 0.0
-                    && !touching.clone().any(|i| active[i])
-                    && let Some(i) = touching.min_by(|&a, &b| gap[a].total_cmp(&gap[b]))
-                {
-                    active[i] = true;
-                    changed += 1;
-                }
-            }
-            // the elastic phase ends once its active set has settled: the last step solved it
-            if elastic_phase && it > 0 && changed == 0 {
-                elastic_phase = false;
-                elastic_steps = it;
-            }
-            // the tangent (the elastic one in the elastic phase)
-            timer.time("assembly", || {
-                if elastic_phase {
-                    l.assemble(Material::Uniform(&c_elastic), &mut k);
-                    for (s, e) in elastic_sigma.iter_mut().zip(&ws.eps) {
-                        *s = c_elastic * e;
-                    }
-                    l.divergence(&elastic_sigma, &mut elastic_grad);
-                    for (g, f) in elastic_grad.iter_mut().zip(l.nodal_load()) {
-                        *g -= f;
-                    }
-                } else {
-                    l.assemble(Material::PerPoint(&tangents), &mut k);
-                }
-            });
-            active_changes += changed;
-            // 3. the Newton step for this active set (inexact with CG: forcing term 1e-2·r)
-            // (a linear problem — no plasticity, no contact — is solved in one step to the tolerance)
-            let linear_problem = l.plasticity().is_none() && nr == 0;
-            if let Some(iterative) = system.iterative() {
-                iterative.tol = if linear_problem { 0.1 * self.tol } else { (1e-2 * r.min(1.0)).max(1e-13) }.max(1e-14);
-            }
-            grad.copy_from_slice(if elastic_phase { &elastic_grad } else { &ws.force });
-            let phase = if linear == LinearSolver::Amg { "CG solves" } else { "factorisation and solves" };
-            let step = timer.time(phase, || system.step(l, &k, &active, &grad, &gap))?;
-            if step.du.iter().chain(&step.dv).chain(&step.lambda).any(|x| !x.is_finite()) {
-                return Err(SolveError::NonFinite {
-                    solver: name.into(),
-                    what: "the Newton step".into(),
-                    iteration: it,
-                });
-            }
-            // 4. line search on J + ν Σ_A |g_i|
-            nu = nu.max(2.0 * max_abs(&step.lambda));
-            // ℓ₁ violation of the *active* rows only: rows that a full step drives into the
-            // obstacle join the active set at the next iteration (PDAS), they do not block
-            let violation = |g: &[f64]| (0..nr).filter(|&i| active[i]).map(|i| g[i].abs()).sum::<f64>();
-            let alpha = if self.line_search && !elastic_phase {
-                timer.time("line search", || {
-                    let j0 = l.energy(&u, &v, &mut ws) + nu * violation(&gap);
-                    let slope = grad.iter().zip(&step.du).map(|(a, b)| a * b).sum::<f64>()
-                        - l.load().iter().zip(&step.dv).map(|(a, b)| a * b).sum::<f64>()
-                        - nu * (0..nr).filter(|&i| active[i]).map(|i| gap[i].abs()).sum::<f64>();
-                    let mut alpha = 1.0;
-                    // below round-off of J the test is noise: take the full step
-                    if slope.abs() <= 1e-13 * j0.abs().max(f64::MIN_POSITIVE) || slope >= 0.0 {
-                        return alpha;
-                    }
-                    for _ in 0..40 {
-                        axpy_into(&mut u_trial, &u, alpha, &step.du);
-                        axpy_into(&mut v_trial, &v, alpha, &step.dv);
-                        rows.gap(&u_trial, &v_trial, &mut g_trial);
-                        let j = l.energy(&u_trial, &v_trial, &mut ws) + nu * violation(&g_trial);
-                        if j <= j0 + 1e-4 * alpha * slope {
-                            break;
-                        }
-                        alpha *= 0.5;
-                        backtracks += 1;
-                    }
-                    alpha
-                })
-            } else {
-                1.0
-            };
-            axpy(&mut u, alpha, &step.du);
-            axpy(&mut v, alpha, &step.dv);
-            lambda.copy_from_slice(&step.lambda);
-            it += 1;
-        };
-        let elastic_factorisations = (elastic_solves > 0) as usize;
-        counters.insert("factorisations".into(), (system.factorisations + elastic_factorisations) as f64);
-        counters.insert("symbolic_analyses".into(), 1.0);
-        counters.insert("triangular_solve_pairs".into(), (system.solves + elastic_solves) as f64);
-        counters.insert("elastic_contact_solves".into(), elastic_solves as f64);
-        if let Some(iterative) = system.iterative() {
-            counters.insert("pcg_iterations".into(), iterative.iterations as f64);
-            counters.insert("pcg_unconverged".into(), iterative.unconverged as f64);
+        Ok(Self { settings, l, name, system, c_elastic, row_stiffness, cold, state, count, work, history: Vec::new() })
+    }
+
+    /// Stage 1 (theory §4.2 step 1): the local law with consistent tangents at every point
+    /// (theory §2.5), then the KKT residuals of the iterate (theory §3.4); `ws.force` holds
+    /// ∇J(u) without the contact forces afterwards.
+    fn local_law(&mut self, timer: &mut PhaseTimer) -> KktResiduals {
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        let law = timer.time("local law", || {
+            l.strain(&s.u, &mut w.ws.eps);
+            let law = l.local_law(&w.ws.eps, &mut s.stress, Some(&mut w.tangents));
+            w.ws.stress.clone_from(&s.stress);
+            law
+        });
+        self.count.return_mappings += law.projected;
+        timer.time("residual", || {
+            l.kkt_with_stress(&Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.lambda }, &mut w.ws)
+        })
+    }
+
+    /// Stage 3 (theory §4.2 step 2): the active set A = {i : λ_i − c_i g_i > 0} (every row at a
+    /// cold start), a touching row for every loaded extra, and the end of the elastic phase
+    /// once A has settled.
+    fn update_active_set(&mut self) {
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        let rows = l.constraints();
+        rows.gap(&s.u, &s.v, &mut w.gap);
+        let mut changed = 0;
+        // cold start: every candidate row active (the punch imprints its shape), tensile rows
+        // are released at the next iteration
+        let all = self.cold && s.it == 0;
+        for i in 0..rows.n_rows() {
+            let a = all || s.lambda[i] - self.row_stiffness[i] * w.gap[i] > 0.0;
+            changed += (a != s.active[i]) as usize;
+            s.active[i] = a;
         }
-        counters.insert("line_search_backtracks".into(), backtracks as f64);
-        counters.insert("active_set_changes".into(), active_changes as f64);
-        counters.insert("return_mappings".into(), return_mappings as f64);
-        counters.insert("elastic_phase_steps".into(), elastic_steps as f64);
-        counters.insert("contact_rows_active".into(), active.iter().filter(|a| **a).count() as f64);
+        // an extra with a load needs a touching row: the one with the smallest gap
+        for (kx, f) in l.load().iter().enumerate() {
+            let touching = (0..rows.n_rows()).filter(|&i| rows.extra_row(i)[kx] != 0.0);
+            if *f != 0.0
+                && !touching.clone().any(|i| s.active[i])
+                && let Some(i) = touching.min_by(|&a, &b| w.gap[a].total_cmp(&w.gap[b]))
+            {
+                s.active[i] = true;
+                changed += 1;
+            }
+        }
+        // the elastic phase ends once its active set has settled: the last step solved it
+        if s.elastic_phase && s.it > 0 && changed == 0 {
+            s.elastic_phase = false;
+            self.count.elastic_phase_steps = s.it;
+        }
+        self.count.active_changes += changed;
+    }
+
+    /// Stage 4 (theory §4.2 step 3): the tangent K_t on L's pattern and the gradient ∇J(u) —
+    /// the elastic ones in the elastic phase.
+    fn assemble(&mut self, timer: &mut PhaseTimer) {
+        let (l, c, w) = (self.l, &self.c_elastic, &mut self.work);
+        if self.state.elastic_phase {
+            timer.time("assembly", || {
+                l.assemble(Material::Uniform(c), &mut w.k);
+                for (s, e) in w.elastic_sigma.iter_mut().zip(&w.ws.eps) {
+                    *s = c * e;
+                }
+                l.divergence(&w.elastic_sigma, &mut w.grad);
+                for (g, f) in w.grad.iter_mut().zip(l.nodal_load()) {
+                    *g -= f;
+                }
+            });
+        } else {
+            timer.time("assembly", || l.assemble(Material::PerPoint(&w.tangents), &mut w.k));
+            w.grad.copy_from_slice(&w.ws.force);
+        }
+    }
+
+    /// Stage 5 (theory §4.2 step 3, linear backends): the Newton step for A from an iterate
+    /// with KKT residual `r` — exact with the direct backend, to the forcing term with CG.
+    fn solve(&mut self, r: f64, timer: &mut PhaseTimer) -> Result<Step, SolveError> {
+        let l = self.l;
+        // a linear problem (no plasticity, no contact) is solved in one step to the tolerance
+        let linear_problem = l.plasticity().is_none() && l.constraints().n_rows() == 0;
+        let cg_tol = self.settings.cg_tol(r, linear_problem);
+        let phase = if self.system.iterative().is_some() { "CG solves" } else { "factorisation and solves" };
+        let (s, w) = (&self.state, &self.work);
+        let step = timer.time(phase, || self.system.step(l, &w.k, &s.active, &w.grad, &w.gap, cg_tol))?;
+        if step.du.iter().chain(&step.dv).chain(&step.lambda).any(|x| !x.is_finite()) {
+            return Err(SolveError::NonFinite {
+                solver: self.name.into(),
+                what: "the Newton step".into(),
+                iteration: s.it,
+            });
+        }
+        Ok(step)
+    }
+
+    /// Stage 6 (theory §4.2 step 4): the step length α — a backtracking Armijo line search on
+    /// J + ν Σ_{i∈A} |g_i|; the full step in the elastic phase, with `line_search = false`, or
+    /// when the predicted decrease is below the round-off of J.
+    fn line_search(&mut self, step: &Step, timer: &mut PhaseTimer) -> f64 {
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        s.nu = s.nu.max(NU_FACTOR * max_abs(&step.lambda));
+        if !self.settings.line_search || s.elastic_phase {
+            return 1.0;
+        }
+        let rows = l.constraints();
+        let (active, nu) = (&s.active, s.nu);
+        // ℓ₁ violation of the *active* rows only: rows that a full step drives into the
+        // obstacle join the active set at the next iteration (PDAS), they do not block
+        let violation = |g: &[f64]| (0..rows.n_rows()).filter(|&i| active[i]).map(|i| g[i].abs()).sum::<f64>();
+        let backtracks = &mut self.count.backtracks;
+        timer.time("line search", || {
+            let j0 = l.energy(&s.u, &s.v, &mut w.ws) + nu * violation(&w.gap);
+            let slope = w.grad.iter().zip(&step.du).map(|(a, b)| a * b).sum::<f64>()
+                - l.load().iter().zip(&step.dv).map(|(a, b)| a * b).sum::<f64>()
+                - nu * violation(&w.gap);
+            let mut alpha = 1.0;
+            // below round-off of J the test is noise: take the full step
+            if slope.abs() <= SLOPE_ROUND_OFF * j0.abs().max(f64::MIN_POSITIVE) || slope >= 0.0 {
+                return alpha;
+            }
+            for _ in 0..MAX_HALVINGS {
+                axpy_into(&mut w.u_trial, &s.u, alpha, &step.du);
+                axpy_into(&mut w.v_trial, &s.v, alpha, &step.dv);
+                rows.gap(&w.u_trial, &w.v_trial, &mut w.g_trial);
+                let j = l.energy(&w.u_trial, &w.v_trial, &mut w.ws) + nu * violation(&w.g_trial);
+                if j <= j0 + ARMIJO * alpha * slope {
+                    break;
+                }
+                alpha *= 0.5;
+                *backtracks += 1;
+            }
+            alpha
+        })
+    }
+
+    /// Stage 7: (u, V) += α (du, dV), λ from the step.
+    fn advance(&mut self, step: &Step, alpha: f64) {
+        let s = &mut self.state;
+        axpy(&mut s.u, alpha, &step.du);
+        axpy(&mut s.v, alpha, &step.dv);
+        s.lambda.copy_from_slice(&step.lambda);
+        s.it += 1;
+    }
+
+    /// The solution and its report (theory §5): the iterate, `stop` and the last residuals
+    /// `kkt`, the counters, and the phases of `timer`.
+    fn finish(mut self, stop: StopReason, kkt: KktResiduals, timer: &mut PhaseTimer) -> Solution {
+        let (sys, c) = (&mut self.system, &self.count);
+        let elastic_factorisations = (c.elastic_contact_solves > 0) as usize;
+        let mut counters = BTreeMap::new();
+        let mut put = |k: &str, x: usize| counters.insert(k.to_string(), x as f64);
+        put("factorisations", sys.factorisations + elastic_factorisations);
+        put("symbolic_analyses", sys.symbolic_analyses);
+        put("triangular_solve_pairs", sys.solves + c.elastic_contact_solves);
+        put("elastic_contact_solves", c.elastic_contact_solves);
+        if let Some(iterative) = sys.iterative() {
+            put("pcg_iterations", iterative.iterations);
+            put("pcg_unconverged", iterative.unconverged);
+        }
+        put("line_search_backtracks", c.backtracks);
+        put("active_set_changes", c.active_changes);
+        put("return_mappings", c.return_mappings);
+        put("elastic_phase_steps", c.elastic_phase_steps);
+        put("contact_rows_active", self.state.active.iter().filter(|a| **a).count());
+        let State { u, v, lambda, stress, it, .. } = self.state;
         let report = SolveReport {
-            solver: name.into(),
+            solver: self.name.into(),
             converged: stop == StopReason::Converged,
             stop_reason: stop,
             iterations: it,
-            tolerance: self.tol,
+            tolerance: self.settings.tol,
             kkt,
-            residual_history: history,
+            residual_history: self.history,
             phases: std::mem::take(timer).into_phases(),
             counters,
             warnings: Vec::new(),
         };
-        Ok(Solution { u, extras: v, stress, lambda, report })
+        Solution { u, extras: v, stress, lambda, report }
     }
 }
 
-/// The elastic contact problem solved exactly: the projection onto K_h, in the energy metric of
-/// the elastic stiffness K, of the unconstrained elastic solution z = K⁻¹f (Uzawa's step (ii) of
-/// SPEC §4 with ρ = 1 from u = 0, which for an elastic body is the solution). One factorisation
-/// of K into `chol` (analysed on L's pattern), one solve per contact row for the Delassus matrix
-/// G K⁻¹ Gᵀ (in blocks of columns) and a dense QP over the rows. Returns the start and the
-/// triangular solves spent.
-fn elastic_contact_start(l: &dyn Lagrangian, chol: &mut SparseCholesky) -> Result<(Start, usize), SolveError> {
+/// The elastic contact problem solved exactly (theory §4.2, elastic start): the projection onto
+/// K_h, in the energy metric of the elastic stiffness K, of the unconstrained elastic solution
+/// z = K⁻¹f (Uzawa's step 2 of theory §4.1 with ρ = 1 from u = 0, which for an elastic body is
+/// the solution). One factorisation of K into `chol` (analysed on L's pattern), one solve per
+/// contact row for the Delassus matrix G K⁻¹ Gᵀ (in blocks of columns) and a dense QP over the
+/// rows. Returns the start and the triangular solves spent; errors name `solver`.
+fn elastic_contact_start(
+    l: &dyn Lagrangian,
+    chol: &mut SparseCholesky,
+    solver: &str,
+) -> Result<(Start, usize), SolveError> {
     let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.constraints().n_rows());
     let c = l.elasticity().stiffness_matrix();
-    chol.factorise(&l.stiffness(Material::Uniform(&c))).in_solver("newton")?;
+    chol.factorise(&l.stiffness(Material::Uniform(&c))).in_solver(solver)?;
     // z = K⁻¹f_u (zero without loads on u)
     let mut z = vec![0.0; n];
     let f_u = l.nodal_load();
@@ -317,7 +558,7 @@ fn elastic_contact_start(l: &dyn Lagrangian, chol: &mut SparseCholesky) -> Resul
         chol.solve(&mut z);
     }
     let rows = l.constraints();
-    let mut projection = MetricProjection::new(rows, chol, 0.0, 1.0, l.load())?;
+    let mut projection = MetricProjection::new(rows, chol, 0.0, 1.0, l.load(), solver)?;
     let (mut u, mut extras, mut lambda) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
     let solves = projection.setup_solves + projection.project(rows, chol, &z, &mut extras, &mut u, &mut lambda)?;
     Ok((Start { u, extras, lambda }, solves))

@@ -1,13 +1,13 @@
-//! The penalty method: the regularised Lagrangian L_μ of the paper's existence proof (SPEC §4),
+//! The penalty method: the regularised Lagrangian L_μ of the paper's existence proof (theory §4.3),
 //! maximised without constraints by Newton's method.
 //!
 //! # L_μ in physical units
 //!
-//! SPEC §4 writes `L_μ = L − (1/(2μ))∫_{Γ₀}[(v₃ + φ − V)⁻]² − (μ/2)‖ε(v)‖² − (μ/2)V²` in the
-//! paper's scaled units. Here μ is a *dimensionless* number that means the same thing in any
+//! The paper writes `L_μ = L − (1/(2μ))∫_{Γ₀}[(v₃ + φ − V)⁻]² − (μ/2)‖ε(v)‖² − (μ/2)V²`
+//! (theory §4.3) in its scaled units. Here μ is a *dimensionless* number that means the same thing in any
 //! units and on any mesh: every term is measured against the elastic stiffness
 //! K_el = Σ_T |T| B_Tᵀ C B_T where it acts. With the rows g(u, V) = G u + H V + c ≥ 0 of K_h
-//! (SPEC §3), each acting on one displacement dof s_i with coefficient a_i = G_{i s_i},
+//! (theory §3), each acting on one displacement dof s_i with coefficient a_i = G_{i s_i},
 //! maximising L_μ over (v, V) ∈ W_h × R is minimising
 //!
 //! ```text
@@ -19,13 +19,13 @@
 //! * `k_i = (K_el)_{s_i s_i} / (μ a_i²)` — the contact penalty stiffness: 1/μ times the elastic
 //!   stiffness of the node in the row's direction (≈ E·h, so μ is relative to the local mesh size,
 //!   also on graded meshes); a_i = 1 for the punch;
-//! * `(μ/2) uᵀK_el u = (μ/2)(Cε(u), ε(u))` — the SPEC's (μ/2)‖ε(v)‖² in the energy metric;
-//! * `k_V,k = E · L · mean_i H_ik²` over the rows touching extra k, L = |Ω|^{1/3} — the SPEC's
+//! * `(μ/2) uᵀK_el u = (μ/2)(Cε(u), ε(u))` — the paper's (μ/2)‖ε(v)‖² in the energy metric;
+//! * `k_V,k = E · L · mean_i H_ik²` over the rows touching extra k, L = |Ω|^{1/3} — the paper's
 //!   (μ/2)V² with V weighted by the stiffness of the body as a whole (a mesh-independent scale:
 //!   summing the nodal stiffnesses instead grows like 1/h under refinement and with it the load
 //!   carried by the regularisation, μ k_V V).
 //!
-//! The penalty contact pressure of SPEC (1.16) is `χ_i = k_i g_i⁻ ≥ 0`; it is returned as λ.
+//! The penalty contact pressure of the paper's (1.16) (theory §4.3) is `χ_i = k_i g_i⁻ ≥ 0`; it is returned as λ.
 //!
 //! # Algorithm
 //!
@@ -37,33 +37,41 @@
 //! [ Σ_{i∈A} k_i a_i H_i e_sᵀ                    μ diag(k_V) + Σ_{i∈A} k_i H_i H_iᵀ ]
 //! ```
 //!
-//! (K_t: the consistent tangent of SPEC §2). The contact rows only add to the diagonal, so the
+//! (K_t: the consistent tangent of theory §2). The contact rows only add to the diagonal, so the
 //! u-block lives on the fixed pattern of L: one symbolic analysis per solve, numeric
 //! factorisations on it. The extras are coupled through an n_extras × n_extras Schur complement
 //! from one solve with 1 + n_extras right-hand sides, formed without the catastrophic
 //! cancellation of the textbook `C − BᵀA⁻¹B` ([`PenaltySystem`]).
 //!
-//! Each Newton iteration:
+//! Each Newton iteration runs in named stages (one method of the private `Run` each):
 //!
-//! 1. the local law with its consistent tangent at every element (SPEC §2);
-//! 2. the step d minimises the model `∇S·d + ½dᵀ(K_t + μK_el)d + Σ_i ½k_i((g_i + Δg_i(d))⁻)²` of
+//! 1. **local law** (`Run::local_law`): the pressures χ = k g⁻ and the local law with its
+//!    consistent tangent at every element (theory §2.5);
+//! 2. **residual** (`Run::residual`): the KKT residual of the *true* problem (theory §3.4);
+//! 3. **gradient** (`Run::gradient`): ∇J_μ and its size relative to its terms;
+//! 4. **convergence** (`Run::stop`): J_μ minimised to `gradient_tol` or `step_tol`, or out of
+//!    budget;
+//! 5. **assembly** (`Run::assemble`): K' = K_t + μK_el;
+//! 6. **model step** (`Run::model_step`): the step d minimises the model `∇S·d + ½dᵀ(K_t + μK_el)d + Σ_i ½k_i((g_i + Δg_i(d))⁻)²` of
 //!    J_μ = S + (contact term): the smooth part expanded to second order, the piecewise quadratic
 //!    contact term kept *exactly*. It is found by an active-set loop on the model (A = rows that
 //!    penetrate after the step; one factorisation each; usually one, two when the contact zone
 //!    moves). Linearising the contact term instead (A = rows penetrating now) would let the first
 //!    row that a step pushes into the obstacle, with its 1/μ stiffness, stop the line search: on
 //!    fine meshes one row per iteration would enter;
-//! 3. an Armijo backtracking line search on J_μ along d — a descent direction of J_μ since the
+//! 7. **line search** (`Run::step_length`): an Armijo backtracking line search on J_μ along d — a descent direction of J_μ since the
 //!    model is convex with the same directional derivative — with safeguarded quadratic
 //!    interpolation; the full step is taken when the predicted decrease is below the round-off of
-//!    J_μ.
+//!    J_μ;
+//! 8. **update** (`Run::advance`): (u, V) and the carried gaps along the step.
 //!
 //! From a cold start the first iteration uses the *elastic* tangent and takes the full step (as
 //! [`crate::Newton`] does): its model is then exact, so it lands on the elastic penalty solution,
 //! its active-set loop started from every candidate row (the punch imprints its shape instead of
 //! pushing one node through the body, which would drive it plastic). The inner problem is solved
-//! when the relative gradient of J_μ is at round-off ([`GRADIENT_TOL`]) or the Newton step is
-//! ([`STEP_TOL`]): J_μ is then minimised to machine precision.
+//! when the relative gradient of J_μ falls to `gradient_tol` or the Newton step to `step_tol`
+//! (by default round-off, [`GRADIENT_TOL`] and [`STEP_TOL`]): J_μ is then minimised to machine
+//! precision.
 //!
 //! **The gaps are carried, not recomputed.** χ = k g⁻ multiplies the gap by 1/μ, and g = u_s + φ −
 //! V recomputed from (u, V) is known only to ε_mach·|u|: χ would carry a round-off error
@@ -94,48 +102,76 @@
 //! relative to ‖f‖), `mu`, and `condition_estimate` (see [`PenaltySystem`]).
 
 use crate::active_set::SlaveRows;
-use crate::linear::{InSolver, lower};
+use crate::linear::{self, InSolver};
+use crate::newton::{ARMIJO, SLOPE_ROUND_OFF};
 use crate::residual;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::linalg::SparseCholesky;
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace, max_abs, norm};
+use saddle_core::problem::lagrangian::{
+    Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace, max_abs, norm,
+};
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// The inner problem is solved when ‖∇J_μ‖ falls below this fraction of the size of its terms.
+/// The default of `gradient_tol`: the inner problem is solved when ‖∇J_μ‖ falls below this
+/// fraction of the size of its terms. Its terms are sums over thousands of elements, each known
+/// to ε_mach of its size: 1e-12 (≈ 5000 ε_mach) is the round-off level, J_μ is then minimised to
+/// machine precision.
 pub const GRADIENT_TOL: f64 = 1e-12;
-/// ... or when the Newton step falls below this fraction of the displacement scale.
+/// The default of `step_tol`: ... or when the Newton step falls below this fraction of the
+/// displacement scale, a few hundred ulps of u: further steps would only move u in its
+/// round-off.
 pub const STEP_TOL: f64 = 1e-13;
 /// Active-set sweeps of the contact model per Newton step before falling back to the plain
-/// semismooth Newton direction.
-const MODEL_SWEEPS: usize = 10;
-/// Backtracking steps before the line search gives up.
-const MAX_BACKTRACKS: usize = 60;
+/// semismooth Newton direction. The model settles in one sweep, two when the contact zone
+/// moves (module docs); ten sweeps without settling means its active set cycles.
+pub const MODEL_SWEEPS: usize = 10;
+/// Shrinkings before the line search gives up: each shrinks α by at least half, so 60 of them
+/// take it below 2⁻⁶⁰ ≈ 1e-18, beneath any step that changes J_μ measurably.
+pub const MAX_BACKTRACKS: usize = 60;
+/// The safeguard of the line search's quadratic interpolation: the next trial α lies in
+/// [0.1, 0.5] times the last one (at least halved, at most cut tenfold), the usual bounds that
+/// keep interpolation from stalling or from collapsing the step.
+pub const SHRINK_MIN: f64 = 0.1;
+/// The upper bound of that safeguard, and the plain halving when the parabola is degenerate.
+pub const SHRINK_MAX: f64 = 0.5;
+/// A line search that finds no decrease along a step larger than this fraction of the
+/// displacement scale means the iteration is stuck (`stagnated`). Below it, the step is under
+/// √ε_mach ≈ 1.5e-8 of u, where the change of J_μ (quadratic near its minimum) is at the
+/// round-off of J_μ itself: the inner problem is then solved.
+pub const STUCK_STEP: f64 = 1e-8;
 
-/// `type = "penalty"`: the regularised Lagrangian L_μ of the existence proof (SPEC §4), solved
+/// `type = "penalty"`: the regularised Lagrangian L_μ of the existence proof (theory §4.3), solved
 /// by Newton's method.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Penalty {
     /// The dimensionless regularisation μ: penalty stiffness = elastic stiffness / μ. The error
-    /// against the discrete problem of SPEC §3 is O(μ): measured, the true KKT residual is ≈ 4.2μ
+    /// against the discrete problem of theory §3 is O(μ): measured, the true KKT residual is ≈ 4.2μ
     /// on the small default scene and ≈ 4.4μ on `examples/johnson.toml` (mesh-independent: the
     /// regularisation of V uses the body's stiffness E·|Ω|^{1/3}). The default 1e-12 meets the
     /// default `tol` with a margin of ~1000.
     pub mu: f64,
-    /// Tolerance on the relative KKT residual of the *true* problem (SPEC §3, §5).
+    /// Tolerance on the relative KKT residual of the *true* problem (theory §3, §5).
     pub tol: f64,
     /// Newton iteration budget.
     pub max_iter: usize,
+    /// The inner problem (minimising J_μ) is solved when ‖∇J_μ‖ relative to the size of its
+    /// terms falls to this (default [`GRADIENT_TOL`], round-off) ...
+    pub gradient_tol: f64,
+    /// ... or when the Newton step falls to this fraction of the displacement scale (default
+    /// [`STEP_TOL`], round-off). Loosening either trades the inner accuracy for iterations; the
+    /// report's residual is that of the true problem either way.
+    pub step_tol: f64,
 }
 
 impl Default for Penalty {
     fn default() -> Self {
-        Self { mu: 1e-12, tol: 1e-8, max_iter: 50 }
+        Self { mu: 1e-12, tol: 1e-8, max_iter: 50, gradient_tol: GRADIENT_TOL, step_tol: STEP_TOL }
     }
 }
 
@@ -145,6 +181,8 @@ impl Solver for Penalty {
         check::positive(path, "mu", self.mu)?;
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
         check::at_least_one(path, "max_iter", self.max_iter)?;
+        check::open_interval(path, "gradient_tol", self.gradient_tol, 0.0, 1.0)?;
+        check::open_interval(path, "step_tol", self.step_tol, 0.0, 1.0)?;
         Ok(())
     }
 
@@ -153,11 +191,10 @@ impl Solver for Penalty {
     }
 
     fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        self.validate("solver")?;
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
-        let mut sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
-        self.newton(l, &mut sys, monitor, timer)
+        let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
+        self.newton(l, sys, monitor, timer)
     }
 }
 
@@ -195,6 +232,8 @@ pub struct PenaltySystem {
     kcols: Vec<f64>,
     /// The model's next active set.
     next: Vec<bool>,
+    /// Symbolic analyses of L's pattern so far (one, in [`PenaltySystem::new`]).
+    pub symbolic_analyses: usize,
     /// Numeric factorisations so far.
     pub factorisations: usize,
     /// Triangular solve pairs so far.
@@ -261,18 +300,21 @@ impl PenaltySystem {
         }
         let n = l.n_dofs();
         kprime.iter_mut().for_each(|x| *x = 0.0);
+        let mut symbolic_analyses = 0;
+        let chol = linear::analyse(l.pattern(), "penalty Hessian", "penalty", &mut symbolic_analyses)?;
         Ok(Self {
             mu,
             slaves,
             k,
             k_v,
             c_el,
-            chol: SparseCholesky::analyse(lower(l.pattern()), "penalty Hessian").in_solver("penalty")?,
+            chol,
             hess: vec![0.0; kprime.len()],
             kprime,
             cols: vec![0.0; n * (1 + ne)],
             kcols: vec![0.0; n * (1 + ne)],
             next: vec![false; rows.n_rows()],
+            symbolic_analyses,
             factorisations: 0,
             solves: 0,
             condition_estimate: f64::NAN,
@@ -420,186 +462,388 @@ impl PenaltySystem {
 }
 
 impl Penalty {
-    /// Newton on J_μ (module docs), then the honest report.
+    /// Newton on J_μ (module docs, theory §4.3) in stages, then the honest report.
     fn newton(
         &self,
         l: &dyn Lagrangian,
-        sys: &mut PenaltySystem,
+        sys: PenaltySystem,
         monitor: &mut dyn Monitor,
         mut timer: PhaseTimer,
     ) -> Result<Solution, SolveError> {
+        let mut run = Run::new(self, l, sys);
+        monitor.phase("iterations");
+        let (end, kkt) = loop {
+            run.local_law(&mut timer);
+            let kkt = run.residual(&mut timer);
+            residual::record("penalty", run.state.it, kkt.max(), self.tol, &mut run.history, monitor)?;
+            run.gradient(&mut timer)?;
+            if let Some(end) = run.stop() {
+                break (end, kkt);
+            }
+            run.assemble(&mut timer);
+            run.model_step(&mut timer)?;
+            let alpha = run.step_length(&mut timer);
+            run.advance(alpha);
+        };
+        Ok(run.finish(end, kkt, timer))
+    }
+}
+
+/// Why Newton on J_μ ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum End {
+    /// J_μ minimised to round-off: the inner problem is solved.
+    Minimised,
+    /// No measurable decrease along a step that is not small: the iteration is stuck.
+    Stuck,
+    /// Out of iterations.
+    Budget,
+}
+
+/// The iteration state of Newton on J_μ (theory §4.3): the iterate, its carried gaps and
+/// pressures, the model's active set, and where the iteration stands.
+struct State {
+    /// u.
+    u: Vec<f64>,
+    /// V.
+    v: Vec<f64>,
+    /// The carried gaps g (module docs), g(0, 0) = c at the start.
+    gap: Vec<f64>,
+    /// χ = k g⁻, the penalty contact pressures.
+    chi: Vec<f64>,
+    /// σ̂ = P_D(Cε(u), 0), from the last local law.
+    stress: StressField,
+    /// The contact model's active set, and the previous iteration's.
+    model: Vec<bool>,
+    previous: Vec<bool>,
+    /// Iterations done.
+    it: usize,
+    /// The last step was at round-off, or the line search failed: evaluate once more, stop.
+    finished: bool,
+    /// ... and the line search failed on a step that is not small.
+    stuck: bool,
+    /// ‖∇J_μ‖ relative to the size of its terms, at the iterate.
+    grad_rel: f64,
+    /// The Newton decrement −∇J_μ·d relative to |J_μ|, of the last line search.
+    decrement_rel: f64,
+}
+
+/// What a penalty run counts for its report.
+#[derive(Default)]
+struct Counts {
+    /// Shrinkings of the line search.
+    backtracks: usize,
+    /// Rows that entered or left the model's active set.
+    active_changes: usize,
+    /// Points at which P's return mapping ran, as the local law reports them.
+    return_mappings: usize,
+    /// Active-set sweeps of the contact model.
+    sweeps: usize,
+    /// Newton steps whose model did not settle.
+    unsettled: usize,
+    /// Line searches that found no decrease.
+    line_search_failures: usize,
+}
+
+/// Scratch of the stages, allocated once per solve.
+struct Scratch {
+    ws: Workspace,
+    /// Consistent tangents per point (plus μC after assembly).
+    tangents: Vec<SymOp>,
+    /// σ + μCε.
+    sig_mu: Vec<Sym>,
+    /// Bᵀ(σ + μCε) − f_u: the gradient of the smooth part.
+    r: Vec<f64>,
+    /// ∇J_μ.
+    grad_u: Vec<f64>,
+    grad_v: Vec<f64>,
+    /// Gᵀχ and Hᵀχ.
+    gt_chi: Vec<f64>,
+    ht_chi: Vec<f64>,
+    /// The Newton step and the gaps after it.
+    du: Vec<f64>,
+    dv: Vec<f64>,
+    g_next: Vec<f64>,
+    /// The line search's trial point and its gaps.
+    u_trial: Vec<f64>,
+    v_trial: Vec<f64>,
+    gap_trial: Vec<f64>,
+}
+
+/// One penalty solve: what it reads, its Newton system, state, counters and scratch.
+struct Run<'a> {
+    settings: &'a Penalty,
+    l: &'a dyn Lagrangian,
+    sys: PenaltySystem,
+    /// P bounds the stresses (else no tangents are needed).
+    plastic: bool,
+    /// (1 + μ)C: the elastic tangent of J_μ.
+    c_el_mu: SymOp,
+    state: State,
+    count: Counts,
+    work: Scratch,
+    /// The true problem's KKT residual of every iterate.
+    history: Vec<f64>,
+}
+
+impl<'a> Run<'a> {
+    /// The cold start u = 0, V = 0, g = c, every row in the model, and the scratch.
+    fn new(settings: &'a Penalty, l: &'a dyn Lagrangian, sys: PenaltySystem) -> Self {
         let rows = l.constraints();
         let (n, ne, nr, np) = (l.n_dofs(), l.n_extras(), rows.n_rows(), l.n_points());
-        let mu = self.mu;
-        let plastic = l.plasticity().is_some();
-        let c_el = sys.c_el;
-        let c_el_mu = c_el * (1.0 + mu);
-        let (mut u, mut v) = (vec![0.0; n], vec![0.0; ne]);
-        // the gaps are carried along with (u, V) (module docs): g(0, 0) = c
-        let mut gap = rows.offset.clone();
-        let (mut du, mut dv, mut g_next) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
-        let (mut u_trial, mut v_trial, mut gap_trial) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
-        let mut ws = Workspace::new(l);
-        let mut stress = StressField::new(np, l.hardening_dim());
-        let mut tangents = vec![SymOp::zeros(); np];
-        let mut sig_mu = vec![Sym::zeros(); np];
-        let (mut r, mut grad_u, mut grad_v) = (vec![0.0; n], vec![0.0; n], vec![0.0; ne]);
-        let (mut gt_chi, mut ht_chi) = (vec![0.0; n], vec![0.0; ne]);
-        let mut chi = vec![0.0; nr];
-        let (mut model, mut previous) = (vec![true; nr], vec![true; nr]);
-        let mut history = Vec::new();
-        let (mut backtracks, mut active_changes, mut return_mappings) = (0usize, 0usize, 0usize);
-        let (mut sweeps, mut unsettled, mut line_search_failures) = (0usize, 0usize, 0usize);
-        let (mut finished, mut stuck) = (false, false);
-        let mut grad_rel;
-        let mut decrement_rel = f64::NAN;
-        monitor.phase("iterations");
-        let mut it = 0;
-        let (stop, kkt) = loop {
-            // the cold iteration is elastic: its model is exact, its step full
-            let elastic = it == 0;
-            // 1. pressures, the local law (SPEC §2) with tangents when Newton needs them
-            sys.pressures(&gap, &mut chi);
-            let want_tangents = !elastic && !finished && plastic;
-            timer.time("local law", || {
-                l.strain(&u, &mut ws.eps);
-                l.local_law(&ws.eps, &mut stress, if want_tangents { Some(&mut tangents) } else { None });
-            });
-            if plastic {
-                return_mappings += np;
-            }
-            // 2. the residual of the *true* problem on (u, V, σ(u), χ)
-            let kkt = timer.time("residual", || {
-                ws.stress.clone_from(&stress);
-                l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &chi }, &mut ws)
-            });
-            residual::record("penalty", it, kkt.max(), self.tol, &mut history, monitor)?;
-            // 3. ∇J_μ (of the elastic J_μ in the cold iteration)
-            timer.time("gradient", || {
-                let eps = &ws.eps;
-                if elastic {
-                    sig_mu.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s = c_el_mu * e);
-                } else {
-                    let sigma = stress.sigma.par_iter();
-                    sig_mu
-                        .par_iter_mut()
-                        .zip(sigma)
-                        .zip(eps.par_iter())
-                        .for_each(|((s, sg), e)| *s = sg + c_el * e * mu);
-                }
-                l.divergence(&sig_mu, &mut r);
-                // the loads on u belong to the smooth part
-                for (ri, f) in r.iter_mut().zip(l.nodal_load()) {
-                    *ri -= f;
-                }
-                gt_chi.iter_mut().for_each(|x| *x = 0.0);
-                ht_chi.iter_mut().for_each(|x| *x = 0.0);
-                rows.add_transpose(&chi, &mut gt_chi, &mut ht_chi);
-                for ((g, a), b) in grad_u.iter_mut().zip(&r).zip(&gt_chi) {
-                    *g = a - b;
-                }
-                for kx in 0..ne {
-                    grad_v[kx] = -l.load()[kx] - ht_chi[kx] + mu * sys.k_v[kx] * v[kx];
-                }
-            });
-            let grad_norm = (norm(&grad_u).powi(2) + norm(&grad_v).powi(2)).sqrt();
-            let grad_scale =
-                norm(&r).max(norm(&gt_chi)).max(norm(l.load())).max(norm(&ht_chi)).max(norm(l.nodal_load()));
-            grad_rel = if grad_scale > 0.0 { grad_norm / grad_scale } else { grad_norm };
-            if !grad_rel.is_finite() {
-                return Err(non_finite("the gradient of J_μ", it));
-            }
-            // 4. stop: J_μ minimised to round-off, or out of budget
-            if finished || (!elastic && grad_rel <= GRADIENT_TOL) {
-                break (stuck.then_some(StopReason::Stagnated), kkt);
-            }
-            if it >= self.max_iter {
-                break (Some(StopReason::MaxIterations), kkt);
-            }
-            // 5. the Newton step of the contact model, from every row (cold) or the rows
-            // penetrating now
-            timer.time("assembly", || {
-                if elastic || !plastic {
-                    l.assemble(Material::Uniform(&c_el_mu), &mut sys.kprime);
-                } else {
-                    tangents.par_iter_mut().for_each(|t| *t += c_el * mu);
-                    l.assemble(Material::PerPoint(&tangents), &mut sys.kprime);
-                }
-            });
-            if !elastic {
-                for (a, g) in model.iter_mut().zip(&gap) {
-                    *a = *g < 0.0;
-                }
-            }
-            let (s, settled) = timer.time("factorisation and solves", || {
-                let at = Point { r: &r, gap: &gap, v: &v };
-                let mut d = Direction { du: &mut du, dv: &mut dv, g_next: &mut g_next };
-                sys.model_step(l, &mut model, &at, &mut d, !elastic)
-            })?;
-            sweeps += s;
-            unsettled += !settled as usize;
-            active_changes += model.iter().zip(&previous).filter(|(a, b)| a != b).count();
-            previous.copy_from_slice(&model);
-            if du.iter().chain(&dv).any(|x| !x.is_finite()) {
-                return Err(non_finite("the Newton step", it));
-            }
-            // 6. the step length: full in the cold iteration, Armijo on J_μ afterwards
-            let slope = dot(&grad_u, &du) + dot(&grad_v, &dv);
-            let x_scale = max_abs(&u).max(max_abs(&v)).max(max_abs(&rows.offset));
-            let step_rel = max_abs(&du).max(max_abs(&dv)) / x_scale.max(f64::MIN_POSITIVE);
-            let mut alpha = 1.0;
-            if !elastic {
-                let j0 = timer.time("line search", || sys.energy(l, &u, &v, &gap, &mut ws));
-                let j_scale = j0.abs().max(l.load().iter().zip(&v).map(|(f, v)| (f * v).abs()).sum());
-                decrement_rel = (-slope).max(0.0) / j_scale.max(f64::MIN_POSITIVE);
-                if step_rel <= STEP_TOL {
-                    // the step is at the round-off of u: take it, re-evaluate, stop
-                    finished = true;
-                } else if slope < 0.0 && -slope > 1e-13 * j_scale {
-                    let found = timer.time("line search", || {
-                        for _ in 0..MAX_BACKTRACKS {
-                            axpy_into(&mut u_trial, &u, alpha, &du);
-                            axpy_into(&mut v_trial, &v, alpha, &dv);
-                            blend(&mut gap_trial, &gap, alpha, &g_next);
-                            let j = sys.energy(l, &u_trial, &v_trial, &gap_trial, &mut ws);
-                            if j <= j0 + 1e-4 * alpha * slope {
-                                return true;
-                            }
-                            // safeguarded minimiser of the parabola through J(0), J'(0), J(α)
-                            let q = -slope * alpha * alpha / (2.0 * (j - j0 - slope * alpha));
-                            alpha = if q.is_finite() { q.clamp(0.1 * alpha, 0.5 * alpha) } else { 0.5 * alpha };
-                            backtracks += 1;
-                        }
-                        false
-                    });
-                    if !found {
-                        // no measurable decrease along a descent direction: J_μ is at its
-                        // round-off if the step is tiny, else the iteration is stuck
-                        line_search_failures += 1;
-                        alpha = 0.0;
-                        finished = true;
-                        stuck = step_rel > 1e-8;
-                    }
-                }
-                // else: the predicted decrease is below the round-off of J_μ: the full step
-            }
-            axpy(&mut u, alpha, &du);
-            axpy(&mut v, alpha, &dv);
-            for (g, gn) in gap.iter_mut().zip(&g_next) {
-                *g = (1.0 - alpha) * *g + alpha * gn;
-            }
-            it += 1;
+        let state = State {
+            u: vec![0.0; n],
+            v: vec![0.0; ne],
+            gap: rows.offset.clone(),
+            chi: vec![0.0; nr],
+            stress: StressField::new(np, l.hardening_dim()),
+            model: vec![true; nr],
+            previous: vec![true; nr],
+            it: 0,
+            finished: false,
+            stuck: false,
+            grad_rel: f64::NAN,
+            decrement_rel: f64::NAN,
         };
-        // the report: the true residual, the penalty's error indicators
-        let inner_solved = stop.is_none();
-        let converged = inner_solved && kkt.max() <= self.tol;
-        let stop = stop.unwrap_or(if converged { StopReason::Converged } else { StopReason::ApproximationLimit });
-        let x_scale = max_abs(&u).max(max_abs(&v)).max(max_abs(&rows.offset));
+        let work = Scratch {
+            ws: Workspace::new(l),
+            tangents: vec![SymOp::zeros(); np],
+            sig_mu: vec![Sym::zeros(); np],
+            r: vec![0.0; n],
+            grad_u: vec![0.0; n],
+            grad_v: vec![0.0; ne],
+            gt_chi: vec![0.0; n],
+            ht_chi: vec![0.0; ne],
+            du: vec![0.0; n],
+            dv: vec![0.0; ne],
+            g_next: vec![0.0; nr],
+            u_trial: vec![0.0; n],
+            v_trial: vec![0.0; ne],
+            gap_trial: vec![0.0; nr],
+        };
+        let c_el_mu = sys.c_el * (1.0 + settings.mu);
+        Self {
+            settings,
+            l,
+            plastic: l.plasticity().is_some(),
+            c_el_mu,
+            sys,
+            state,
+            count: Counts::default(),
+            work,
+            history: Vec::new(),
+        }
+    }
+
+    /// The cold iteration is elastic: its model is exact, its step full (module docs).
+    fn elastic(&self) -> bool {
+        self.state.it == 0
+    }
+
+    /// Stage 1 (theory §4.3; the local law of theory §2): the pressures χ = k g⁻, the stresses
+    /// σ(u) and, when Newton needs them, the consistent tangents.
+    fn local_law(&mut self, timer: &mut PhaseTimer) {
+        let want_tangents = !self.elastic() && !self.state.finished && self.plastic;
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        self.sys.pressures(&s.gap, &mut s.chi);
+        let law = timer.time("local law", || {
+            l.strain(&s.u, &mut w.ws.eps);
+            l.local_law(&w.ws.eps, &mut s.stress, if want_tangents { Some(&mut w.tangents) } else { None })
+        });
+        self.count.return_mappings += law.projected;
+    }
+
+    /// Stage 2 (theory §4.3, honesty; theory §3.4): the KKT residuals of the *true* problem
+    /// on (u, V, σ(u), χ).
+    fn residual(&mut self, timer: &mut PhaseTimer) -> KktResiduals {
+        let (l, s, w) = (self.l, &self.state, &mut self.work);
+        timer.time("residual", || {
+            w.ws.stress.clone_from(&s.stress);
+            l.kkt_with_stress(&Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.chi }, &mut w.ws)
+        })
+    }
+
+    /// Stage 3 (theory §4.3): ∇J_μ — of the elastic J_μ in the cold iteration — and its size
+    /// relative to its terms.
+    fn gradient(&mut self, timer: &mut PhaseTimer) -> Result<(), SolveError> {
+        let elastic = self.elastic();
+        let (l, sys, s, w) = (self.l, &self.sys, &mut self.state, &mut self.work);
+        let (mu, c_el, c_el_mu) = (self.settings.mu, sys.c_el, self.c_el_mu);
+        let rows = l.constraints();
+        timer.time("gradient", || {
+            let eps = &w.ws.eps;
+            if elastic {
+                w.sig_mu.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s = c_el_mu * e);
+            } else {
+                let sigma = s.stress.sigma.par_iter();
+                w.sig_mu.par_iter_mut().zip(sigma).zip(eps.par_iter()).for_each(|((s, sg), e)| *s = sg + c_el * e * mu);
+            }
+            l.divergence(&w.sig_mu, &mut w.r);
+            // the loads on u belong to the smooth part
+            for (ri, f) in w.r.iter_mut().zip(l.nodal_load()) {
+                *ri -= f;
+            }
+            w.gt_chi.iter_mut().for_each(|x| *x = 0.0);
+            w.ht_chi.iter_mut().for_each(|x| *x = 0.0);
+            rows.add_transpose(&s.chi, &mut w.gt_chi, &mut w.ht_chi);
+            for ((g, a), b) in w.grad_u.iter_mut().zip(&w.r).zip(&w.gt_chi) {
+                *g = a - b;
+            }
+            for kx in 0..l.n_extras() {
+                w.grad_v[kx] = -l.load()[kx] - w.ht_chi[kx] + mu * sys.k_v[kx] * s.v[kx];
+            }
+        });
+        let grad_norm = (norm(&w.grad_u).powi(2) + norm(&w.grad_v).powi(2)).sqrt();
+        let grad_scale =
+            norm(&w.r).max(norm(&w.gt_chi)).max(norm(l.load())).max(norm(&w.ht_chi)).max(norm(l.nodal_load()));
+        s.grad_rel = if grad_scale > 0.0 { grad_norm / grad_scale } else { grad_norm };
+        if !s.grad_rel.is_finite() {
+            return Err(non_finite("the gradient of J_μ", s.it));
+        }
+        Ok(())
+    }
+
+    /// Stage 4 (theory §4.3, §4.5): J_μ minimised to round-off (relative gradient at most
+    /// `gradient_tol`, or the last step at round-off), or out of budget; `None`: go on.
+    fn stop(&self) -> Option<End> {
+        let s = &self.state;
+        if s.finished || (!self.elastic() && s.grad_rel <= self.settings.gradient_tol) {
+            Some(if s.stuck { End::Stuck } else { End::Minimised })
+        } else if s.it >= self.settings.max_iter {
+            Some(End::Budget)
+        } else {
+            None
+        }
+    }
+
+    /// Stage 5 (theory §4.3): K' = K_t + μK_el on L's pattern — (1 + μ)K_el in the cold
+    /// iteration or without plasticity.
+    fn assemble(&mut self, timer: &mut PhaseTimer) {
+        let elastic_tangent = self.elastic() || !self.plastic;
+        let (l, sys, w) = (self.l, &mut self.sys, &mut self.work);
+        let (c_el, mu) = (sys.c_el, self.settings.mu);
+        if elastic_tangent {
+            timer.time("assembly", || l.assemble(Material::Uniform(&self.c_el_mu), &mut sys.kprime));
+        } else {
+            timer.time("assembly", || {
+                w.tangents.par_iter_mut().for_each(|t| *t += c_el * mu);
+                l.assemble(Material::PerPoint(&w.tangents), &mut sys.kprime);
+            });
+        }
+    }
+
+    /// Stage 6 (theory §4.3): the Newton step of the contact model, its active-set loop started
+    /// from every row (cold) or from the rows penetrating now, and the gaps ĝ after it.
+    fn model_step(&mut self, timer: &mut PhaseTimer) -> Result<(), SolveError> {
+        let elastic = self.elastic();
+        let (l, sys, s, w) = (self.l, &mut self.sys, &mut self.state, &mut self.work);
+        if !elastic {
+            for (a, g) in s.model.iter_mut().zip(&s.gap) {
+                *a = *g < 0.0;
+            }
+        }
+        let (sweeps, settled) = timer.time("factorisation and solves", || {
+            let at = Point { r: &w.r, gap: &s.gap, v: &s.v };
+            let mut d = Direction { du: &mut w.du, dv: &mut w.dv, g_next: &mut w.g_next };
+            sys.model_step(l, &mut s.model, &at, &mut d, !elastic)
+        })?;
+        self.count.sweeps += sweeps;
+        self.count.unsettled += !settled as usize;
+        self.count.active_changes += s.model.iter().zip(&s.previous).filter(|(a, b)| a != b).count();
+        s.previous.copy_from_slice(&s.model);
+        if w.du.iter().chain(&w.dv).any(|x| !x.is_finite()) {
+            return Err(non_finite("the Newton step", s.it));
+        }
+        Ok(())
+    }
+
+    /// Stage 7 (theory §4.3): the step length α — full in the cold iteration; afterwards an
+    /// Armijo line search on J_μ with safeguarded quadratic interpolation, the full step when
+    /// the predicted decrease is below the round-off of J_μ, and the end of the iteration when
+    /// the step is at the round-off of u or no decrease is found.
+    fn step_length(&mut self, timer: &mut PhaseTimer) -> f64 {
+        let elastic = self.elastic();
+        let (l, sys, s, w) = (self.l, &self.sys, &mut self.state, &mut self.work);
+        let offset = &l.constraints().offset;
+        let slope = dot(&w.grad_u, &w.du) + dot(&w.grad_v, &w.dv);
+        let x_scale = max_abs(&s.u).max(max_abs(&s.v)).max(max_abs(offset));
+        let step_rel = max_abs(&w.du).max(max_abs(&w.dv)) / x_scale.max(f64::MIN_POSITIVE);
+        let mut alpha = 1.0;
+        if elastic {
+            return alpha;
+        }
+        let j0 = timer.time("line search", || sys.energy(l, &s.u, &s.v, &s.gap, &mut w.ws));
+        let j_scale = j0.abs().max(l.load().iter().zip(&s.v).map(|(f, v)| (f * v).abs()).sum());
+        s.decrement_rel = (-slope).max(0.0) / j_scale.max(f64::MIN_POSITIVE);
+        if step_rel <= self.settings.step_tol {
+            // the step is at the round-off of u: take it, re-evaluate, stop
+            s.finished = true;
+        } else if slope < 0.0 && -slope > SLOPE_ROUND_OFF * j_scale {
+            let backtracks = &mut self.count.backtracks;
+            let found = timer.time("line search", || {
+                for _ in 0..MAX_BACKTRACKS {
+                    axpy_into(&mut w.u_trial, &s.u, alpha, &w.du);
+                    axpy_into(&mut w.v_trial, &s.v, alpha, &w.dv);
+                    blend(&mut w.gap_trial, &s.gap, alpha, &w.g_next);
+                    let j = sys.energy(l, &w.u_trial, &w.v_trial, &w.gap_trial, &mut w.ws);
+                    if j <= j0 + ARMIJO * alpha * slope {
+                        return true;
+                    }
+                    // safeguarded minimiser of the parabola through J(0), J'(0), J(α)
+                    let q = -slope * alpha * alpha / (2.0 * (j - j0 - slope * alpha));
+                    alpha = if q.is_finite() {
+                        q.clamp(SHRINK_MIN * alpha, SHRINK_MAX * alpha)
+                    } else {
+                        SHRINK_MAX * alpha
+                    };
+                    *backtracks += 1;
+                }
+                false
+            });
+            if !found {
+                // no measurable decrease along a descent direction: J_μ is at its round-off if
+                // the step is tiny, else the iteration is stuck
+                self.count.line_search_failures += 1;
+                alpha = 0.0;
+                s.finished = true;
+                s.stuck = step_rel > STUCK_STEP;
+            }
+        }
+        // else: the predicted decrease is below the round-off of J_μ: the full step
+        alpha
+    }
+
+    /// (u, V) += α (du, dV) and the carried gaps along the step, g ← (1 − α)g + αĝ.
+    fn advance(&mut self, alpha: f64) {
+        let (s, w) = (&mut self.state, &self.work);
+        axpy(&mut s.u, alpha, &w.du);
+        axpy(&mut s.v, alpha, &w.dv);
+        for (g, gn) in s.gap.iter_mut().zip(&w.g_next) {
+            *g = (1.0 - alpha) * *g + alpha * gn;
+        }
+        s.it += 1;
+    }
+
+    /// The solution and its honest report (module docs): the true residual `kkt` decides
+    /// `converged`, the counters carry the penalty's error indicators.
+    fn finish(mut self, end: End, kkt: KktResiduals, timer: PhaseTimer) -> Solution {
+        let (l, sys, s, w, c) = (self.l, &self.sys, &self.state, &mut self.work, &self.count);
+        let rows = l.constraints();
+        let mu = self.settings.mu;
+        let inner_solved = end == End::Minimised;
+        let converged = inner_solved && kkt.max() <= self.settings.tol;
+        let stop = match end {
+            End::Minimised if converged => StopReason::Converged,
+            End::Minimised => StopReason::ApproximationLimit,
+            End::Stuck => StopReason::Stagnated,
+            End::Budget => StopReason::MaxIterations,
+        };
+        let x_scale = max_abs(&s.u).max(max_abs(&s.v)).max(max_abs(&rows.offset));
         let relative = |x: f64, scale: f64| if scale > 0.0 { x / scale } else { x };
-        let max_pen = gap.iter().fold(0.0f64, |m, g| m.max(-g));
-        let load_def = l.load().iter().zip(&ht_chi).map(|(f, h)| (f + h).powi(2)).sum::<f64>().sqrt();
-        rows.gap(&u, &v, &mut ws.gap);
-        let drift = gap.iter().zip(&ws.gap).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let max_pen = s.gap.iter().fold(0.0f64, |m, g| m.max(-g));
+        let load_def = l.load().iter().zip(&w.ht_chi).map(|(f, h)| (f + h).powi(2)).sum::<f64>().sqrt();
+        rows.gap(&s.u, &s.v, &mut w.ws.gap);
+        let drift = s.gap.iter().zip(&w.ws.gap).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         let mut counters = BTreeMap::new();
         let mut put = |k: &str, x: f64| counters.insert(k.to_string(), x);
         put("mu", mu);
@@ -611,32 +855,33 @@ impl Penalty {
         put("penalty_stiffness_max", sys.k.iter().copied().fold(0.0, f64::max));
         put("gap_drift_relative", relative(drift, x_scale));
         put("factorisations", sys.factorisations as f64);
-        put("symbolic_analyses", 1.0);
+        put("symbolic_analyses", sys.symbolic_analyses as f64);
         put("triangular_solve_pairs", sys.solves as f64);
-        put("contact_model_sweeps", sweeps as f64);
-        put("contact_model_unsettled", unsettled as f64);
-        put("line_search_backtracks", backtracks as f64);
-        put("line_search_failures", line_search_failures as f64);
-        put("active_set_changes", active_changes as f64);
-        put("contact_rows_active", chi.iter().filter(|c| **c > 0.0).count() as f64);
-        put("return_mappings", return_mappings as f64);
+        put("contact_model_sweeps", c.sweeps as f64);
+        put("contact_model_unsettled", c.unsettled as f64);
+        put("line_search_backtracks", c.backtracks as f64);
+        put("line_search_failures", c.line_search_failures as f64);
+        put("active_set_changes", c.active_changes as f64);
+        put("contact_rows_active", s.chi.iter().filter(|c| **c > 0.0).count() as f64);
+        put("return_mappings", c.return_mappings as f64);
         put("inner_converged", inner_solved as u8 as f64);
-        put("inner_gradient_relative", grad_rel);
-        put("newton_decrement_relative", decrement_rel);
+        put("inner_gradient_relative", s.grad_rel);
+        put("newton_decrement_relative", s.decrement_rel);
         put("approximation_limit", (stop == StopReason::ApproximationLimit) as u8 as f64);
+        let State { u, v, chi, stress, it, .. } = self.state;
         let report = SolveReport {
             solver: "penalty".into(),
             converged,
             stop_reason: stop,
             iterations: it,
-            tolerance: self.tol,
+            tolerance: self.settings.tol,
             kkt,
-            residual_history: history,
+            residual_history: self.history,
             phases: timer.into_phases(),
             counters,
             warnings: Vec::new(),
         };
-        Ok(Solution { u, extras: v, stress, lambda: chi, report })
+        Solution { u, extras: v, stress, lambda: chi, report }
     }
 }
 

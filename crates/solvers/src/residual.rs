@@ -1,4 +1,4 @@
-//! What every iterative solver does with the relative KKT residual of its iterate (SPEC §5):
+//! What every iterative solver does with the relative KKT residual of its iterate (theory §5):
 //! record it in the report's history, show it to the monitor, and never let NaN or Inf pass.
 
 use saddle_core::{Monitor, SolveError};

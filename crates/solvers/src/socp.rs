@@ -1,7 +1,7 @@
-//! The conic solver of SPEC §4: the dual (stress) form 3 of SPEC §3 handed to Clarabel's
+//! The conic solver of theory §4.4: the dual (stress) form 3 of theory §3 handed to Clarabel's
 //! interior point method, then polished by active-set Newton.
 //!
-//! **The cone programme** (SPEC §3 form 3). Variables `x = [σ̂_T for every stress point T
+//! **The cone programme** (theory §3 form 3). Variables `x = [σ̂_T for every stress point T
 //! (6 Mandel entries of σ_T and the hardening entries q_T), λ_i for every row of K_h]`:
 //!
 //! * objective `½[σ̂, σ̂] + Σ_i λ_i c_i`: P is block diagonal with `w_T A` (A the elastic
@@ -12,7 +12,7 @@
 //!   2. zero cone, one row per extra unknown k: `−(Hᵀλ)_k = f_k` (Σλ = F for the punch);
 //!   3. nonnegative cone: `s = λ ≥ 0`;
 //!   4. one second-order cone per point and per block of `P::cone()`:
-//!      `s = offset + map·(σ_T, q_T)` (SPEC §3: D is a second-order cone in (k₀ + ξ, dev σ)).
+//!      `s = offset + map·(σ_T, q_T)` (theory §3: D is a second-order cone in (k₀ + ξ, dev σ)).
 //!
 //!   An elastic problem has no blocks 4: a QP.
 //!
@@ -32,7 +32,7 @@
 //!
 //! **Perfect plasticity.** A hardening variable whose metric is infinite
 //! (`hardening_inner(e_k, e_k) = ∞`, von Mises with h = 0) is fixed at 0, as the local law of
-//! SPEC §2 does: it is eliminated from the programme (no column; its entries of the cone maps
+//! theory §2 does: it is eliminated from the programme (no column; its entries of the cone maps
 //! are dropped) and returned as 0.
 //!
 //! **Polishing.** The interior point method alone gives stresses to about 10⁻⁵; its (u, V, λ)
@@ -55,8 +55,8 @@ use std::collections::BTreeMap;
 /// The solver's type name.
 const NAME: &str = "socp";
 
-/// `type = "socp"`: the stress form of SPEC §3 as a second-order cone programme solved by
-/// Clarabel (SPEC §4), polished by active-set Newton.
+/// `type = "socp"`: the stress form of theory §3 as a second-order cone programme solved by
+/// Clarabel (theory §4.4), polished by active-set Newton.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Socp {
@@ -107,7 +107,6 @@ impl Solver for Socp {
 
     /// Builds the cone programme, runs Clarabel, recovers (u, V, σ̂, λ) and polishes them.
     fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        self.validate("solver")?;
         let mut timer = PhaseTimer::default();
         monitor.phase("cone programme");
         let prog = timer.time("cone programme", || ConeProgramme::build(l))?;
@@ -121,9 +120,13 @@ impl Solver for Socp {
             });
         }
         let (u, extras, mut stress, lambda) = prog.recover(l, &ipm);
+        // the residual of the interior point solution, its σ(u) by the local law (theory §3.4)
         let mut ws = Workspace::new(l);
-        let kkt = timer
-            .time("residual", || l.kkt(&Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws));
+        let (law, kkt) = timer.time("residual", || {
+            l.strain(&u, &mut ws.eps);
+            let law = l.local_law(&ws.eps, &mut ws.stress, None);
+            (law, l.kkt_with_stress(&Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws))
+        });
         stress.plastic.clone_from(&ws.stress.plastic);
         let r_ipm = kkt.max();
         monitor.iteration(ipm.iterations, r_ipm, self.tol);
@@ -147,6 +150,7 @@ impl Solver for Socp {
         if ipm.status != SolverStatus::Solved {
             warnings.push(format!("the interior point method ended {:?} (status {})", ipm.status, ipm.status as u32));
         }
+        counters.insert("return_mappings".into(), law.projected as f64);
         if !self.polish {
             counters.insert("polish_iterations".into(), 0.0);
             let converged = r_ipm <= self.tol;
@@ -173,7 +177,10 @@ impl Solver for Socp {
         let mut sol = newton.solve_from(l, Some(Start { u, extras, lambda }), monitor, &mut timer, NAME)?;
         let report = &mut sol.report;
         counters.insert("polish_iterations".into(), report.iterations as f64);
+        // the return mappings of the residual above and of the polish
+        let ipm_return_mappings = counters["return_mappings"];
         counters.append(&mut report.counters);
+        *counters.entry("return_mappings".into()).or_insert(0.0) += ipm_return_mappings;
         report.counters = counters;
         report.residual_history.insert(0, r_ipm);
         warnings.append(&mut report.warnings);
@@ -211,7 +218,7 @@ impl Scales {
     }
 }
 
-/// Where the unknowns of SPEC §3 form 3 sit in Clarabel's x and z.
+/// Where the unknowns of theory §3 form 3 sit in Clarabel's x and z.
 #[derive(Clone, Debug)]
 struct Layout {
     /// Stress points.
@@ -324,15 +331,16 @@ fn check_block(name: &str, k: usize, blk: &SocBlock, width: usize) -> Result<(),
 }
 
 impl ConeProgramme {
-    /// Builds the programme of SPEC §3 form 3 for `l`, non-dimensionalised.
+    /// Builds the programme of theory §3 form 3 for `l`, non-dimensionalised.
     fn build(l: &dyn Lagrangian) -> Result<Self, SolveError> {
         let plasticity = l.plasticity();
         let cone = match plasticity {
             Some(p) => Some(p.cone().ok_or_else(|| {
                 unsupported(format!(
-                    "the yield surface `{}` has no second-order-cone description (AdmissibleStresses::cone); \
-                     use another solver",
-                    p.name()
+                    "cannot solve the yield surface `{}`: {} (AdmissibleStresses::cone is None); \
+                     use newton, uzawa or penalty, which need only the projection onto D",
+                    p.name(),
+                    p.cone_unavailable()
                 ))
             })?),
             None => None,

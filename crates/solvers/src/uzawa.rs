@@ -1,7 +1,7 @@
-//! The paper's algorithm: Uzawa / Arrow–Hurwicz (SPEC §4), exactly as stated there.
+//! The paper's algorithm: Uzawa / Arrow–Hurwicz (theory §4.1), exactly as stated there.
 //!
 //! For n = 0, 1, …
-//!  1. σ̂ⁿ⁺¹ = P_D(C ε(uⁿ), 0) element by element (the local law, SPEC §2);
+//!  1. σ̂ⁿ⁺¹ = P_D(C ε(uⁿ), 0) element by element (the local law, theory §2);
 //!  2. (uⁿ⁺¹, Vⁿ⁺¹) ∈ K_h is the projected gradient step
 //!     `(uⁿ⁺¹ − uⁿ, v − uⁿ⁺¹)_M + m (Vⁿ⁺¹ − Vⁿ)(V − Vⁿ⁺¹) ≥ ρ [f·(V − Vⁿ⁺¹) − (σⁿ⁺¹, ε(v − uⁿ⁺¹))]`
 //!     for all (v, V) ∈ K_h — a projection onto K_h in the metric diag(M, m), solved exactly for
@@ -17,11 +17,10 @@
 //! iterate, never on the step length; divergence and NaN are detected and reported.
 
 use crate::kh_projection::MetricProjection;
-use crate::linear::{InSolver, lower};
+use crate::linear::{self, InSolver};
 use crate::residual;
 use saddle_core::SymOp;
 use saddle_core::error::{ParameterError, check};
-use saddle_core::linalg::SparseCholesky;
 use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace};
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use serde::{Deserialize, Serialize};
@@ -37,7 +36,7 @@ pub enum UzawaMetric {
     Strain,
 }
 
-/// `type = "uzawa"`: the paper's Uzawa / Arrow–Hurwicz method (SPEC §4).
+/// `type = "uzawa"`: the paper's Uzawa / Arrow–Hurwicz method (theory §4.1).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Uzawa {
@@ -60,8 +59,29 @@ impl Default for Uzawa {
     }
 }
 
-/// The stable range of ρ (in units of 1/L): 0 < ρ < 2.
+/// The stable range of ρ (in units of 1/L): 0 < ρ < 2 (theory §4.1: the projected gradient
+/// method converges for ρ < 2/L).
 pub const RHO_BOUND: f64 = 2.0;
+
+/// Divergence (theory §4.1): a step length in diag(M, m) this many times the smallest one seen
+/// since the first step. Below the bound the step length never grows, so any growth is
+/// instability; 10 leaves room for round-off once the steps are tiny, and above the bound the
+/// growth |1 − ρ|ⁿ passes 10 within a few iterations.
+pub const DIVERGENCE_GROWTH: f64 = 10.0;
+
+/// Steps below this fraction of the first one are round-off: the smallest step is floored
+/// there, so that tiny steps of a converging iteration are not taken for growth.
+pub const STEP_ROUND_OFF: f64 = 1e-12;
+
+/// The first iteration at which divergence is judged: the test compares the last step with the
+/// smallest one after the first, so it needs steps 1 and 2.
+pub const DIVERGENCE_WARM_UP: usize = 3;
+
+/// Stagnation (theory §4.1): no new best residual for max(this, n/4) iterations. Uzawa's
+/// residual is not monotone, so the window is deliberately long: it only decides when a run
+/// that cannot improve (a round-off floor above `tol`) is stopped, so a long window costs time,
+/// never a solution.
+pub const STAGNATION_WINDOW: usize = 500;
 
 #[typetag::serde(name = "uzawa")]
 impl Solver for Uzawa {
@@ -78,7 +98,6 @@ impl Solver for Uzawa {
     }
 
     fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        self.validate("solver")?;
         let mut timer = PhaseTimer::default();
         let law = *l.elasticity();
         // M and its Lipschitz bound L
@@ -90,23 +109,24 @@ impl Solver for Uzawa {
         monitor.phase("assembly");
         let m_values = timer.time("assembly", || l.stiffness(Material::Uniform(&metric)));
         monitor.phase("factorisation");
+        let (mut symbolic_analyses, mut factorisations) = (0usize, 0usize);
         let mut chol = timer.time("factorisation", || -> Result<_, SolveError> {
-            let mut chol = SparseCholesky::analyse(lower(l.pattern()), "Uzawa metric").in_solver("uzawa")?;
+            let mut chol = linear::analyse(l.pattern(), "Uzawa metric", "uzawa", &mut symbolic_analyses)?;
             chol.factorise(&m_values).in_solver("uzawa")?;
+            factorisations += 1;
             Ok(chol)
         })?;
         drop(m_values);
         // without contact rows step (ii) is a plain gradient step: no contact structures at all
         let rows = l.constraints();
-        let mut proj =
-            if rows.n_rows() > 0 {
-                monitor.phase("contact set-up");
-                Some(timer.time("contact set-up", || {
-                    MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load())
-                })?)
-            } else {
-                None
-            };
+        let mut proj = if rows.n_rows() > 0 {
+            monitor.phase("contact set-up");
+            Some(timer.time("contact set-up", || {
+                MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load(), "uzawa")
+            })?)
+        } else {
+            None
+        };
 
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let mut u = vec![0.0; n];
@@ -126,17 +146,19 @@ impl Solver for Uzawa {
         let mut first_step = 0.0;
         let (mut u_prev, mut v_prev) = (vec![0.0; n], vec![0.0; ne]);
         let mut scratch_v = vec![0.0; ne];
-        let plastic = l.plasticity().is_some();
+        let mut return_mappings = 0usize;
         monitor.phase("iterations");
         let mut it = 0;
         let mut last_step = 0.0;
         let (stop, kkt) = loop {
             // (i) σ̂ⁿ⁺¹ = P_D(Cε(uⁿ), 0); the KKT residual of the iterate (uⁿ, Vⁿ, σ̂ⁿ⁺¹, λⁿ)
-            timer.time("local law", || {
+            let law = timer.time("local law", || {
                 l.strain(&u, &mut ws.eps);
-                l.local_law(&ws.eps, &mut stress, None);
+                let law = l.local_law(&ws.eps, &mut stress, None);
                 ws.stress.clone_from(&stress);
+                law
             });
+            return_mappings += law.projected;
             let kkt = timer.time("residual", || {
                 l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
             });
@@ -148,7 +170,10 @@ impl Solver for Uzawa {
             if r < best.0 {
                 best = (r, it);
             }
-            if it >= 3 && smallest_step < f64::INFINITY && last_step > 10.0 * smallest_step.max(1e-12 * first_step) {
+            if it >= DIVERGENCE_WARM_UP
+                && smallest_step < f64::INFINITY
+                && last_step > DIVERGENCE_GROWTH * smallest_step.max(STEP_ROUND_OFF * first_step)
+            {
                 return Err(SolveError::Diverged {
                     solver: "uzawa".into(),
                     iteration: it,
@@ -159,7 +184,7 @@ impl Solver for Uzawa {
             if it >= self.max_iter {
                 break (StopReason::MaxIterations, kkt);
             }
-            if it - best.1 > 500.max(it / 4) {
+            if it - best.1 > STAGNATION_WINDOW.max(it / 4) {
                 break (StopReason::Stagnated, kkt);
             }
             // (ii) z = uⁿ − ρ M⁻¹ Bᵀσⁿ⁺¹ (ws.force holds Bᵀσⁿ⁺¹), then project onto K_h in M
@@ -202,11 +227,12 @@ impl Solver for Uzawa {
         let mut counters = BTreeMap::new();
         counters.insert("rho".into(), self.rho);
         counters.insert("rho_bound".into(), RHO_BOUND);
-        counters.insert("factorisations".into(), 1.0);
+        counters.insert("symbolic_analyses".into(), symbolic_analyses as f64);
+        counters.insert("factorisations".into(), factorisations as f64);
         counters.insert("setup_solves".into(), proj.as_ref().map_or(0, |p| p.setup_solves) as f64);
         counters.insert("triangular_solve_pairs".into(), solves as f64);
         counters.insert("qp_factorisations".into(), proj.as_ref().map_or(0, |p| p.qp_work().1) as f64);
-        counters.insert("return_mappings".into(), if plastic { (it + 1) as f64 * l.n_points() as f64 } else { 0.0 });
+        counters.insert("return_mappings".into(), return_mappings as f64);
         counters.insert("contact_structures".into(), proj.is_some() as u8 as f64);
         counters.insert(
             "delassus_columns_kept".into(),

@@ -1,4 +1,4 @@
-//! The penalty method (SPEC §4): its error against the discrete problem falls in proportion to
+//! The penalty method (theory §4.3): its error against the discrete problem falls in proportion to
 //! μ, is reported honestly (the true KKT residual, penetration, load defect), and never turns
 //! into NaN.
 //!
@@ -13,7 +13,7 @@ use saddle_solvers::{Newton, Penalty};
 mod common;
 use common::{SCALED, homogeneous};
 
-/// The default scene of SPEC §6 on a coarse graded mesh.
+/// The default scene of theory §6 on a coarse graded mesh.
 fn johnson() -> P1P0Lagrangian {
     common::johnson([10, 10, 5], Some((1.0, 5.0)), SCALED)
 }
@@ -25,7 +25,7 @@ fn johnson_prescribed(u: f64) -> P1P0Lagrangian {
     })
 }
 
-/// U of the closed form of SPEC §7 (E = 100, k₀ = 1, h = 5): U = −ε₃₃, ε = Aσ + p.
+/// U of the closed form of theory §7 (E = 100, k₀ = 1, h = 5): U = −ε₃₃, ε = Aσ + p.
 fn homogeneous_u(f: f64) -> f64 {
     let (e, k0, h) = (100.0, 1.0, 5.0);
     let s = (2.0f64 / 3.0).sqrt() * f;
@@ -41,7 +41,7 @@ fn solve(p: &Penalty, l: &P1P0Lagrangian) -> Solution {
     p.solve(l, &mut Silent).unwrap_or_else(|e| panic!("mu = {}: {e}", p.mu))
 }
 
-/// Newton at tol 1e-12: the discrete solution of SPEC §3.
+/// Newton at tol 1e-12: the discrete solution of theory §3.
 fn reference(l: &P1P0Lagrangian) -> Solution {
     let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(l, &mut Silent).unwrap();
     assert!(sol.report.converged, "reference: {:?}", sol.report.stop_reason);
@@ -52,7 +52,7 @@ fn u_error(a: &Solution, reference: &Solution) -> f64 {
     (a.extras[0] - reference.extras[0]).abs() / reference.extras[0].abs()
 }
 
-/// [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} (SPEC §5).
+/// [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} (theory §5).
 fn stress_error(l: &P1P0Lagrangian, a: &StressField, reference: &StressField) -> f64 {
     let mut diff = reference.clone();
     for (d, s) in diff.sigma.iter_mut().zip(&a.sigma) {
@@ -118,7 +118,9 @@ fn default_scene_error_falls_in_proportion_to_mu_and_matches_newton() {
     // and quickly: one factorisation per Newton step, a second when the contact zone moves
     assert!(s.report.iterations <= 10, "{} iterations", s.report.iterations);
     assert!(s.report.counters["factorisations"] <= 2.0 * s.report.iterations as f64);
+    // the pattern is analysed once, where the analysis runs, for all those factorisations
     assert_eq!(s.report.counters["symbolic_analyses"], 1.0);
+    assert!(s.report.counters["factorisations"] > 1.0);
 }
 
 #[test]
@@ -138,10 +140,17 @@ fn prescribed_punch_displacement_matches_newton() {
 #[test]
 fn error_indicators_are_reported_and_honest() {
     let l = johnson();
+    let reference = reference(&l);
     let mut previous: Option<Solution> = None;
     for mu in [1e-3, 1e-5, 1e-7] {
         let s = solve(&penalty(mu), &l);
         assert!(all_finite(&s), "mu = {mu}");
+        // the μ asked for is the μ solved with: the error against Newton falls like μ (by 100
+        // from one μ to the next), not like √μ, not at all
+        if let Some(p) = &previous {
+            let ratio = u_error(p, &reference) / u_error(&s, &reference);
+            assert!((50.0..=200.0).contains(&ratio), "mu = {mu}: U error ratio {ratio}");
+        }
         let c = &s.report.counters;
         for key in [
             "mu",
@@ -157,7 +166,6 @@ fn error_indicators_are_reported_and_honest() {
         ] {
             assert!(c.contains_key(key), "counter {key} missing");
         }
-        assert_eq!(c["mu"], mu);
         // the penalised problem is solved, the true one only to O(μ): flagged, not hidden
         assert_eq!(c["inner_converged"], 1.0);
         assert!(!s.report.converged);
@@ -223,6 +231,8 @@ fn invalid_parameters_name_the_field() {
         (Penalty { tol: 0.0, ..Penalty::default() }, "solver.tol"),
         (Penalty { tol: f64::NAN, ..Penalty::default() }, "solver.tol"),
         (Penalty { max_iter: 0, ..Penalty::default() }, "solver.max_iter"),
+        (Penalty { gradient_tol: 0.0, ..Penalty::default() }, "solver.gradient_tol"),
+        (Penalty { step_tol: 1.5, ..Penalty::default() }, "solver.step_tol"),
     ] {
         let e = p.solve(&l, &mut Silent).expect_err("invalid parameters are an error");
         assert!(e.to_string().contains(field), "{e}");
@@ -230,7 +240,10 @@ fn invalid_parameters_name_the_field() {
     // scene tables: defaults, and unknown fields rejected
     let s: Box<dyn Solver> = toml::from_str("type = \"penalty\"").unwrap();
     assert_eq!((s.name(), s.tolerance()), ("penalty", Penalty::default().tol));
-    let s: Box<dyn Solver> = toml::from_str("type = \"penalty\"\nmu = 1e-9\ntol = 1e-6\nmax_iter = 7").unwrap();
+    let s: Box<dyn Solver> = toml::from_str(
+        "type = \"penalty\"\nmu = 1e-9\ntol = 1e-6\nmax_iter = 7\ngradient_tol = 1e-10\nstep_tol = 1e-11",
+    )
+    .unwrap();
     assert_eq!(s.tolerance(), 1e-6);
     let e = toml::from_str::<Box<dyn Solver>>("type = \"penalty\"\nrho = 1.0").expect_err("unknown field");
     assert!(e.to_string().contains("rho"), "{e}");

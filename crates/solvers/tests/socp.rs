@@ -1,5 +1,5 @@
 #![cfg(feature = "socp")]
-//! The conic solver (SPEC §3 form 3, §4): the closed form of SPEC §7, agreement with Newton on
+//! The conic solver (theory §3 form 3, §4): the closed form of theory §7, agreement with Newton on
 //! the default scene, the QP of an elastic problem, the signs of the displacements read from
 //! the equality duals, invariance to units, perfect plasticity, and parameter errors.
 
@@ -32,7 +32,7 @@ fn newton(l: &P1P0Lagrangian) -> Solution {
     sol
 }
 
-/// [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} (SPEC §5).
+/// [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} (theory §5).
 fn energy_error(l: &P1P0Lagrangian, s: &StressField, reference: &StressField) -> f64 {
     let mut d = reference.clone();
     for (a, b) in d.sigma.iter_mut().zip(&s.sigma) {
@@ -67,7 +67,7 @@ fn print_report(tag: &str, sol: &Solution) {
 
 #[test]
 fn homogeneous_compression_matches_the_closed_form() {
-    // SPEC §7 with E = 100, ν = 0.3, k₀ = 1, h = 5; first yield at F = sqrt(3/2)
+    // theory §7 with E = 100, ν = 0.3, k₀ = 1, h = 5; first yield at F = sqrt(3/2)
     let (e, k0, h) = (100.0, 1.0, 5.0);
     for f in [2.0, 1.0] {
         let l = homogeneous(f);
@@ -207,7 +207,7 @@ fn perfect_plasticity_fixes_the_hardening_variable() {
     assert!(sol.stress.q.iter().all(|q| *q == 0.0));
     assert!(sol.stress.sigma.iter().all(|s| deviator(s).norm() <= 1.0 + 1e-8));
     assert!(sol.stress.n_plastic() > 0);
-    // the stresses are unique even at h = 0 (SPEC §1): the interior point ones agree
+    // the stresses are unique even at h = 0 (theory §1): the interior point ones agree
     let ipm = Socp { polish: false, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
     assert!(energy_error(&l, &ipm.stress, &sol.stress) <= 1e-4);
     assert!(sol.report.converged, "{:?}: KKT {:e}", sol.report.stop_reason, sol.report.kkt.max());

@@ -1,4 +1,4 @@
-//! No yield: D is the whole space of stresses (SPEC §7, the Hertz case with yield switched off).
+//! No yield: D is the whole space of stresses (theory §7, the Hertz case with yield switched off).
 
 use saddle_core::error::ParameterError;
 use saddle_core::problem::elasticity::Elasticity;
@@ -40,12 +40,12 @@ impl AdmissibleStresses for Elastic {
         true
     }
 
-    /// The identity (SPEC §2 with D the whole space); never outside.
+    /// The identity (theory §2 with D the whole space); never outside.
     fn project(&self, _law: &Elasticity, _sigma: &mut Sym, _q: &mut [f64]) -> bool {
         false
     }
 
-    /// σ = Cε, tangent C (SPEC §2 with D the whole space).
+    /// σ = Cε, tangent C (theory §2 with D the whole space).
     fn local_law(
         &self,
         law: &Elasticity,

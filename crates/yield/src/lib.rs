@@ -1,20 +1,20 @@
 //! # saddle-yield
 //!
-//! Yield surfaces — implementations of **P**, the admissible generalised stresses of SPEC §1
+//! Yield surfaces — implementations of **P**, the admissible generalised stresses of theory §1
 //! ([`AdmissibleStresses`]) — and the conformance kit every implementation must pass.
 //!
 //! A generalised stress is σ̂ = (σ, q): a stress σ (Mandel vector, see
 //! [`saddle_core::problem::tensor`]) and `hardening_dim()` hardening variables q. P is the set of
 //! fields with σ̂(x) ∈ D at every point, for a closed convex set D, and the energy inner
 //! product is `[σ̂, τ̂] = Aσ:τ + q·H⁻¹r`. Everything a solver needs follows from the
-//! projection onto D in that metric (SPEC §2): the local law σ̂ = P_D(Cε, 0), its derivative
+//! projection onto D in that metric (theory §2): the local law σ̂ = P_D(Cε, 0), its derivative
 //! (the consistent tangent), the reduced energy ψ(ε) with ∂ψ/∂ε = σ, and for conic solvers a
-//! description of D by second-order cones (SPEC §3).
+//! description of D by second-order cones (theory §3).
 //!
 //! Provided here, chosen by `type` in the `[yield]` table of a scene:
 //!
 //! * [`VonMises`] (`type = "von_mises"`, `k0`, `h`): `D = {|dev σ| ≤ k₀ + ξ}`, metric ξη/h —
-//!   the material of SPEC §1;
+//!   the material of theory §1;
 //! * [`Elastic`] (`type = "elastic"`): D is the whole space.
 //!
 //! ## Adding a yield surface
@@ -85,7 +85,7 @@
 //! assert_eq!(p.name(), "perfect_mises");
 //! ```
 //!
-//! The kit checks (SPEC §2) that the projection lies in D, is idempotent, satisfies the
+//! The kit checks (theory §2) that the projection lies in D, is idempotent, satisfies the
 //! variational inequality and is non-expansive in the energy metric; that ∂ψ/∂ε = σ and the
 //! tangent is the derivative of σ(ε) (finite differences); that ψ is convex, equals
 //! ε:σ − ½[σ̂, σ̂], and that the local law is the projection of (Cε, 0); and that the cone

@@ -64,6 +64,11 @@ impl AdmissibleStresses for VonMises {
         Ok(())
     }
 
+    /// ξ, the isotropic hardening variable.
+    fn hardening_fields(&self) -> Vec<(&'static str, usize)> {
+        vec![("xi", 1)]
+    }
+
     /// One hardening variable, ξ.
     fn hardening_dim(&self) -> usize {
         1
@@ -204,41 +209,67 @@ mod tests {
         (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
     }
 
+    /// The hand-checkable case of the SPEC §2 radial return (theory §2). Every expected number
+    /// below is a short decimal worked out by hand from E, ν, k₀, h and the trial strain:
+    ///
+    /// * E = 100, ν = 1/4: G = E/(2(1+ν)) = 40, so 2G = 80; 3K_b = E/(1−2ν) = 200.
+    /// * k₀ = 1, h = 20, so h + 2G = 100.
+    /// * Trial strain ε = 0.01 I + 0.025 M with M = [[1,0,0],[0,−1,1],[0,1,0]]: tr M = 0 and
+    ///   |M|² = 1 + 1 + 1 + 1 = 4, so |M| = 2. In components
+    ///   ε = [[0.035, 0, 0], [0, −0.015, 0.025], [0, 0.025, 0.01]], tr ε = 0.03, dev ε = 0.025 M.
+    /// * s_tr = 2G dev ε = 80 · 0.025 M = 2 M, r = |s_tr| = 4 > k₀ = 1: plastic.
+    ///   tr σ_tr = 3K_b tr ε = 200 · 0.03 = 6.
+    /// * t = (h r + 2G k₀)/(h + 2G) = (20·4 + 80·1)/100 = 1.6;
+    ///   ξ = h (r − k₀)/(h + 2G) = 20 · 3/100 = 0.6 (= t − k₀).
+    /// * s = s_tr t/r = 2M · 0.4 = 0.8 M; tr σ = tr σ_tr = 6, so σ = 0.8 M + 2 I
+    ///   = [[2.8, 0, 0], [0, 1.2, 0.8], [0, 0.8, 2.0]].
+    /// * p = (s_tr − s)/(2G) = 1.2 M/80 = 0.015 M, |p| = 0.03 = (r − k₀)/(h + 2G); h|p| = 0.6 = ξ;
+    ///   |s| = 0.8 · 2 = 1.6 = k₀ + ξ.
+    /// * ψ(ε) = ½ Cε:ε − (r − k₀)²/(2(2G + h)) with Cε:ε = s_tr:dev ε + tr σ_tr tr ε/3
+    ///   = 2 · 0.025 · |M|² + 6 · 0.03/3 = 0.2 + 0.06 = 0.26, so ψ = 0.13 − 9/200 = 0.085.
+    /// * Below yield: ε' = 0.01 I + 0.005 M gives s_tr = 0.4 M, r = 0.8 ≤ k₀: σ = 0.4 M + 2 I
+    ///   = [[2.4, 0, 0], [0, 1.6, 0.4], [0, 0.4, 2.0]], ξ = 0.
     #[test]
-    fn local_law_matches_spec_closed_form_for_a_uniaxial_trial() {
-        // E = 100, ν = 0.3: G = 100/2.6, K_b = 100/1.2; trial ε = (0.03, −0.01, −0.01, 0, 0, 0)
-        let law = law();
-        let vm = VonMises::new(1.0, 5.0);
-        let g = 100.0 / 2.6;
-        let kb = 100.0 / 1.2;
-        assert!(close(law.shear_modulus(), g, 1e-15));
-        let eps = Sym::new(0.03, -0.01, -0.01, 0.0, 0.0, 0.0);
-        // dev ε = (0.08/3)(1, −½, −½): |dev ε| = (0.08/3)√(3/2)
-        let dev_norm = 0.08 / 3.0 * 1.5f64.sqrt();
-        let r = 2.0 * g * dev_norm;
-        assert!(r > 1.0);
-        let t = (5.0 * r + 2.0 * g) / (5.0 + 2.0 * g);
-        let xi = t - 1.0;
-        let p_norm = (r - 1.0) / (5.0 + 2.0 * g);
+    fn local_law_matches_a_radial_return_worked_by_hand() {
+        use nalgebra::Matrix3;
+        use saddle_core::problem::tensor::{from_matrix, to_matrix};
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let vm = VonMises::new(1.0, 20.0);
+        let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
+        let eps = from_matrix(&Matrix3::new(0.035, 0.0, 0.0, 0.0, -0.015, 0.025, 0.0, 0.025, 0.01));
+        // every expected value is O(1); the inputs carry decimal rounding of ~1e-16
+        let tol = 1e-13;
+        let near = |a: f64, b: f64| (a - b).abs() <= tol;
+        let same = |a: &Matrix3<f64>, b: &Matrix3<f64>| (a - b).abs().max() <= tol;
+
         let (mut s, mut q) = (Sym::zeros(), [0.0]);
-        assert!(vm.local_law(&law, &eps, &mut s, &mut q, None));
-        // the numbers themselves (computed independently): r = 2.51230, ξ = 0.09230
-        assert!(close(r, 2.512_297_172_085_31, 1e-13), "r = {r}");
-        assert!(close(q[0], 0.092_299_827_404_267_7, 1e-12), "ξ = {}", q[0]);
-        assert!(close(q[0], xi, 1e-13));
-        assert!(close(q[0], 5.0 * p_norm, 1e-13), "ξ = h|p|");
-        assert!(close(deviator(&s).norm(), 1.0 + q[0], 1e-13), "|s| = k0 + ξ");
-        assert!(close(trace(&s), 3.0 * kb * 0.01, 1e-13), "tr σ = tr σ_tr");
-        // s parallel to s_tr: s = (2/3, −1/3, −1/3)·|s|·√(3/2)
-        let c = deviator(&s).norm() * (2.0f64 / 3.0).sqrt();
-        assert!(close(deviator(&s)[0], c, 1e-13) && close(deviator(&s)[1], -0.5 * c, 1e-13));
-        // plastic strain p = (s_tr − s)/(2G) has |p| = (r − k0)/(h + 2G)
-        let s_tr = deviator(&eps) * (2.0 * g);
-        assert!(close(((s_tr - deviator(&s)) / (2.0 * g)).norm(), p_norm, 1e-12));
-        // the strain stays elastic below r = k0
-        let small = eps * (0.9 / r);
-        assert!(!vm.local_law(&law, &small, &mut s, &mut q, None));
-        assert!((s - law.stress(&small)).norm() < 1e-15 && q[0] == 0.0);
+        assert!(vm.local_law(&law, &eps, &mut s, &mut q, None), "r = 4 > k0 = 1: plastic");
+        let sigma = to_matrix(&s);
+        let expected = Matrix3::new(2.8, 0.0, 0.0, 0.0, 1.2, 0.8, 0.0, 0.8, 2.0);
+        assert!(same(&sigma, &expected), "σ = {sigma}, by hand {expected}");
+        assert!(near(q[0], 0.6), "ξ = {}, by hand 0.6", q[0]);
+        assert!(near(trace(&s), 6.0), "tr σ = {}, by hand 6", trace(&s));
+        assert!(near(deviator(&s).norm(), 1.6), "|s| = {}, by hand 1.6 = k0 + ξ", deviator(&s).norm());
+        // the plastic strain p = ε − Aσ (its deviator: tr p = 0), by hand 0.015 M
+        let p = to_matrix(&(eps - law.compliance(&s)));
+        assert!(same(&p, &(mm * 0.015)), "p = {p}, by hand 0.015 M");
+        assert!(near(q[0], 20.0 * p.norm()), "ξ = h|p| = 20 · 0.03");
+        assert!(near(vm.energy(&law, &eps), 0.085), "ψ = {}, by hand 0.085", vm.energy(&law, &eps));
+
+        // the general projection of (σ_tr, 0) = (2M + 2I, 0) gives the same point
+        let (mut s2, mut q2) = (from_matrix(&(mm * 2.0 + Matrix3::identity() * 2.0)), [0.0]);
+        assert!(vm.project(&law, &mut s2, &mut q2));
+        assert!(same(&to_matrix(&s2), &expected) && near(q2[0], 0.6), "P_D(σ_tr, 0) = ({s2}, {})", q2[0]);
+
+        // below yield the law is linear elastic: σ = 0.4 M + 2 I, ξ = 0
+        let small = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.005));
+        assert!(!vm.local_law(&law, &small, &mut s, &mut q, None), "r = 0.8 ≤ k0 = 1: elastic");
+        let elastic = Matrix3::new(2.4, 0.0, 0.0, 0.0, 1.6, 0.4, 0.0, 0.4, 2.0);
+        assert!(same(&to_matrix(&s), &elastic) && q[0] == 0.0, "σ = {}, ξ = {}", to_matrix(&s), q[0]);
+        assert!(
+            near(vm.energy(&law, &small), 0.5 * (0.4 * 0.005 * 4.0 + 0.06)),
+            "ψ = ½Cε:ε = ½(0.4 · 0.005 · 4 + 0.06) = 0.034"
+        );
     }
 
     #[test]
@@ -361,24 +392,32 @@ mod tests {
         assert!(q1[0] > 0.02, "clearly plastic: ξ = {}", q1[0]);
     }
 
+    /// The consistent tangent on the hand-worked point of
+    /// `local_law_matches_a_radial_return_worked_by_hand` (E = 100, ν = 1/4, k₀ = 1, h = 20,
+    /// 2G = 80, 3K_b = 200, r = 4, t = 1.6): along n = M/|M| the deviatoric stiffness is
+    /// 2G h/(h + 2G) = 80 · 20/100 = 16; across it (any deviator m ⟂ n) 2G t/r = 80 · 0.4 = 32;
+    /// on I it is 3K_b = 200; below yield it is C.
     #[test]
     fn tangent_is_c_when_elastic_and_hardening_modulus_along_n() {
-        let law = law();
-        let g2 = 2.0 * law.shear_modulus();
-        let vm = VonMises::new(1.0, 5.0);
-        let eps = Sym::new(0.03, -0.01, -0.01, 0.0, 0.0, 0.0);
+        use nalgebra::Matrix3;
+        use saddle_core::problem::tensor::from_matrix;
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let vm = VonMises::new(1.0, 20.0);
+        let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
+        let eps = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.025));
         let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
         vm.local_law(&law, &eps, &mut s, &mut q, Some(&mut c));
-        let n = deviator(&eps) / deviator(&eps).norm();
-        // along n the deviatoric stiffness is 2G h/(h + 2G); on I it is 3K_b
-        assert!(close(n.dot(&(c * n)), g2 * 5.0 / (5.0 + g2), 1e-13));
-        assert!(close(identity().dot(&(c * identity())) / 3.0, 3.0 * law.bulk_modulus(), 1e-13));
-        let m = deviator(&Sym::new(0.0, 1.0, -1.0, 0.0, 0.0, 0.0));
-        let m = m / m.norm();
-        assert!(m.dot(&n).abs() < 1e-15);
-        let r = g2 * deviator(&eps).norm();
-        let t = (5.0 * r + g2) / (5.0 + g2);
-        assert!(close(m.dot(&(c * m)), g2 * t / r, 1e-13));
+        let n = from_matrix(&(mm * 0.5));
+        let near = |a: f64, b: f64| (a - b).abs() <= 1e-12;
+        assert!(near(n.dot(&(c * n)), 16.0), "n:C_t:n = {}, by hand 16", n.dot(&(c * n)));
+        assert!(near(identity().dot(&(c * identity())) / 3.0, 200.0), "I:C_t:I/3, by hand 3K_b = 200");
+        // m = diag(1, 1, −2)/√6: deviatoric, |m| = 1, m:M = 1 − 1 + 0 = 0
+        let m = Sym::new(1.0, 1.0, -2.0, 0.0, 0.0, 0.0) / 6.0f64.sqrt();
+        assert!(m.dot(&n).abs() < 1e-15 && trace(&m) == 0.0);
+        assert!(near(m.dot(&(c * m)), 32.0), "m:C_t:m = {}, by hand 32", m.dot(&(c * m)));
+        // a shear direction orthogonal to M (the 1–2 shear, Mandel component 5) is also 32
+        let w = Sym::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(near(w.dot(&(c * w)), 32.0) && near(n.dot(&(c * m)), 0.0));
         assert!((c - c.transpose()).norm() < 1e-12);
         vm.local_law(&law, &(eps * 0.1), &mut s, &mut q, Some(&mut c));
         assert_eq!(c, law.stiffness_matrix());

@@ -1,6 +1,6 @@
 //! Loads on the displacements (Neumann data): surface tractions on boundary facets and body
 //! forces, assembled into consistent P1 nodal forces f_u. They enter the primal energy as
-//! `J = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V` and equilibrium as `Bᵀσ = Gᵀλ + f_u` (SPEC §3 with
+//! `J = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V` and equilibrium as `Bᵀσ = Gᵀλ + f_u` (theory §3 with
 //! the load term of (1.11) extended to u).
 
 use crate::error::{ParameterError, SceneError, check, join};

@@ -1,4 +1,4 @@
-//! The P1–P0 discretisation of L (SPEC §3): continuous piecewise-linear displacements on
+//! The P1–P0 discretisation of L (theory §3): continuous piecewise-linear displacements on
 //! tetrahedra, stresses and hardening constant per element. The strain of a P1 field is
 //! constant per tetrahedron, so one stress point per element is exact.
 //!
@@ -48,8 +48,10 @@ pub struct P1P0Lagrangian {
 
 impl P1P0Lagrangian {
     /// Assembles L from a mesh, Dirichlet conditions, elasticity, P (`None`: elastic) and K
-    /// (`None`: no contact). Parameters are validated with the scene's paths (`material`,
-    /// `yield`, `obstacle`).
+    /// (`None`: no contact). The parameters are taken as valid: a scene validates every plugin
+    /// once, when it is read; a problem composed in Rust calls each plugin's `validate` (or
+    /// builds it with a constructor that checks). K's rows are discretised here, and errors name
+    /// the scene's paths (`obstacle.zone`).
     pub fn new(
         mesh: TetMesh,
         dirichlet: &[Dirichlet],
@@ -57,13 +59,8 @@ impl P1P0Lagrangian {
         stresses: Option<Box<dyn AdmissibleStresses>>,
         obstacle: Option<Box<dyn AdmissibleDisplacements>>,
     ) -> Result<Self, SceneError> {
-        law.validate("material")?;
         if let Some(p) = &stresses {
-            p.validate("yield")?;
             assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
-        }
-        if let Some(k) = &obstacle {
-            k.validate("obstacle")?;
         }
         let dofs = DofMap::new(&mesh, dirichlet)?;
         let (grads, weights): (Vec<_>, Vec<_>) =
@@ -94,7 +91,7 @@ impl P1P0Lagrangian {
         })
     }
 
-    /// The same problem with tractions and body forces (SPEC §3 with loads on u).
+    /// The same problem with tractions and body forces (theory §3 with loads on u).
     pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
         let f = nodal_loads(&self.mesh, &self.dofs, loads)?;
         self.nodal_load = if loads.is_empty() { Vec::new() } else { f };

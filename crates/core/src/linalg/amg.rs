@@ -128,8 +128,10 @@ impl NearNullSpace {
     }
 }
 
-/// Parameters of the smoothed-aggregation hierarchy and its V-cycle.
-#[derive(Clone, Debug, PartialEq)]
+/// Parameters of the smoothed-aggregation hierarchy and its V-cycle. As a scene table (a
+/// solver's `amg`) every field is optional, its default below.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct AmgParams {
     /// θ of the strength of connection ‖A_ij‖_F ≥ θ √(‖A_ii‖_F ‖A_jj‖_F).
     pub strength_threshold: f64,

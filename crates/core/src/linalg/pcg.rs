@@ -1,5 +1,5 @@
 //! Preconditioned conjugate gradients for symmetric positive definite systems A x = b, with the
-//! [`Preconditioner`] interface that algebraic multigrid ([`crate::amg`]) and Jacobi implement.
+//! [`Preconditioner`] interface that algebraic multigrid ([`super::amg`]) and Jacobi implement.
 //!
 //! CG minimises the energy norm of the error over the Krylov space of M⁻¹A; with an SPD
 //! preconditioner M the iteration count grows like √κ(M⁻¹A). The iteration stops when the

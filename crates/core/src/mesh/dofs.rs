@@ -1,4 +1,4 @@
-//! The P1 displacement space W_h (SPEC §3): three degrees of freedom per node, those fixed by
+//! The P1 displacement space W_h (theory §3): three degrees of freedom per node, those fixed by
 //! Dirichlet conditions eliminated. A Dirichlet condition fixes chosen components on the nodes
 //! of the selected facets (closure): all three is clamped, one is a roller.
 

@@ -1,4 +1,4 @@
-//! `type = "gmsh"`: a tetrahedral mesh T_h (SPEC §3) read from a Gmsh MSH 4.1 file, ASCII or
+//! `type = "gmsh"`: a tetrahedral mesh T_h (theory §3) read from a Gmsh MSH 4.1 file, ASCII or
 //! binary (cargo feature `gmsh`, on by default).
 //!
 //! ```toml
@@ -25,7 +25,7 @@
 //!
 //! The node rules of the scene apply to groups as to any region: a node belongs to every group
 //! one of whose facets it lies on, so the nodes on the rim between two physical surfaces belong
-//! to both. A Dirichlet condition fixes the closure of its facets (SPEC §3: nodes on the closure
+//! to both. A Dirichlet condition fixes the closure of its facets (theory §3: nodes on the closure
 //! of Γ₂ are clamped), so a node shared by `clamped` and `free` is clamped; a contact zone
 //! `{ group = "contact" }` holds its rim nodes shared with `free` (and drops with a warning any
 //! node whose u₃ is clamped).

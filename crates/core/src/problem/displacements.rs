@@ -1,9 +1,9 @@
-//! **K** — the admissible displacements (SPEC §1, §3): a closed convex set of displacements
+//! **K** — the admissible displacements (theory §1, §3): a closed convex set of displacements
 //! together with its own extra unknowns V (the punch's U) and the load term ℓ(V) = f·V of the
 //! Lagrangian (F·V for the punch).
 //!
 //! On a mesh, K_h is polyhedral: affine rows `g_i(u, V) = Σ_j G_ij u_j + Σ_k H_ik V_k + c_i ≥ 0`,
-//! one per contact node (SPEC §3). Rows are exactly what solvers need: projecting onto K_h in a
+//! one per contact node (theory §3). Rows are exactly what solvers need: projecting onto K_h in a
 //! metric (Uzawa), linearising it (it is its own linearisation), penalising its violation.
 
 use crate::error::{ParameterError, SceneError};
@@ -136,7 +136,7 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
     /// The load term ℓ(V) = f·V of the Lagrangian (1.11): the coefficients f (`[F]`).
     fn load(&self) -> Vec<f64>;
 
-    /// K_h on a mesh (SPEC §3): the rows g(u, V) ≥ 0. Errors name `path`'s fields (a contact
+    /// K_h on a mesh (theory §3): the rows g(u, V) ≥ 0. Errors name `path`'s fields (a contact
     /// zone with no nodes, a missing group).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError>;
 

@@ -1,11 +1,11 @@
 //! Isotropic linear elasticity: the stiffness C and the compliance A = C⁻¹ of the energy
-//! inner product (SPEC §1).
+//! inner product (theory §1).
 
 use crate::error::{ParameterError, check};
 use crate::problem::tensor::{Sym, SymOp, deviatoric_projector, identity, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
-/// Isotropic elasticity `Cε = 2G dev ε + K_b tr(ε) I`, `Aσ = ((1+ν)σ − ν tr(σ) I)/E` (SPEC §1–§2).
+/// Isotropic elasticity `Cε = 2G dev ε + K_b tr(ε) I`, `Aσ = ((1+ν)σ − ν tr(σ) I)/E` (theory §1–§2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Elasticity {

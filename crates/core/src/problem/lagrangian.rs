@@ -142,6 +142,16 @@ impl KktResiduals {
     }
 }
 
+/// What one evaluation of [`Lagrangian::local_law`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LocalLaw {
+    /// Points whose trial stress Cε lay outside D.
+    pub plastic: usize,
+    /// Points at which P's return mapping ran ([`AdmissibleStresses::local_law`] called): all of
+    /// them for a bounded P, none for an elastic problem.
+    pub projected: usize,
+}
+
 /// The material of an assembly: one tensor for all points, or one per point.
 #[derive(Clone, Copy, Debug)]
 pub enum Material<'a> {
@@ -258,8 +268,9 @@ pub trait Lagrangian: Sync {
     }
 
     /// The local law at every point: σ̂_T = P_D(Cε_T, 0) and, if asked, the consistent
-    /// tangents (SPEC §2). Returns the number of plastic points.
-    fn local_law(&self, eps: &[Sym], out: &mut StressField, tangents: Option<&mut [SymOp]>) -> usize {
+    /// tangents (theory §2). Returns how many points were plastic and at how many P's return
+    /// mapping ran (none for an elastic problem: σ = Cε, no call of P at all).
+    fn local_law(&self, eps: &[Sym], out: &mut StressField, tangents: Option<&mut [SymOp]>) -> LocalLaw {
         let law = *self.elasticity();
         let Some(p) = self.plasticity() else {
             let c = law.stiffness_matrix();
@@ -268,7 +279,7 @@ pub trait Lagrangian: Sync {
             if let Some(t) = tangents {
                 t.par_iter_mut().for_each(|t| *t = c);
             }
-            return 0;
+            return LocalLaw::default();
         };
         let (m, stride) = (out.q_dim, out.stride());
         let points = out
@@ -277,21 +288,23 @@ pub trait Lagrangian: Sync {
             .zip(out.q.par_chunks_mut(stride))
             .zip(out.plastic.par_iter_mut())
             .zip(eps.par_iter());
-        match tangents {
+        // each point counts its own return mapping, where it runs
+        let (plastic, projected) = match tangents {
             None => points
                 .map(|(((s, q), pl), e)| {
                     *pl = p.local_law(&law, e, s, &mut q[..m], None);
-                    *pl as usize
+                    (*pl as usize, 1)
                 })
-                .sum(),
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
             Some(t) => points
                 .zip(t.par_iter_mut())
                 .map(|((((s, q), pl), e), t)| {
                     *pl = p.local_law(&law, e, s, &mut q[..m], Some(t));
-                    *pl as usize
+                    (*pl as usize, 1)
                 })
-                .sum(),
-        }
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
+        };
+        LocalLaw { plastic, projected }
     }
 
     /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (SPEC §2).

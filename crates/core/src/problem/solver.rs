@@ -1,4 +1,4 @@
-//! The solver interface (SPEC §4–§5): a solver takes the Lagrangian L and returns a
+//! The solver interface (theory §4–§5): a solver takes the Lagrangian L and returns a
 //! [`Solution`] with an honest [`SolveReport`] — residuals, per-phase wall time and why it
 //! stopped — or a typed [`SolveError`]. NaN or Inf never leaves a solver unreported.
 
@@ -25,7 +25,7 @@ pub enum StopReason {
     ApproximationLimit,
 }
 
-/// What a solve reports (SPEC §5).
+/// What a solve reports (theory §5).
 #[derive(Clone, Debug, Serialize)]
 pub struct SolveReport {
     /// Solver type name.
@@ -128,7 +128,8 @@ pub trait Solver: Debug + Send + Sync + dyn_clone::DynClone {
     fn name(&self) -> &'static str {
         self.typetag_name()
     }
-    /// Checks the parameters; `path` is the table's path (`solver`).
+    /// Checks the parameters; `path` is the table's path (`solver`). Called once, by whoever
+    /// reads the parameters (a scene when it is loaded); `solve` takes them as valid.
     fn validate(&self, path: &str) -> Result<(), ParameterError>;
     /// The relative KKT tolerance it stops at.
     fn tolerance(&self) -> f64;

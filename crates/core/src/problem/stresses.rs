@@ -1,4 +1,4 @@
-//! **P** — the admissible generalised stresses (SPEC §1, §2).
+//! **P** — the admissible generalised stresses (theory §1, §2).
 //!
 //! A generalised stress σ̂ = (σ, q) is a stress σ (Mandel vector) and `hardening_dim()`
 //! hardening variables q (one, ξ, for isotropic hardening). P = {τ̂ : τ̂(x) ∈ D a.e.} for a
@@ -30,7 +30,7 @@ pub struct SocBlock {
     pub map: Vec<f64>,
 }
 
-/// D as an intersection of second-order cones, for conic solvers (SPEC §3).
+/// D as an intersection of second-order cones, for conic solvers (theory §3).
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct ConeDescription {
     /// The cone blocks; D = {(σ, q) : every block holds}.
@@ -57,17 +57,28 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
         false
     }
 
-    /// The hardening part of the energy inner product, q·H⁻¹r (ξη/h in SPEC §1).
+    /// The hardening variables by name, with their number of components, in storage order:
+    /// von Mises with isotropic hardening `[("xi", 1)]`. Output writes one cell field per name;
+    /// the components add up to [`AdmissibleStresses::hardening_dim`]. The default names them
+    /// all `q`.
+    fn hardening_fields(&self) -> Vec<(&'static str, usize)> {
+        match self.hardening_dim() {
+            0 => Vec::new(),
+            m => vec![("q", m)],
+        }
+    }
+
+    /// The hardening part of the energy inner product, q·H⁻¹r (ξη/h in theory §1).
     fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64;
 
     /// Membership test (σ, q) ∈ D, with a tolerance relative to the material's stress scale.
     fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool;
 
-    /// Projection onto D in the energy metric (SPEC §2): (σ, q) is replaced by the point of D
+    /// Projection onto D in the energy metric (theory §2): (σ, q) is replaced by the point of D
     /// nearest in `[·,·]`. Returns true when the point was outside D.
     fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool;
 
-    /// The local law (SPEC §2): σ̂ = P_D(Cε, 0), and its consistent tangent dσ/dε when asked.
+    /// The local law (theory §2): σ̂ = P_D(Cε, 0), and its consistent tangent dσ/dε when asked.
     /// Returns true when the point is plastic (the trial was outside D).
     fn local_law(
         &self,
@@ -78,7 +89,7 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
         tangent: Option<&mut SymOp>,
     ) -> bool;
 
-    /// The reduced energy density ψ(ε) = ε:σ − ½[σ̂, σ̂] at σ̂ = P_D(Cε, 0) (SPEC §2).
+    /// The reduced energy density ψ(ε) = ε:σ − ½[σ̂, σ̂] at σ̂ = P_D(Cε, 0) (theory §2).
     /// Override with a closed form where one is known.
     fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
         let mut sigma = Sym::zeros();
@@ -93,8 +104,15 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
         None
     }
 
+    /// Why D has no second-order-cone description, when [`AdmissibleStresses::cone`] is
+    /// `None`: conic solvers quote it in their error (Tresca: polyhedral in principal stresses,
+    /// which needs semidefinite cones).
+    fn cone_unavailable(&self) -> String {
+        "it has no second-order-cone description".to_string()
+    }
+
     /// Warnings about the parameters that are legal but delicate (e.g. h = 0: the solution
-    /// need not be unique, SPEC §1).
+    /// need not be unique, theory §1).
     fn warnings(&self) -> Vec<String> {
         Vec::new()
     }
@@ -102,7 +120,7 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
 
 dyn_clone::clone_trait_object!(AdmissibleStresses);
 
-/// The energy inner product [σ̂, τ̂] = Aσ:τ + q·H⁻¹r at one point (SPEC §1).
+/// The energy inner product [σ̂, τ̂] = Aσ:τ + q·H⁻¹r at one point (theory §1).
 pub fn energy_inner(
     p: Option<&dyn AdmissibleStresses>,
     law: &Elasticity,

@@ -1,8 +1,8 @@
-//! Symmetric 3×3 tensors in Mandel notation (SPEC §1–§2).
+//! Symmetric 3×3 tensors in Mandel notation (theory §1–§2).
 //!
 //! A symmetric tensor `a` is stored as `(a11, a22, a33, √2 a23, √2 a13, √2 a12)`. With this
 //! scaling the Euclidean dot product of two vectors is the double contraction `a:b`, the
-//! Euclidean norm is the Frobenius norm `|a|` of SPEC §1, and fourth-order tensors with the
+//! Euclidean norm is the Frobenius norm `|a|` of theory §1, and fourth-order tensors with the
 //! minor symmetries are plain symmetric 6×6 matrices.
 
 use nalgebra::{Matrix3, Matrix6, Vector6};

@@ -1,12 +1,18 @@
-//! Scenes shared by the solver tests: the default scene of SPEC §6 on a coarse graded mesh and
-//! the homogeneous compression of SPEC §7.
+//! Scenes shared by the solver tests: the default scene of theory §6 on a coarse graded mesh and
+//! the homogeneous compression of theory §7.1; and [`Counting`], a P that counts the return
+//! mappings it runs, for tests that must not trust a solver's own bookkeeping.
 #![allow(dead_code)]
 
 use saddle_contact::{Flat, Paraboloid, RigidPunch};
+use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleDisplacements, AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, P1P0Lagrangian, Region,
+    AdmissibleDisplacements, AdmissibleStresses, BoxMesh, Component, ConeDescription, Dirichlet, Elasticity,
+    P1P0Lagrangian, Region, Sym, SymOp,
 };
 use saddle_yield::VonMises;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Units of a scene: stresses (E, k₀, h) are multiplied by `stress`, lengths by `length`.
 #[derive(Clone, Copy)]
@@ -15,21 +21,41 @@ pub struct Units {
     pub length: f64,
 }
 
-/// The scaled units of SPEC §6 (E = 100, lengths of order 1).
+/// The scaled units of theory §6 (E = 100, lengths of order 1).
 pub const SCALED: Units = Units { stress: 1.0, length: 1.0 };
 
-/// The default scene of SPEC §6 (force F = 0.3) with `cells`; `k0_h = None` is elastic.
+/// The default scene of theory §6 (force F = 0.3) with `cells`; `k0_h = None` is elastic.
 pub fn johnson(cells: [usize; 3], k0_h: Option<(f64, f64)>, units: Units) -> P1P0Lagrangian {
-    johnson_with(cells, k0_h, units, |zone, force, radius| {
-        Box::new(RigidPunch::new(force, zone, Box::new(Paraboloid::new(radius))))
-    })
+    johnson_with(cells, k0_h, units, punch)
 }
 
-/// The default scene of SPEC §6 with the obstacle made by `obstacle(zone Γ₀, force F, punch
+/// The default scene of theory §6 in scaled units with the yield surface `p`.
+pub fn johnson_yield(cells: [usize; 3], p: Box<dyn AdmissibleStresses>) -> P1P0Lagrangian {
+    johnson_scene(cells, Some(p), SCALED, punch)
+}
+
+/// The paraboloid punch of theory §6 on `zone` with force `force` and radius `radius`.
+fn punch(zone: Region, force: f64, radius: f64) -> Box<dyn AdmissibleDisplacements> {
+    Box::new(RigidPunch::new(force, zone, Box::new(Paraboloid::new(radius))))
+}
+
+/// The default scene of theory §6 with the obstacle made by `obstacle(zone Γ₀, force F, punch
 /// radius R)` in the scene's units.
 pub fn johnson_with(
     cells: [usize; 3],
     k0_h: Option<(f64, f64)>,
+    units: Units,
+    obstacle: impl FnOnce(Region, f64, f64) -> Box<dyn AdmissibleDisplacements>,
+) -> P1P0Lagrangian {
+    let p: Option<Box<dyn AdmissibleStresses>> =
+        k0_h.map(|(k0, h)| Box::new(VonMises::new(k0 * units.stress, h * units.stress)) as _);
+    johnson_scene(cells, p, units, obstacle)
+}
+
+/// The default scene with the yield surface `p` (`None`: no P) and the obstacle of `obstacle`.
+fn johnson_scene(
+    cells: [usize; 3],
+    p: Option<Box<dyn AdmissibleStresses>>,
     units: Units,
     obstacle: impl FnOnce(Region, f64, f64) -> Box<dyn AdmissibleDisplacements>,
 ) -> P1P0Lagrangian {
@@ -40,8 +66,6 @@ pub fn johnson_with(
         Region::Box { min: [-0.75 * s, -0.75 * s, -s], max: [0.75 * s, 0.75 * s, s] },
     ]);
     let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 * s }]);
-    let p: Option<Box<dyn AdmissibleStresses>> =
-        k0_h.map(|(k0, h)| Box::new(VonMises::new(k0 * units.stress, h * units.stress)) as _);
     P1P0Lagrangian::new(
         mesh,
         &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
@@ -52,7 +76,7 @@ pub fn johnson_with(
     .unwrap()
 }
 
-/// Homogeneous compression of SPEC §7: the unit cube on rollers (u₁ = 0 on x₁ = 0, u₂ = 0 on
+/// Homogeneous compression of theory §7.1: the unit cube on rollers (u₁ = 0 on x₁ = 0, u₂ = 0 on
 /// x₂ = 0, u₃ = 0 on x₃ = 1), a flat punch on the whole bottom face with force `f`; k₀ = 1, h = 5.
 pub fn homogeneous(f: f64) -> P1P0Lagrangian {
     let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]).mesh().unwrap();
@@ -69,4 +93,63 @@ pub fn homogeneous(f: f64) -> P1P0Lagrangian {
         Some(Box::new(RigidPunch::new(f, g("zmin"), Box::new(Flat::default())))),
     )
     .unwrap()
+}
+
+/// A P that wraps another and counts the return mappings it runs: its calls of `local_law` and
+/// `project`, counted where they run. Everything else is the wrapped P's.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Counting {
+    inner: Box<dyn AdmissibleStresses>,
+    /// Shared by the clones, so that a Lagrangian holding a copy still counts here.
+    #[serde(skip)]
+    calls: Arc<AtomicUsize>,
+}
+
+impl Counting {
+    /// `inner`, counted, as a P; the counter is returned with it.
+    pub fn wrap(inner: Box<dyn AdmissibleStresses>) -> (Box<dyn AdmissibleStresses>, Arc<AtomicUsize>) {
+        let calls = Arc::new(AtomicUsize::new(0));
+        (Box::new(Self { inner, calls: calls.clone() }), calls)
+    }
+
+    fn count(&self) {
+        self.calls.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+#[typetag::serde(name = "test_counting")]
+impl AdmissibleStresses for Counting {
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        self.inner.validate(path)
+    }
+    fn hardening_dim(&self) -> usize {
+        self.inner.hardening_dim()
+    }
+    fn is_unbounded(&self) -> bool {
+        self.inner.is_unbounded()
+    }
+    fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+        self.inner.hardening_inner(q, r)
+    }
+    fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+        self.inner.contains(sigma, q, tol)
+    }
+    fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+        self.count();
+        self.inner.project(law, sigma, q)
+    }
+    fn local_law(&self, law: &Elasticity, eps: &Sym, sigma: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>) -> bool {
+        self.count();
+        self.inner.local_law(law, eps, sigma, q, t)
+    }
+    /// The wrapped P's energy (for von Mises a closed form, no return mapping).
+    fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+        self.inner.energy(law, eps)
+    }
+    fn cone(&self) -> Option<ConeDescription> {
+        self.inner.cone()
+    }
+    fn warnings(&self) -> Vec<String> {
+        self.inner.warnings()
+    }
 }
