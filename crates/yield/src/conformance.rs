@@ -43,11 +43,11 @@
 //! [`KitConfig::fd_step`] relative to |ε| and a tolerance [`KitConfig::fd_tol`] relative to
 //! |σ| (gradient) or to the largest eigenvalue of C (tangent). NaN always fails.
 
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use saddle_core::problem::elasticity::Elasticity;
 use saddle_core::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM, energy_inner};
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use saddle_core::problem::tensor::{Sym, SymOp, deviator, from_matrix, identity};
 use thiserror::Error;
 
