@@ -96,9 +96,11 @@
 //! (e.g. `use saddle_yield as _;`), or the `von_mises` / `elastic` names are unknown.
 
 pub mod conformance;
+mod drucker_prager;
 mod elastic;
 mod von_mises;
 
+pub use drucker_prager::DruckerPrager;
 pub use elastic::Elastic;
 pub use saddle_core::problem::stresses::AdmissibleStresses;
 pub use von_mises::VonMises;

@@ -1,0 +1,602 @@
+//! Drucker–Prager with linear isotropic hardening (theory §9): D = {(σ, ξ) : |dev σ| + α tr σ ≤
+//! k₀ + ξ}, hardening metric ξη/h. α = 0 is von Mises ([`crate::VonMises`]).
+//!
+//! In the energy metric `Aσ:τ + ξη/h` the deviator, the trace and ξ are orthogonal: with
+//! `s = dev σ`, `T = tr σ`, `Aσ:σ = |s|²/(2G) + T²/(9K_b)`. Projecting a general point (σ, ξ)
+//! with `r = |s|`, `n = s/r`, `t₀ = k₀ + ξ` means solving
+//! `min ½[|s' − s|²/(2G) + (T' − T)²/(9K_b) + (ξ' − ξ)²/h]` s.t. `|s'| + α T' ≤ k₀ + ξ'`.
+//! The KKT conditions, with a multiplier γ ≥ 0 and `ν ∈ ∂|s'|`, are
+//! `s' = s − 2Gγ ν`, `T' = T − 9K_b α γ`, `ξ' = ξ + hγ`. Write `v = 9K_b α² + h`.
+//!
+//! * Inside when `f = r + α T − t₀ ≤ 0`.
+//! * Smooth return (`s' ≠ 0`, ν = n): the constraint active gives `γ = f/(2G + v)` and
+//!   `|s'| = t = r − 2Gγ = (v r + 2G(t₀ − αT))/(2G + v)`; valid while `t > 0`. Then `s' = s t/r`,
+//!   `T' = T − 9K_b α γ`, `ξ' = ξ + hγ`.
+//! * Apex return (`s' = 0`, |ν| ≤ 1, so `r ≤ 2Gγ`): the constraint `α T' = k₀ + ξ'` gives
+//!   `γ = (αT − t₀)/v`, and `r ≤ 2Gγ` is exactly `t ≤ 0`. Then `s' = 0`,
+//!   `T' = (hT + 9K_b α t₀)/v`, `ξ' = ξ + hγ`: hydrostatic tension on the apex.
+//!
+//! The two cases meet continuously at `t = 0`. For h = 0 the metric is infinite in ξ: ξ is
+//! frozen and the same formulas hold with h = 0 (the apex then has `T' = t₀/α`). When also
+//! α = 0 (v = 0) this is perfect von Mises: radial return to `|s| = t₀`, and if `t₀ < 0` the
+//! slice is empty and the point goes to `s = 0`, `ξ = −k₀` as [`crate::VonMises`] does.
+//!
+//! For the local law (ξ = 0, `t₀ = k₀ ≥ 0`) the apex is reached when
+//! `v r < 2G(α T − k₀)`: hydrostatic tension beyond `k₀/α`, with little deviator.
+
+use saddle_core::error::{ParameterError, check};
+use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
+use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+use serde::{Deserialize, Serialize};
+
+use crate::VonMises;
+
+/// Drucker–Prager yield with linear isotropic hardening (theory §9):
+/// `D = {|dev σ| + α tr σ ≤ k₀ + ξ}`, `[σ̂, τ̂] = Aσ:τ + ξη/h`. Scene table:
+/// `type = "drucker_prager"`, `k0`, `alpha`, `h`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DruckerPrager {
+    /// Yield radius k₀ ≥ 0 of |dev σ| at tr σ = 0 (von Mises: `k₀ = √(2/3) σ_y`).
+    pub k0: f64,
+    /// Pressure sensitivity α ≥ 0: the admissible |dev σ| grows by α per unit of −tr σ
+    /// (compression strengthens); α = 0 is von Mises.
+    pub alpha: f64,
+    /// Hardening modulus h ≥ 0 of the metric ξη/h; h = 0 is perfect plasticity.
+    pub h: f64,
+}
+
+impl DruckerPrager {
+    /// Drucker–Prager with yield radius `k0`, pressure sensitivity `alpha` and hardening
+    /// modulus `h` (not validated).
+    pub fn new(k0: f64, alpha: f64, h: f64) -> Self {
+        Self { k0, alpha, h }
+    }
+
+    /// `v = 9K_b α² + h`, the stiffness of the apex return (module docs).
+    fn apex_modulus(&self, law: &Elasticity) -> f64 {
+        9.0 * law.bulk_modulus() * self.alpha * self.alpha + self.h
+    }
+}
+
+#[typetag::serde(name = "drucker_prager")]
+impl AdmissibleStresses for DruckerPrager {
+    /// k₀, α and h finite and ≥ 0 (fields `{path}.k0`, `{path}.alpha`, `{path}.h`).
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        check::non_negative(path, "k0", self.k0)?;
+        check::non_negative(path, "alpha", self.alpha)?;
+        check::non_negative(path, "h", self.h)?;
+        Ok(())
+    }
+
+    /// ξ, the isotropic hardening variable.
+    fn hardening_fields(&self) -> Vec<(&'static str, usize)> {
+        vec![("xi", 1)]
+    }
+
+    /// One hardening variable, ξ.
+    fn hardening_dim(&self) -> usize {
+        1
+    }
+
+    /// ξη/h, as von Mises: for h = 0 the metric is infinite in ξ (0 when ξη = 0, else ±∞).
+    fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+        VonMises::new(self.k0, self.h).hardening_inner(q, r)
+    }
+
+    /// `|dev σ| + α tr σ ≤ k₀ + ξ + tol · max(k₀, |σ|, α|tr σ|, |ξ|)`: the tolerance is relative
+    /// to the largest magnitude involved, floored at the smallest positive normal number.
+    fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+        let xi = q[0];
+        let at = self.alpha * trace(sigma);
+        let scale = self.k0.max(sigma.norm()).max(at.abs()).max(xi.abs()).max(f64::MIN_POSITIVE);
+        deviator(sigma).norm() + at <= self.k0 + xi + tol * scale
+    }
+
+    /// Projection onto D in the energy metric (theory §9.1) for a general point (σ, ξ): the
+    /// smooth return to the cone or the apex return, see the module docs. For h = 0 ξ is frozen.
+    fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+        let s = deviator(sigma);
+        let r = s.norm();
+        let tr = trace(sigma);
+        let t0 = self.k0 + q[0];
+        if r + self.alpha * tr <= t0 {
+            return false;
+        }
+        let kb = law.bulk_modulus();
+        let g2 = 2.0 * law.shear_modulus();
+        let v = self.apex_modulus(law);
+        // |s'| of the smooth return; with α = 0 exactly the von Mises arithmetic
+        let t = if v > 0.0 { (v * r + g2 * (t0 - self.alpha * tr)) / (g2 + v) } else { t0 };
+        if t > 0.0 {
+            let gamma = (r - t) / g2;
+            let tr_new = tr - 9.0 * kb * self.alpha * gamma;
+            *sigma = identity() * (tr_new / 3.0) + s * (t / r);
+            if self.h > 0.0 {
+                q[0] = t + self.alpha * tr_new - self.k0;
+            }
+        } else if v > 0.0 {
+            // apex: γ = (αT − t₀)/v ≥ r/(2G)
+            let gamma = (self.alpha * tr - t0) / v;
+            let tr_new = tr - 9.0 * kb * self.alpha * gamma;
+            *sigma = identity() * (tr_new / 3.0);
+            if self.h > 0.0 {
+                q[0] = self.alpha * tr_new - self.k0;
+            }
+        } else {
+            // α = 0, h = 0 and k₀ + ξ ≤ 0: the slice of D is empty; the limit h → 0, as von Mises
+            *sigma = identity() * (tr / 3.0);
+            q[0] = -self.k0;
+        }
+        true
+    }
+
+    /// σ̂ = P_D(Cε, 0) in closed form (theory §9.1) and the consistent tangent. With
+    /// `b = 2G n + 3K_b α I` and `D = 2G + v`, the smooth-return tangent is
+    /// `K_b I⊗I + 2G(t/r)(I_dev − n⊗n) + 2G n⊗n − b⊗b/D`; the apex tangent is
+    /// `(K_b h/v) I⊗I` (the derivative of the apex map; 0 for h = 0).
+    fn local_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
+        let g2 = 2.0 * law.shear_modulus();
+        let kb = law.bulk_modulus();
+        let s_tr = deviator(eps) * g2;
+        let r = s_tr.norm();
+        let p = kb * trace(eps);
+        let a = self.alpha;
+        if r + a * (3.0 * p) <= self.k0 {
+            *sigma = s_tr + identity() * p;
+            q[0] = 0.0;
+            if let Some(c) = tangent {
+                *c = law.stiffness_matrix();
+            }
+            return false;
+        }
+        let v = self.apex_modulus(law);
+        let t = (v * r + g2 * (self.k0 - a * (3.0 * p))) / (v + g2);
+        if t >= 0.0 {
+            let gamma = (r - t) / g2;
+            let p_new = p - 3.0 * kb * a * gamma;
+            *sigma = s_tr * (t / r) + identity() * p_new;
+            q[0] = if self.h > 0.0 { t + a * (3.0 * p_new) - self.k0 } else { 0.0 };
+            if let Some(c) = tangent {
+                let n = s_tr / r;
+                let nn = n * n.transpose();
+                let i = identity();
+                let dd = v + g2;
+                *c = volumetric_projector() * (3.0 * kb)
+                    + (deviatoric_projector() - nn) * (g2 * t / r)
+                    + nn * (g2 * v / dd)
+                    - (n * i.transpose() + i * n.transpose()) * (g2 * 3.0 * kb * a / dd)
+                    - i * i.transpose() * (9.0 * kb * kb * a * a / dd);
+            }
+        } else {
+            // apex (t < 0 needs v > 0): γ = (αT − k₀)/v, T' = T − 9K_b α γ
+            let gamma = (a * (3.0 * p) - self.k0) / v;
+            let p_new = p - 3.0 * kb * a * gamma;
+            *sigma = identity() * p_new;
+            q[0] = if self.h > 0.0 { a * (3.0 * p_new) - self.k0 } else { 0.0 };
+            if let Some(c) = tangent {
+                *c = volumetric_projector() * (3.0 * kb * self.h / v);
+            }
+        }
+        true
+    }
+
+    /// `ψ(ε) = ½Cε:ε − ½ dist²((Cε, 0), D)` (theory §9.1): with `f = r + αT − k₀`,
+    /// `dist² = f²/(2G + v)` on the smooth return and `r²/(2G) + (αT − k₀)²/v` at the apex.
+    fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+        let g2 = 2.0 * law.shear_modulus();
+        let r = g2 * deviator(eps).norm();
+        let tr = 3.0 * law.bulk_modulus() * trace(eps);
+        let elastic = 0.5 * eps.dot(&law.stress(eps));
+        let over = self.alpha * tr - self.k0;
+        let f = r + over;
+        if f <= 0.0 {
+            return elastic;
+        }
+        let v = self.apex_modulus(law);
+        if v * r >= g2 * over {
+            elastic - f * f / (2.0 * (g2 + v))
+        } else {
+            elastic - r * r / (2.0 * g2) - over * over / (2.0 * v)
+        }
+    }
+
+    /// One second-order cone of dimension 6 (theory §3, §9): `t = k₀ + ξ − α tr σ`,
+    /// `x = (e_k·σ)_{k=1..5}` in the orthonormal deviatoric basis
+    /// [`VonMises::deviatoric_basis`], so `|x| = |dev σ|`. The map is 6 × 7 row-major on (σ, ξ).
+    fn cone(&self) -> Option<ConeDescription> {
+        let mut offset = vec![0.0; 6];
+        offset[0] = self.k0;
+        let mut map = vec![0.0; 6 * 7];
+        for m in map.iter_mut().take(3) {
+            *m = -self.alpha;
+        }
+        map[6] = 1.0;
+        for (k, e) in VonMises::deviatoric_basis().iter().enumerate() {
+            for j in 0..6 {
+                map[(k + 1) * 7 + j] = e[j];
+            }
+        }
+        Some(ConeDescription { blocks: vec![SocBlock { dim: 6, offset, map }] })
+    }
+
+    /// h = 0 (perfect plasticity): the solution need not be unique (theory §1, Theorem 1).
+    fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.h == 0.0 {
+            w.push(format!(
+                "yield.h = 0 (perfect plasticity): the solution need not be unique and displacements may be \
+                 discontinuous (theory §1, Theorem 1); stresses are still determined{}",
+                if self.k0 == 0.0 {
+                    ", but with k0 = 0 the admissible stresses form a cone with apex at σ = 0"
+                } else {
+                    ""
+                }
+            ));
+        }
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::conformance::{self, KitConfig, names};
+    use nalgebra::Matrix3;
+    use saddle_core::problem::tensor::from_matrix;
+
+    fn law() -> Elasticity {
+        Elasticity::new(100.0, 0.3).unwrap()
+    }
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
+    }
+
+    #[test]
+    fn kit_passes_for_several_parameter_sets() {
+        for &(k0, alpha, h) in &[
+            (1.0f64, 0.0, 5.0),
+            (1.0, 0.05, 5.0),
+            (1.0, 0.3, 5.0),
+            (1.0, 1.5, 5.0),
+            (1.0, 0.3, 0.0),
+            (1.0, 0.0, 0.0),
+            (0.0, 0.2, 3.0),
+            (0.0, 0.5, 0.0),
+            (0.5, 0.1, 2000.0),
+            (1.0, 0.2, 1e-4),
+        ] {
+            let cfg = KitConfig::new(law(), k0.max(0.1)).with_samples(150).with_seed(11);
+            let dp = DruckerPrager::new(k0, alpha, h);
+            if let Err(e) = conformance::check_all(&dp, &cfg) {
+                panic!("k0 = {k0}, alpha = {alpha}, h = {h}: {e}");
+            }
+        }
+        let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
+        conformance::check_all(&DruckerPrager::new(300.0, 0.2, 1e3), &cfg).unwrap();
+    }
+
+    /// Ways to get the apex return wrong.
+    #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+    enum ApexBreakage {
+        /// s = 0 but tr σ of the trial kept (the von Mises apex): outside D.
+        KeepsTrace,
+        /// s = 0 with the trace and ξ of the smooth-return γ (clamping the radial return): outside D.
+        RadialClamp,
+        /// s = 0, tr σ = (k₀ + ξ)/α with ξ frozen even for h > 0: in D, idempotent, not nearest.
+        IgnoresHardening,
+        /// the projection right, but the local law keeps the trial trace at the apex.
+        LocalLawKeepsTrace,
+        /// everything right but the tangent at the apex, zero as for h = 0.
+        ApexTangentZero,
+    }
+
+    #[derive(Clone, Debug, Serialize, Deserialize)]
+    struct BrokenApex {
+        dp: DruckerPrager,
+        how: ApexBreakage,
+    }
+
+    #[typetag::serde(name = "drucker_prager_test_broken_apex")]
+    impl AdmissibleStresses for BrokenApex {
+        fn validate(&self, path: &str) -> Result<(), ParameterError> {
+            self.dp.validate(path)
+        }
+        fn hardening_dim(&self) -> usize {
+            1
+        }
+        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+            self.dp.hardening_inner(q, r)
+        }
+        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+            self.dp.contains(sigma, q, tol)
+        }
+        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+            let (x, xi) = (*sigma, q[0]);
+            let out = self.dp.project(law, sigma, q);
+            if matches!(self.how, ApexBreakage::LocalLawKeepsTrace | ApexBreakage::ApexTangentZero)
+                || !(out && deviator(sigma).norm() == 0.0 && deviator(&x).norm() > 0.0)
+            {
+                return out;
+            }
+            let (kb, g2, a) = (law.bulk_modulus(), 2.0 * law.shear_modulus(), self.dp.alpha);
+            let (r, tr, t0) = (deviator(&x).norm(), trace(&x), self.dp.k0 + xi);
+            match self.how {
+                ApexBreakage::KeepsTrace => *sigma = identity() * (tr / 3.0),
+                ApexBreakage::RadialClamp => {
+                    let gamma = (r + a * tr - t0) / (g2 + self.dp.apex_modulus(law));
+                    *sigma = identity() * ((tr - 9.0 * kb * a * gamma) / 3.0);
+                    if self.dp.h > 0.0 {
+                        q[0] = xi + self.dp.h * gamma;
+                    }
+                }
+                ApexBreakage::IgnoresHardening => {
+                    *sigma = identity() * (t0 / a / 3.0);
+                    q[0] = xi;
+                }
+                ApexBreakage::LocalLawKeepsTrace | ApexBreakage::ApexTangentZero => unreachable!(),
+            }
+            true
+        }
+        fn local_law(
+            &self,
+            law: &Elasticity,
+            eps: &Sym,
+            sigma: &mut Sym,
+            q: &mut [f64],
+            tangent: Option<&mut SymOp>,
+        ) -> bool {
+            match self.how {
+                ApexBreakage::LocalLawKeepsTrace => {
+                    let plastic = self.dp.local_law(law, eps, sigma, q, tangent);
+                    if plastic && deviator(sigma).norm() == 0.0 {
+                        *sigma = identity() * (trace(&law.stress(eps)) / 3.0);
+                    }
+                    return plastic;
+                }
+                ApexBreakage::ApexTangentZero => {
+                    let mut c = SymOp::zeros();
+                    let plastic = self.dp.local_law(law, eps, sigma, q, Some(&mut c));
+                    if let Some(t) = tangent {
+                        *t = if plastic && deviator(sigma).norm() == 0.0 { SymOp::zeros() } else { c };
+                    }
+                    return plastic;
+                }
+                _ => {}
+            }
+            // consistent with the (broken) projection, as a careless author would write it
+            *sigma = law.stress(eps);
+            q[0] = 0.0;
+            let plastic = self.project(law, sigma, q);
+            if let Some(t) = tangent {
+                let mut dummy = (Sym::zeros(), [0.0]);
+                self.dp.local_law(law, eps, &mut dummy.0, &mut dummy.1, Some(t));
+            }
+            plastic
+        }
+        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+            self.dp.energy(law, eps)
+        }
+        fn cone(&self) -> Option<ConeDescription> {
+            self.dp.cone()
+        }
+    }
+
+    #[test]
+    fn kit_catches_wrong_apex_returns() {
+        let cfg = KitConfig::new(law(), 1.0).with_samples(150);
+        let dp = DruckerPrager::new(1.0, 0.3, 5.0);
+        for (how, first) in [
+            (ApexBreakage::KeepsTrace, names::PROJECTION_IN_SET),
+            (ApexBreakage::RadialClamp, names::PROJECTION_IN_SET),
+            (ApexBreakage::IgnoresHardening, names::VARIATIONAL_INEQUALITY),
+            (ApexBreakage::LocalLawKeepsTrace, names::ENERGY_GRADIENT),
+            (ApexBreakage::ApexTangentZero, names::TANGENT),
+        ] {
+            let e = conformance::check_all(&BrokenApex { dp, how }, &cfg).unwrap_err();
+            println!("{how:?}: {e}");
+            assert_eq!(e.check, first, "{how:?}: {e}");
+        }
+        conformance::check_all(&dp, &cfg).unwrap();
+    }
+
+    #[test]
+    fn alpha_zero_is_von_mises() {
+        use rand::{Rng, SeedableRng, rngs::StdRng};
+        let law = law();
+        let mut rng = StdRng::seed_from_u64(5);
+        for &(k0, h) in &[(1.0, 5.0), (1.0, 0.0), (0.0, 3.0), (0.5, 2000.0)] {
+            let (dp, vm) = (DruckerPrager::new(k0, 0.0, h), VonMises::new(k0, h));
+            let mut plastic = 0;
+            for _ in 0..500 {
+                let eps = Sym::from_fn(|_, _| rng.random_range(-0.05..0.05));
+                let (mut s1, mut q1, mut c1) = (Sym::zeros(), [0.0], SymOp::zeros());
+                let (mut s2, mut q2, mut c2) = (Sym::zeros(), [0.0], SymOp::zeros());
+                let p1 = dp.local_law(&law, &eps, &mut s1, &mut q1, Some(&mut c1));
+                let p2 = vm.local_law(&law, &eps, &mut s2, &mut q2, Some(&mut c2));
+                assert_eq!(p1, p2);
+                plastic += p1 as usize;
+                let scale = s2.norm().max(k0).max(1.0);
+                assert!((s1 - s2).norm() <= 1e-14 * scale, "{s1:?} vs {s2:?}");
+                assert!((q1[0] - q2[0]).abs() <= 1e-14 * scale);
+                assert!((c1 - c2).norm() <= 1e-13 * c2.norm());
+                let (e1, e2) = (dp.energy(&law, &eps), vm.energy(&law, &eps));
+                assert!((e1 - e2).abs() <= 1e-14 * e2.abs().max(1e-3), "{e1} vs {e2}");
+                // general points
+                let sig = law.stress(&eps);
+                let xi = rng.random_range(-2.0..2.0);
+                let (mut a, mut qa, mut b, mut qb) = (sig, [xi], sig, [xi]);
+                assert_eq!(dp.project(&law, &mut a, &mut qa), vm.project(&law, &mut b, &mut qb));
+                assert!((a - b).norm() <= 1e-14 * sig.norm().max(1.0) && (qa[0] - qb[0]).abs() <= 1e-14 * scale);
+            }
+            assert!(plastic > 100, "plastic {plastic}/500");
+        }
+        assert_eq!(DruckerPrager::new(1.5, 0.0, 5.0).cone(), VonMises::new(1.5, 5.0).cone());
+    }
+
+    /// Hydrostatic tension trials ε = e I reach the apex for every e with α·3K_b·3e > k₀ (s_tr = 0,
+    /// r = 0: t = 2G(k₀ − αT)/(2G + v) < 0); tension with a small deviator too.
+    #[test]
+    fn hydrostatic_tension_returns_to_the_apex() {
+        let law = law();
+        let kb = law.bulk_modulus();
+        let dp = DruckerPrager::new(1.0, 0.3, 5.0);
+        let dev = deviator(&Sym::new(1.0, -0.3, 0.2, 0.1, 0.0, -0.2));
+        let dev = dev / dev.norm();
+        let (mut apex, mut plastic, n) = (0, 0, 200);
+        for k in 0..n {
+            let e = -0.01 + 0.05 * k as f64 / n as f64;
+            let eps = identity() * e + dev * (1e-4 * (k % 3) as f64);
+            let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
+            let pl = dp.local_law(&law, &eps, &mut s, &mut q, Some(&mut c));
+            plastic += pl as usize;
+            if pl && deviator(&s).norm() == 0.0 {
+                apex += 1;
+                // on the apex: α tr σ = k₀ + ξ, and the tangent is volumetric
+                assert!(close(0.3 * trace(&s), 1.0 + q[0], 1e-13), "{s:?} {q:?}");
+                assert!(close(identity().dot(&(c * identity())) / 9.0, kb * 5.0 / dp.apex_modulus(&law), 1e-13));
+            }
+        }
+        println!("apex returns: {apex} of {n} hydrostatic-tension trials ({plastic} plastic)");
+        assert!(apex > n / 3, "apex {apex}");
+    }
+
+    /// The hand-checkable cases (E = 100, ν = 1/4, so 2G = 80, 3K_b = 200, 9K_b = 600;
+    /// k₀ = 1, α = 0.1, h = 14: v = 9K_b α² + h = 6 + 14 = 20, 2G + v = 100).
+    ///
+    /// Smooth return. ε = 0.01 I + 0.025 M, M = [[1,0,0],[0,−1,1],[0,1,0]] (tr M = 0, |M| = 2):
+    /// s_tr = 80 · 0.025 M = 2M, r = 4; tr σ_tr = 200 · 0.03 = 6; f = 4 + 0.6 − 1 = 3.6 > 0;
+    /// γ = 3.6/100 = 0.036; t = r − 2Gγ = 4 − 2.88 = 1.12 > 0; tr σ = 6 − 600 · 0.1 · 0.036
+    /// = 3.84; ξ = 14 · 0.036 = 0.504; check |s| + α tr σ = 1.12 + 0.384 = 1.504 = k₀ + ξ.
+    /// σ = 0.56 M + 1.28 I. ψ = ½Cε:ε − f²/(2 · 100) with Cε:ε = 2M:0.025M + 6 · 0.01 = 0.26:
+    /// ψ = 0.13 − 0.0648 = 0.0652.
+    ///
+    /// Apex return. ε = 0.05 I + 0.0025 M: s_tr = 0.2 M, r = 0.4; tr σ_tr = 30, α tr σ_tr = 3;
+    /// t = (20 · 0.4 + 80 (1 − 3))/100 = −1.52 < 0: apex. γ = (3 − 1)/20 = 0.1 (≥ r/2G = 0.005);
+    /// tr σ = 30 − 60 · 0.1 = 24, σ = 8 I, ξ = 1.4 (α tr σ = 2.4 = k₀ + ξ). With
+    /// Cε:ε = 0.2M:0.0025M + 30 · 0.05 = 0.002 + 1.5 = 1.502,
+    /// ψ = 0.751 − r²/(4G) − 2²/(2v) = 0.751 − 0.001 − 0.1 = 0.65. The tangent is (K_b h/v) I⊗I:
+    /// I:C_t:I/9 = K_b h/v = (200/3) · 14/20 = 140/3, and C_t M = 0.
+    #[test]
+    fn local_law_matches_returns_worked_by_hand() {
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let dp = DruckerPrager::new(1.0, 0.1, 14.0);
+        let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
+        let m = from_matrix(&mm);
+        let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
+
+        let eps = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.025));
+        assert!(dp.local_law(&law, &eps, &mut s, &mut q, Some(&mut c)));
+        assert!((s - (m * 0.56 + identity() * 1.28)).norm() < 1e-13, "{s:?}");
+        assert!((q[0] - 0.504).abs() < 1e-14, "{q:?}");
+        assert!((dp.energy(&law, &eps) - 0.0652).abs() < 1e-14);
+        assert!((c - c.transpose()).norm() < 1e-12);
+
+        let eps = from_matrix(&(Matrix3::identity() * 0.05 + mm * 0.0025));
+        assert!(dp.local_law(&law, &eps, &mut s, &mut q, Some(&mut c)));
+        assert!((s - identity() * 8.0).norm() < 1e-13, "{s:?}");
+        assert!((q[0] - 1.4).abs() < 1e-13, "{q:?}");
+        assert!((dp.energy(&law, &eps) - 0.65).abs() < 1e-13, "{}", dp.energy(&law, &eps));
+        assert!((identity().dot(&(c * identity())) / 9.0 - 140.0 / 3.0).abs() < 1e-12);
+        assert!((c * m).norm() < 1e-12, "no deviatoric stiffness at the apex");
+        // the projection of the trial with ξ = 0 gives the same
+        let (mut s2, mut q2) = (law.stress(&eps), [0.0]);
+        assert!(dp.project(&law, &mut s2, &mut q2));
+        assert!((s2 - s).norm() < 1e-13 && (q2[0] - 1.4).abs() < 1e-13);
+    }
+
+    #[test]
+    fn projection_of_general_points() {
+        let law = law();
+        let (kb, g2) = (law.bulk_modulus(), 2.0 * law.shear_modulus());
+        let dp = DruckerPrager::new(1.0, 0.2, 5.0);
+        let v = 9.0 * kb * 0.04 + 5.0;
+        let dir = deviator(&Sym::new(1.0, 0.2, -0.5, 0.3, 0.0, -0.4));
+        let dir = dir / dir.norm();
+        // smooth return with ξ ≠ 0: r = 3, tr = 2.1, t0 = 1.5
+        let x = (identity() * 0.7 + dir * 3.0, 0.5);
+        let (mut s, mut q) = (x.0, [x.1]);
+        assert!(dp.project(&law, &mut s, &mut q));
+        let gamma = (3.0 + 0.2 * 2.1 - 1.5) / (g2 + v);
+        assert!(close(deviator(&s).norm(), 3.0 - g2 * gamma, 1e-13));
+        assert!(close(trace(&s), 2.1 - 9.0 * kb * 0.2 * gamma, 1e-13));
+        assert!(close(q[0], 0.5 + 5.0 * gamma, 1e-13));
+        assert!((deviator(&s) / deviator(&s).norm() - dir).norm() < 1e-14, "radial in the deviator");
+        // apex with ξ ≠ 0: r = 0.1, tr = 30, t0 = 0.5
+        let x = (identity() * 10.0 + dir * 0.1, -0.5);
+        let (mut s, mut q) = (x.0, [x.1]);
+        assert!(dp.project(&law, &mut s, &mut q));
+        let gamma = (0.2 * 30.0 - 0.5) / v;
+        assert!(gamma * g2 >= 0.1);
+        assert_eq!(deviator(&s).norm(), 0.0);
+        assert!(close(trace(&s), 30.0 - 9.0 * kb * 0.2 * gamma, 1e-13) && close(q[0], -0.5 + 5.0 * gamma, 1e-13));
+        // nearest: [x − Px, y − Px] ≤ 0 for points y of D
+        let ip = |px: &(Sym, f64), y: &(Sym, f64)| {
+            law.compliance(&(x.0 - px.0)).dot(&(y.0 - px.0)) + (x.1 - px.1) * (y.1 - px.1) / 5.0
+        };
+        for y in [(Sym::zeros(), 0.0), (dir * 0.5, 0.0), (identity() * 3.0, 1.0), (identity() * -3.0 + dir, 0.0)] {
+            assert!(dp.contains(&y.0, &[y.1], 0.0));
+            assert!(ip(&(s, q[0]), &y) <= 1e-12, "{y:?}");
+        }
+        // h = 0: ξ frozen, apex on α tr σ = k₀ + ξ
+        let pp = DruckerPrager::new(1.0, 0.2, 0.0);
+        let (mut s, mut q) = (x.0, [x.1]);
+        assert!(pp.project(&law, &mut s, &mut q));
+        assert!(deviator(&s).norm() == 0.0 && q[0] == -0.5 && close(trace(&s), 0.5 / 0.2, 1e-13));
+        // inside: unchanged
+        let (mut s, mut q) = (identity() * -1.0 + dir * 1.0, [0.0]);
+        assert!(!dp.project(&law, &mut s, &mut q));
+        assert_eq!(s, identity() * -1.0 + dir * 1.0);
+    }
+
+    #[test]
+    fn cone_block_is_the_yield_function() {
+        let dp = DruckerPrager::new(1.5, 0.3, 5.0);
+        let b = &dp.cone().unwrap().blocks[0];
+        assert_eq!((b.dim, b.offset.len(), b.map.len()), (6, 6, 42));
+        let sigma = Sym::new(3.0, -1.0, 0.5, 0.7, -0.2, 0.9);
+        let z: Vec<f64> = sigma.iter().copied().chain([0.25]).collect();
+        let v: Vec<f64> = (0..6).map(|i| b.offset[i] + (0..7).map(|j| b.map[i * 7 + j] * z[j]).sum::<f64>()).collect();
+        assert!((v[0] - (1.75 - 0.3 * 2.5)).abs() < 1e-15);
+        let x = (v[1..].iter().map(|x| x * x).sum::<f64>()).sqrt();
+        assert!((x - deviator(&sigma).norm()).abs() < 1e-14);
+    }
+
+    #[test]
+    fn validation_warnings_and_toml() {
+        let ok = DruckerPrager::new(1.0, 0.2, 5.0);
+        assert!(ok.validate("yield").is_ok() && ok.warnings().is_empty());
+        for (dp, field, value) in [
+            (DruckerPrager::new(-1.0, 0.2, 5.0), "yield.k0", "-1"),
+            (DruckerPrager::new(1.0, -0.5, 5.0), "yield.alpha", "-0.5"),
+            (DruckerPrager::new(1.0, 0.2, -2.0), "yield.h", "-2"),
+            (DruckerPrager::new(1.0, f64::NAN, 5.0), "yield.alpha", "NaN"),
+            (DruckerPrager::new(1.0, 0.2, f64::INFINITY), "yield.h", "inf"),
+        ] {
+            let e = dp.validate("yield").unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert_eq!(e.value.to_lowercase(), value.to_lowercase(), "{e}");
+        }
+        let w = DruckerPrager::new(1.0, 0.2, 0.0).warnings();
+        assert!(w.len() == 1 && w[0].contains("unique"), "{w:?}");
+        let p: Box<dyn AdmissibleStresses> =
+            toml::from_str("type = \"drucker_prager\"\nk0 = 1.0\nalpha = 0.2\nh = 5.0").unwrap();
+        assert_eq!((p.name(), p.hardening_dim()), ("drucker_prager", 1));
+        assert_eq!(p.hardening_fields(), vec![("xi", 1)]);
+        // the apex is at α tr σ = k₀: tr σ = 5
+        assert!(p.contains(&(identity() * (5.0 / 3.0)), &[0.0], 1e-12));
+        assert!(!p.contains(&(identity() * 1.67), &[0.0], 0.0));
+        let err =
+            toml::from_str::<Box<dyn AdmissibleStresses>>("type = \"drucker_prager\"\nk0 = 1.0\nh = 5.0").unwrap_err();
+        assert!(err.to_string().contains("alpha"), "{err}");
+    }
+}
