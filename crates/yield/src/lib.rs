@@ -99,8 +99,10 @@ pub mod conformance;
 mod drucker_prager;
 mod elastic;
 mod von_mises;
+mod von_mises_kinematic;
 
 pub use drucker_prager::DruckerPrager;
 pub use elastic::Elastic;
 pub use saddle_core::problem::stresses::AdmissibleStresses;
 pub use von_mises::VonMises;
+pub use von_mises_kinematic::VonMisesKinematic;

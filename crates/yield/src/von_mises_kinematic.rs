@@ -1,0 +1,607 @@
+//! Von Mises with linear kinematic (Prager) and isotropic hardening (theory §9.3): generalised
+//! stress (σ, ξ, χ) with a deviatoric back stress χ,
+//! `D = {(σ, ξ, χ) : |dev σ − χ| ≤ k₀ + ξ}`, hardening metric `ξη/h + χ:ω/c`.
+//!
+//! χ is stored as its five coordinates in the orthonormal deviatoric basis
+//! [`VonMises::deviatoric_basis`] (so `χ:ω` is the Euclidean product of the coordinates), after
+//! ξ: `q = (ξ, χ₁, …, χ₅)`, `hardening_dim() = 6`.
+//!
+//! **Projection.** Write s = dev σ, the relative stress `a = s − χ`, `r = |a|`, `t₀ = k₀ + ξ`.
+//! The projection minimises `|s' − s|²/(4G) + (ξ' − ξ)²/(2h) + |χ' − χ|²/(2c)` (the volumetric
+//! part of σ is orthogonal to everything D constrains and stays) subject to
+//! `|s' − χ'| ≤ k₀ + ξ'`. In the scaled coordinates `x = s/√(2G)`, `z = χ/√c`, `y = ξ/√h` the
+//! metric is Euclidean and the constraint only sees the combination `√(2G) x − √c z = s − χ`;
+//! the orthogonal combination `c s + 2G χ` is free and therefore unchanged. On the constrained
+//! line D is the von Mises cone with 2G replaced by 2G + c, so the KKT conditions
+//! `(s' − s)/(2G) + λn = 0`, `(χ' − χ)/c − λn = 0`, `(ξ' − ξ)/h − λ = 0`, `n = (s' − χ')/|s' − χ'|`
+//! give `s' − χ' = a − (2G + c)λn`, hence n = a/r (a radial return of the relative stress) and
+//!
+//! * `s' = s − 2Gλn`, `χ' = χ + cλn`, `ξ' = ξ + hλ`, `λ = (r − t₀)/(2G + c + h)`;
+//! * inside when `r ≤ t₀`;
+//! * on the cone when `t = ((2G + c) t₀ + h r)/(2G + c + h) > 0`: `s' − χ' = t n`, `ξ' = t − k₀`,
+//!   `(2G + c)λ = r − t`;
+//! * at the apex (`s' = χ' = (c s + 2G χ)/(2G + c)`, `ξ' = −k₀`) when `(2G + c) t₀ + h r ≤ 0`.
+//!
+//! For h = 0 ξ is frozen (infinite metric): t = t₀, and if t₀ ≤ 0 the slice of D is empty and
+//! the point goes to the apex with ξ' = −k₀, the limit h → 0 (as [`VonMises`] does).
+//!
+//! **Local law.** From (Cε, 0, 0) the relative trial is s_tr = 2G dev ε, t₀ = k₀ ≥ 0, so the
+//! apex is never reached and `λ = (r − k₀)/(2G + h + c)`: σ is exactly the isotropic radial
+//! return of theory §2.2 with hardening modulus h + c, with `ξ = hλ`, `χ = cλn`, so
+//! `ξ + |χ| = (h + c)λ` is the isotropic ξ. Hence the tangent and ψ are those of [`VonMises`]
+//! with h + c (theory §9.3).
+
+use crate::VonMises;
+use saddle_core::error::{ParameterError, check};
+use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
+use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+use serde::{Deserialize, Serialize};
+
+/// Von Mises yield with linear kinematic and isotropic hardening (theory §9.3):
+/// `D = {|dev σ − χ| ≤ k₀ + ξ}`, `[σ̂, τ̂] = Aσ:τ + ξη/h + χ:ω/c`. Scene table:
+/// `type = "von_mises_kinematic"`, `k0`, `h`, `c`. Hardening variables `(ξ, χ₁, …, χ₅)`, χ in
+/// the basis [`VonMises::deviatoric_basis`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VonMisesKinematic {
+    /// Initial yield radius k₀ ≥ 0 of |dev σ − χ| (`k₀ = √(2/3) σ_y`).
+    pub k0: f64,
+    /// Isotropic hardening modulus h ≥ 0 of the metric ξη/h; h = 0 freezes ξ at 0 (pure
+    /// kinematic hardening).
+    pub h: f64,
+    /// Kinematic hardening modulus c > 0 of the metric χ:ω/c (Prager: `χ = c p`).
+    pub c: f64,
+}
+
+impl VonMisesKinematic {
+    /// Kinematic hardening with yield radius `k0`, isotropic modulus `h` and kinematic modulus
+    /// `c` (not validated).
+    pub fn new(k0: f64, h: f64, c: f64) -> Self {
+        Self { k0, h, c }
+    }
+
+    /// The back stress χ (a deviatoric Mandel vector) from its coordinates `q[1..6]`.
+    pub fn back_stress(q: &[f64]) -> Sym {
+        VonMises::deviatoric_basis().iter().zip(&q[1..6]).fold(Sym::zeros(), |acc, (e, x)| acc + e * *x)
+    }
+
+    /// The coordinates of the deviator of `a` in [`VonMises::deviatoric_basis`].
+    pub fn coordinates(a: &Sym) -> [f64; 5] {
+        let basis = VonMises::deviatoric_basis();
+        std::array::from_fn(|k| basis[k].dot(a))
+    }
+
+    /// h + c: the isotropic modulus with the same local law (theory §9.3).
+    fn total(&self) -> f64 {
+        self.h + self.c
+    }
+}
+
+#[typetag::serde(name = "von_mises_kinematic")]
+impl AdmissibleStresses for VonMisesKinematic {
+    /// k₀ and h finite and ≥ 0, c finite and > 0 (fields `{path}.k0`, `{path}.h`, `{path}.c`).
+    fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        check::non_negative(path, "k0", self.k0)?;
+        check::non_negative(path, "h", self.h)?;
+        check::positive(path, "c", self.c)?;
+        Ok(())
+    }
+
+    /// ξ, then the five coordinates of the back stress χ in [`VonMises::deviatoric_basis`].
+    fn hardening_fields(&self) -> Vec<(&'static str, usize)> {
+        vec![("xi", 1), ("back_stress", 5)]
+    }
+
+    /// ξ and the five coordinates of χ.
+    fn hardening_dim(&self) -> usize {
+        6
+    }
+
+    /// `ξη/h + χ:ω/c`. For h = 0 the metric is infinite in ξ: the ξ part is 0 when ξη = 0,
+    /// else ±∞ with the sign of ξη.
+    fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+        let p = q[0] * r[0];
+        let iso = if self.h > 0.0 {
+            p / self.h
+        } else if p == 0.0 {
+            0.0
+        } else {
+            p * f64::INFINITY
+        };
+        let kin: f64 = q[1..6].iter().zip(&r[1..6]).map(|(a, b)| a * b).sum();
+        iso + kin / self.c
+    }
+
+    /// `|dev σ − χ| ≤ k₀ + ξ + tol · max(k₀, |σ|, |ξ|, |χ|)`: the tolerance is relative to the
+    /// largest stress magnitude involved, floored at the smallest positive normal number.
+    fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+        let chi = Self::back_stress(q);
+        let scale = self.k0.max(sigma.norm()).max(q[0].abs()).max(chi.norm()).max(f64::MIN_POSITIVE);
+        (deviator(sigma) - chi).norm() <= self.k0 + q[0] + tol * scale
+    }
+
+    /// Projection onto D in the energy metric, for a general point (σ, ξ, χ) — see the module
+    /// docs for the derivation. The volumetric part is unchanged; the relative stress s − χ is
+    /// returned radially, s by 2Gλ and χ by cλ.
+    fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+        let s = deviator(sigma);
+        let chi = Self::back_stress(q);
+        let a = s - chi;
+        let r = a.norm();
+        let t0 = self.k0 + q[0];
+        if r <= t0 {
+            return false;
+        }
+        let m = trace(sigma) / 3.0;
+        let g2 = 2.0 * law.shear_modulus();
+        let gc = g2 + self.c;
+        let t = if self.h > 0.0 { (gc * t0 + self.h * r) / (gc + self.h) } else { t0 };
+        // apex: (2G + c) t₀ + h r ≤ 0 (h = 0: k₀ + ξ ≤ 0); s' − χ' = 0, ξ' = −k₀
+        let t = t.max(0.0);
+        let lambda = (r - t) / gc;
+        let n = a / r;
+        let s_new = s - n * (g2 * lambda);
+        let chi_new = chi + n * (self.c * lambda);
+        *sigma = identity() * m + s_new;
+        let x = Self::coordinates(&chi_new);
+        q[1..6].copy_from_slice(&x);
+        if self.h > 0.0 || t == 0.0 {
+            q[0] = t - self.k0;
+        }
+        true
+    }
+
+    /// Theory §9.3 in closed form: from (Cε, 0, 0), `λ = (r − k₀)/(2G + h + c)`,
+    /// `s = s_tr − 2Gλn`, `ξ = hλ`, `χ = cλn`, and the consistent tangent of the isotropic
+    /// return with modulus h + c,
+    /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + (h + c)/(h + c + 2G) n⊗n]` with t = |s| = r − 2Gλ,
+    /// when plastic; C when elastic.
+    fn local_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
+        let g2 = 2.0 * law.shear_modulus();
+        let kb = law.bulk_modulus();
+        let s_tr = deviator(eps) * g2;
+        let r = s_tr.norm();
+        let p = kb * trace(eps);
+        if r <= self.k0 {
+            *sigma = s_tr + identity() * p;
+            q[..6].fill(0.0);
+            if let Some(c) = tangent {
+                *c = law.stiffness_matrix();
+            }
+            return false;
+        }
+        let hc = self.total();
+        let lambda = (r - self.k0) / (g2 + hc);
+        let n = s_tr / r;
+        let t = r - g2 * lambda;
+        *sigma = n * t + identity() * p;
+        q[0] = self.h * lambda;
+        let x = Self::coordinates(&(n * (self.c * lambda)));
+        q[1..6].copy_from_slice(&x);
+        if let Some(c) = tangent {
+            let nn = n * n.transpose();
+            *c = volumetric_projector() * (3.0 * kb)
+                + (deviatoric_projector() - nn) * (g2 * t / r)
+                + nn * (g2 * hc / (hc + g2));
+        }
+        true
+    }
+
+    /// `ψ(ε) = ½Cε:ε − (2G|dev ε| − k₀)₊² / (2(2G + h + c))` (theory §9.3): the isotropic ψ with
+    /// modulus h + c.
+    fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+        let g2 = 2.0 * law.shear_modulus();
+        let over = (g2 * deviator(eps).norm() - self.k0).max(0.0);
+        0.5 * eps.dot(&law.stress(eps)) - over * over / (2.0 * (g2 + self.total()))
+    }
+
+    /// One second-order cone of dimension 6: `t = k₀ + ξ`, `x_k = e_k·σ − χ_k` with e_k the
+    /// basis [`VonMises::deviatoric_basis`] (χ_k are stored in it), so `|x| = |dev σ − χ|`. The
+    /// map is 6 × 12 row-major on (σ Mandel, ξ, χ₁, …, χ₅).
+    fn cone(&self) -> Option<ConeDescription> {
+        const W: usize = 12;
+        let mut offset = vec![0.0; 6];
+        offset[0] = self.k0;
+        let mut map = vec![0.0; 6 * W];
+        map[6] = 1.0;
+        for (k, e) in VonMises::deviatoric_basis().iter().enumerate() {
+            for j in 0..6 {
+                map[(k + 1) * W + j] = e[j];
+            }
+            map[(k + 1) * W + 7 + k] = -1.0;
+        }
+        Some(ConeDescription { blocks: vec![SocBlock { dim: 6, offset, map }] })
+    }
+
+    /// k₀ = 0: every point with a deviatoric strain is plastic, and the law is linear elastic
+    /// with the reduced shear modulus G(h + c)/(2G + h + c) (theory §9.3). (h = 0 needs no
+    /// warning: c > 0 keeps the solution unique, as isotropic hardening with h = c does.)
+    fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.k0 == 0.0 {
+            w.push(
+                "yield.k0 = 0: every point with a deviatoric strain is plastic; the law is then linear elastic \
+                 with the reduced shear modulus G(h + c)/(2G + h + c) (theory §9.3)"
+                    .to_string(),
+            );
+        }
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::conformance::{self, KitConfig, KitFailure, names};
+
+    fn law() -> Elasticity {
+        Elasticity::new(100.0, 0.3).unwrap()
+    }
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
+    }
+
+    #[test]
+    fn kinematic_kit_passes_for_several_parameter_sets() {
+        for &(k0, h, c) in
+            &[(1.0f64, 5.0, 3.0), (1.0, 0.0, 5.0), (0.0, 2.0, 3.0), (0.5, 1e-4, 2000.0), (1.0, 40.0, 1e-3)]
+        {
+            let cfg = KitConfig::new(law(), k0.max(0.1)).with_samples(150).with_seed(11);
+            let p = VonMisesKinematic::new(k0, h, c);
+            if let Err(e) = conformance::check_all(&p, &cfg) {
+                panic!("k0 = {k0}, h = {h}, c = {c}: {e}");
+            }
+        }
+        let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
+        conformance::check_all(&VonMisesKinematic::new(300.0, 1e3, 5e3), &cfg).unwrap();
+    }
+
+    /// The hand-checkable point of theory §9.3, chosen so that h + c = 20 reproduces the
+    /// isotropic example of `von_mises.rs` (theory §2). Every number is a short decimal:
+    ///
+    /// * E = 100, ν = 1/4: 2G = 80, 3K_b = 200; k₀ = 1, h = 8, c = 12, so 2G + h + c = 100.
+    /// * ε = 0.01 I + 0.025 M with M = [[1,0,0],[0,−1,1],[0,1,0]] (tr M = 0, |M| = 2):
+    ///   s_tr = 2M, r = 4, n = M/2, tr σ = 200 · 0.03 = 6.
+    /// * λ = (r − k₀)/(2G + h + c) = 3/100 = 0.03; s = s_tr − 2Gλ n = 2M − 1.2M = 0.8M,
+    ///   σ = 0.8M + 2I = [[2.8, 0, 0], [0, 1.2, 0.8], [0, 0.8, 2.0]] (the isotropic h = 20 σ).
+    /// * ξ = hλ = 0.24; χ = cλ n = 0.36 · M/2 = 0.18M, whose coordinates in the deviatoric basis
+    ///   are 0.18 · (√2, 0, √2, 0, 0) (M = (1, −1, 0, √2, 0, 0) in Mandel notation).
+    /// * |s − χ| = 0.62 · 2 = 1.24 = k₀ + ξ: on the yield surface. ξ + |χ| = 0.24 + 0.36 = 0.6 =
+    ///   the isotropic ξ of h = 20.
+    /// * p = (s_tr − s)/(2G) = 0.015M, |p| = 0.03 = λ: χ = c p, ξ = h|p| (Prager).
+    /// * ½(ξ²/h + |χ|²/c) = ½(0.0576/8 + 0.1296/12) = ½(0.0072 + 0.0108) = 0.009 = (h + c)λ²/2.
+    /// * ψ = ½Cε:ε − (r − k₀)²/(2(2G + h + c)) = 0.13 − 9/200 = 0.085.
+    /// * Tangent: along n 2G(h + c)/(2G + h + c) = 16; across n (deviators ⟂ M) 2G|s|/r = 32.
+    #[test]
+    fn kinematic_local_law_matches_a_point_worked_by_hand() {
+        use nalgebra::Matrix3;
+        use saddle_core::problem::tensor::{SQRT2, from_matrix, to_matrix};
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let p = VonMisesKinematic::new(1.0, 8.0, 12.0);
+        let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
+        let eps = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.025));
+        let tol = 1e-13;
+        let near = |a: f64, b: f64| (a - b).abs() <= tol;
+        let (mut s, mut q, mut ct) = (Sym::zeros(), [0.0; 6], SymOp::zeros());
+        assert!(p.local_law(&law, &eps, &mut s, &mut q, Some(&mut ct)), "r = 4 > k0 = 1: plastic");
+        let expected = Matrix3::new(2.8, 0.0, 0.0, 0.0, 1.2, 0.8, 0.0, 0.8, 2.0);
+        assert!((to_matrix(&s) - expected).abs().max() <= tol, "σ = {}, by hand {expected}", to_matrix(&s));
+        assert!(near(q[0], 0.24), "ξ = {}, by hand 0.24", q[0]);
+        let x = 0.18 * SQRT2;
+        for (k, want) in [x, 0.0, x, 0.0, 0.0].into_iter().enumerate() {
+            assert!(near(q[1 + k], want), "χ_{} = {}, by hand {want}", k + 1, q[1 + k]);
+        }
+        let chi = VonMisesKinematic::back_stress(&q);
+        assert!((to_matrix(&chi) - mm * 0.18).abs().max() <= tol, "χ = {}, by hand 0.18 M", to_matrix(&chi));
+        assert!(near((deviator(&s) - chi).norm(), 1.24), "|s − χ| = k0 + ξ = 1.24");
+        assert!(near(q[0] + chi.norm(), 0.6), "ξ + |χ| = 0.6, the isotropic ξ of h + c = 20");
+        let plastic_strain = eps - law.compliance(&s);
+        assert!((to_matrix(&plastic_strain) - mm * 0.015).abs().max() <= tol, "p = 0.015 M");
+        assert!((chi - plastic_strain * 12.0).norm() <= tol, "χ = c p");
+        assert!(near(p.hardening_inner(&q, &q) / 2.0, 0.009), "½ q·H⁻¹q = 0.009");
+        assert!(near(p.energy(&law, &eps), 0.085), "ψ = {}, by hand 0.085", p.energy(&law, &eps));
+        let n = from_matrix(&(mm * 0.5));
+        let m = Sym::new(1.0, 1.0, -2.0, 0.0, 0.0, 0.0) / 6.0f64.sqrt();
+        assert!(near(n.dot(&(ct * n)), 16.0) && near(m.dot(&(ct * m)), 32.0) && near(n.dot(&(ct * m)), 0.0));
+        assert!(near(identity().dot(&(ct * identity())) / 3.0, 200.0));
+        // the general projection of (Cε, 0, 0) is the same point
+        let (mut s2, mut q2) = (law.stress(&eps), [0.0; 6]);
+        assert!(p.project(&law, &mut s2, &mut q2));
+        assert!((s2 - s).norm() <= tol && q2.iter().zip(&q).all(|(a, b)| near(*a, *b)), "{s2} {q2:?}");
+        // below yield: elastic, no hardening, tangent C
+        let small = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.005));
+        assert!(!p.local_law(&law, &small, &mut s, &mut q, Some(&mut ct)));
+        assert!(q == [0.0; 6] && ct == law.stiffness_matrix() && s == law.stress(&small));
+    }
+
+    /// Theory §9.3: from the zero state the local law with (h, c) is the isotropic law with
+    /// h + c — the same σ, tangent and ψ to round-off — and the isotropic ξ_iso = (h + c)λ splits
+    /// into ξ = h λ and |χ| = c λ, χ along n = s_tr/|s_tr|. With h = 0 (ξ frozen) it is the
+    /// isotropic law with modulus c.
+    #[test]
+    fn kinematic_local_law_is_isotropic_with_h_plus_c() {
+        let law = law();
+        let g2 = 2.0 * law.shear_modulus();
+        for &(k0, h, c) in &[(1.0, 0.0, 5.0), (1.0, 2.0, 3.0), (0.0, 4.0, 0.5), (0.3, 40.0, 1e-3)] {
+            let kin = VonMisesKinematic::new(k0, h, c);
+            let iso = VonMises::new(k0, h + c);
+            let mut plastic = 0;
+            for i in 0..40 {
+                let t = i as f64;
+                // amplitudes from 0 to 1.5× those below: both regimes when k₀ > 0
+                let eps = (t / 40.0 * 1.5)
+                    * Sym::new(
+                        0.03 * (0.7 * t).sin(),
+                        -0.01 * (1.3 * t).cos(),
+                        0.02 * (0.4 * t + 1.0).sin(),
+                        0.015 * (2.1 * t).cos(),
+                        -0.005 * (0.9 * t).sin(),
+                        0.01 * (1.7 * t + 0.5).cos(),
+                    );
+                let (mut sk, mut qk, mut ck) = (Sym::zeros(), [0.0; 6], SymOp::zeros());
+                let (mut si, mut qi, mut ci) = (Sym::zeros(), [0.0], SymOp::zeros());
+                let pk = kin.local_law(&law, &eps, &mut sk, &mut qk, Some(&mut ck));
+                let pi = iso.local_law(&law, &eps, &mut si, &mut qi, Some(&mut ci));
+                assert_eq!(pk, pi);
+                plastic += pk as usize;
+                assert!((sk - si).norm() <= 1e-14 * si.norm(), "σ: {sk} vs {si}");
+                assert!((ck - ci).norm() <= 1e-13 * ci.norm(), "tangent");
+                assert!(close(kin.energy(&law, &eps), iso.energy(&law, &eps), 1e-14));
+                let chi = VonMisesKinematic::back_stress(&qk);
+                let xi_iso = qi[0];
+                assert!((qk[0] + chi.norm() - xi_iso).abs() <= 1e-14 * (1.0 + xi_iso), "ξ + |χ| = ξ_iso");
+                assert!((qk[0] - h / (h + c) * xi_iso).abs() <= 1e-14 * (1.0 + xi_iso), "ξ = h/(h+c) ξ_iso");
+                assert!((chi.norm() - c / (h + c) * xi_iso).abs() <= 1e-14 * (1.0 + xi_iso), "|χ| = c/(h+c) ξ_iso");
+                if pk {
+                    let s_tr = deviator(&eps) * g2;
+                    let n = s_tr / s_tr.norm();
+                    assert!((chi - n * chi.norm()).norm() <= 1e-14 * (1.0 + chi.norm()), "χ ∥ n");
+                }
+            }
+            let want = if k0 > 0.0 { 10..39 } else { 39..41 };
+            assert!(want.contains(&plastic), "{plastic} plastic of 40");
+        }
+    }
+
+    /// The general projection on points worked by hand (E = 100, ν = 1/4: 2G = 80; k₀ = 1,
+    /// h = 8, c = 12: 2G + c = 92, 2G + c + h = 100). d, m are orthonormal deviators, the
+    /// volumetric part 0.7 I stays.
+    #[test]
+    fn kinematic_projection_of_general_points() {
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let p = VonMisesKinematic::new(1.0, 8.0, 12.0);
+        let basis = VonMises::deviatoric_basis();
+        let (d, m) = (basis[0], basis[3]);
+        let vol = identity() * 0.7;
+        let q_of = |xi: f64, chi: &Sym| {
+            let x = VonMisesKinematic::coordinates(chi);
+            [xi, x[0], x[1], x[2], x[3], x[4]]
+        };
+        let tol = 1e-14;
+        // on the cone: s = 4d + 0.5m, χ = 0.5m, ξ = 0.5: a = 4d, r = 4, t₀ = 1.5,
+        // λ = 2.5/100 = 0.025, s' = s − 2d, χ' = χ + 0.3d, ξ' = 0.7, s' − χ' = 1.7 d
+        let chi = m * 0.5;
+        let (mut s, mut q) = (vol + d * 4.0 + chi, q_of(0.5, &chi));
+        assert!(p.project(&law, &mut s, &mut q));
+        assert!((s - (vol + d * 2.0 + m * 0.5)).norm() < tol, "σ' = {s}");
+        assert!((VonMisesKinematic::back_stress(&q) - (m * 0.5 + d * 0.3)).norm() < tol);
+        assert!(
+            (q[0] - 0.7).abs() < tol && ((deviator(&s) - VonMisesKinematic::back_stress(&q)).norm() - 1.7).abs() < tol
+        );
+
+        // inside: |a| = 1.2 ≤ 1.5, unchanged
+        let (mut s, mut q) = (vol + d * 1.2 + chi, q_of(0.5, &chi));
+        let (s0, q0) = (s, q);
+        assert!(!p.project(&law, &mut s, &mut q));
+        assert_eq!((s, q), (s0, q0));
+
+        // apex: ξ = −2, t₀ = −1: (2G + c)t₀ + h r = −92 + 32 ≤ 0; s' = χ' = (c s + 2Gχ)/(2G + c)
+        // = (48 d + 6 m + 40 m)/92 = (12/23) d + 0.5 m, ξ' = −k₀ = −1
+        let (mut s, mut q) = (vol + d * 4.0 + chi, q_of(-2.0, &chi));
+        assert!(p.project(&law, &mut s, &mut q));
+        let apex = d * (12.0 / 23.0) + m * 0.5;
+        assert!((s - (vol + apex)).norm() < tol && (VonMisesKinematic::back_stress(&q) - apex).norm() < tol);
+        assert_eq!(q[0], -1.0);
+        // the apex is the nearest point: obtuse angle with a point of D
+        let x = (vol + d * 4.0 + chi, q_of(-2.0, &chi));
+        let y = (vol + d * 0.3, q_of(0.0, &Sym::zeros()));
+        let dx = (x.0 - s, std::array::from_fn::<f64, 6, _>(|k| x.1[k] - q[k]));
+        let dy = (y.0 - s, std::array::from_fn::<f64, 6, _>(|k| y.1[k] - q[k]));
+        let ip = law.compliance(&dx.0).dot(&dy.0) + p.hardening_inner(&dx.1, &dy.1);
+        assert!(ip <= 0.0, "{ip}");
+
+        // h = 0: ξ frozen, λ = (4 − 1.25)/92; apex with ξ' = −k0 when k0 + ξ ≤ 0
+        let pk = VonMisesKinematic::new(1.0, 0.0, 12.0);
+        let (mut s, mut q) = (vol + d * 4.0 + chi, q_of(0.25, &chi));
+        assert!(pk.project(&law, &mut s, &mut q));
+        let lambda = 2.75 / 92.0;
+        assert!(q[0] == 0.25 && (s - (vol + d * (4.0 - 80.0 * lambda) + chi)).norm() < tol);
+        assert!(((deviator(&s) - VonMisesKinematic::back_stress(&q)).norm() - 1.25).abs() < tol);
+        let (mut s, mut q) = (vol + d * 4.0 + chi, q_of(-1.5, &chi));
+        assert!(pk.project(&law, &mut s, &mut q));
+        assert!(q[0] == -1.0 && (s - (vol + apex)).norm() < tol);
+        assert!(pk.hardening_inner(&[0.0, 1.0, 0.0, 0.0, 0.0, 0.0], &[3.0, 2.0, 0.0, 0.0, 0.0, 0.0]) == 2.0 / 12.0);
+        assert!(pk.hardening_inner(&[1.0; 6], &[1.0; 6]) == f64::INFINITY);
+        assert!(p.hardening_inner(&[2.0, 1.0, 1.0, 0.0, 0.0, 0.0], &[3.0, 1.0, 2.0, 0.0, 0.0, 0.0]) == 0.75 + 0.25);
+    }
+
+    #[test]
+    fn kinematic_cone_block_measures_the_relative_stress() {
+        let p = VonMisesKinematic::new(1.5, 5.0, 2.0);
+        assert_eq!((p.hardening_dim(), p.hardening_fields()), (6, vec![("xi", 1), ("back_stress", 5)]));
+        let cone = p.cone().unwrap();
+        assert_eq!(cone.blocks.len(), 1);
+        let b = &cone.blocks[0];
+        assert_eq!((b.dim, b.offset.len(), b.map.len()), (6, 6, 72));
+        let sigma = Sym::new(3.0, -1.0, 0.5, 0.7, -0.2, 0.9);
+        let q = [0.25, 0.3, -0.2, 0.1, 0.0, 0.4];
+        let z: Vec<f64> = sigma.iter().copied().chain(q).collect();
+        let v: Vec<f64> =
+            (0..6).map(|i| b.offset[i] + (0..12).map(|j| b.map[i * 12 + j] * z[j]).sum::<f64>()).collect();
+        assert!((v[0] - 1.75).abs() < 1e-15);
+        let x = v[1..].iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((x - (deviator(&sigma) - VonMisesKinematic::back_stress(&q)).norm()).abs() < 1e-14);
+        let chi = deviator(&Sym::new(0.3, -0.1, 0.7, 0.2, -0.5, 0.1));
+        let back = VonMisesKinematic::back_stress(&{
+            let x = VonMisesKinematic::coordinates(&chi);
+            [0.0, x[0], x[1], x[2], x[3], x[4]]
+        });
+        assert!((back - chi).norm() < 1e-15, "coordinates and back_stress are inverse on deviators");
+    }
+
+    #[test]
+    fn kinematic_validation_warnings_and_toml() {
+        let ok = VonMisesKinematic::new(1.0, 0.0, 5.0);
+        assert!(ok.validate("yield").is_ok() && ok.warnings().is_empty(), "h = 0 is unique with c > 0");
+        let e = VonMisesKinematic::new(-1.0, 5.0, 1.0).validate("yield").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.k0", "-1"));
+        let e = VonMisesKinematic::new(1.0, -0.5, 1.0).validate("yield").unwrap_err();
+        assert_eq!(e.field, "yield.h");
+        let e = VonMisesKinematic::new(1.0, 5.0, 0.0).validate("yield").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.c", "0"));
+        assert!(e.to_string().contains("> 0"), "{e}");
+        let e = VonMisesKinematic::new(1.0, 5.0, f64::NAN).validate("yield").unwrap_err();
+        assert!(e.field == "yield.c" && e.to_string().contains("finite"), "{e}");
+        let w = VonMisesKinematic::new(0.0, 1.0, 1.0).warnings();
+        assert!(w.len() == 1 && w[0].contains("k0 = 0"), "{w:?}");
+
+        let p: Box<dyn AdmissibleStresses> =
+            toml::from_str("type = \"von_mises_kinematic\"\nk0 = 1.0\nh = 5.0\nc = 4.0").unwrap();
+        assert_eq!((p.name(), p.hardening_dim()), ("von_mises_kinematic", 6));
+        assert!(p.hardening_inner(&[0.0, 1.0, 0.0, 0.0, 0.0, 0.0], &[0.0, 1.0, 0.0, 0.0, 0.0, 0.0]) == 0.25);
+        let back: Box<dyn AdmissibleStresses> = toml::from_str(&toml::to_string(&p).unwrap()).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{p:?}"));
+        let err = toml::from_str::<Box<dyn AdmissibleStresses>>("type = \"von_mises_kinematic\"\nk0 = 1.0\nh = 5.0")
+            .unwrap_err();
+        assert!(err.to_string().contains('c'), "c is required: {err}");
+        let err = toml::from_str::<Box<dyn AdmissibleStresses>>(
+            "type = \"von_mises_kinematic\"\nk0 = 1.0\nh = 5.0\nc = 1.0\nC = 2.0",
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("unknown field"), "{err}");
+    }
+
+    /// Ways to break the plugin, each a plausible slip of an author.
+    #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+    enum Breakage {
+        /// the back stress moves by 2cλ instead of cλ, in the projection and in the local law
+        /// derived from it (ψ and the tangent stay right): the relative stress s' − χ' =
+        /// (r − (2G + 2c)λ) n overshoots through 0 when cλ > 2t, out of D.
+        DoubleBackStress,
+        /// the metric weight of χ is c instead of 1/c (projection unchanged): the projection is
+        /// no longer the nearest point.
+        WrongMetricWeight,
+        /// the local law forgets the kinematic part (isotropic h only), consistent ψ and
+        /// tangent; the projection is right.
+        LocalLawWithoutC,
+        /// the cone measures |dev σ| instead of |dev σ − χ| (the −1 entries on χ dropped).
+        ConeWithoutBackStress,
+    }
+
+    #[derive(Clone, Debug, Serialize, Deserialize)]
+    struct Broken {
+        p: VonMisesKinematic,
+        how: Breakage,
+    }
+
+    #[typetag::serde(name = "von_mises_kinematic_test_broken")]
+    impl AdmissibleStresses for Broken {
+        fn validate(&self, path: &str) -> Result<(), ParameterError> {
+            self.p.validate(path)
+        }
+        fn hardening_dim(&self) -> usize {
+            6
+        }
+        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+            match self.how {
+                Breakage::WrongMetricWeight => {
+                    let kin: f64 = q[1..6].iter().zip(&r[1..6]).map(|(a, b)| a * b).sum();
+                    q[0] * r[0] / self.p.h + kin * self.p.c
+                }
+                _ => self.p.hardening_inner(q, r),
+            }
+        }
+        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+            self.p.contains(sigma, q, tol)
+        }
+        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+            let chi0 = VonMisesKinematic::back_stress(q);
+            let out = self.p.project(law, sigma, q);
+            if out && self.how == Breakage::DoubleBackStress {
+                // χ' = χ + 2cλn: add the increment once more
+                let dchi = VonMisesKinematic::back_stress(q) - chi0;
+                let x = VonMisesKinematic::coordinates(&(chi0 + dchi * 2.0));
+                q[1..6].copy_from_slice(&x);
+            }
+            out
+        }
+        fn local_law(
+            &self,
+            law: &Elasticity,
+            eps: &Sym,
+            sigma: &mut Sym,
+            q: &mut [f64],
+            tangent: Option<&mut SymOp>,
+        ) -> bool {
+            match self.how {
+                Breakage::DoubleBackStress => {
+                    let plastic = self.p.local_law(law, eps, sigma, q, tangent);
+                    *sigma = law.stress(eps);
+                    q.fill(0.0);
+                    self.project(law, sigma, q);
+                    plastic
+                }
+                Breakage::LocalLawWithoutC => {
+                    let mut xi = [0.0];
+                    let plastic = VonMises::new(self.p.k0, self.p.h).local_law(law, eps, sigma, &mut xi, tangent);
+                    q.fill(0.0);
+                    q[0] = xi[0];
+                    plastic
+                }
+                Breakage::WrongMetricWeight | Breakage::ConeWithoutBackStress => {
+                    self.p.local_law(law, eps, sigma, q, tangent)
+                }
+            }
+        }
+        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+            match self.how {
+                Breakage::LocalLawWithoutC => VonMises::new(self.p.k0, self.p.h).energy(law, eps),
+                _ => self.p.energy(law, eps),
+            }
+        }
+        fn cone(&self) -> Option<ConeDescription> {
+            let mut c = self.p.cone()?;
+            if self.how == Breakage::ConeWithoutBackStress {
+                for row in c.blocks[0].map.chunks_mut(12) {
+                    row[7..].fill(0.0);
+                }
+            }
+            Some(c)
+        }
+    }
+
+    #[test]
+    fn kinematic_kit_catches_broken_copies() {
+        let cfg = KitConfig::new(law(), 1.0).with_samples(120);
+        let p = VonMisesKinematic::new(1.0, 5.0, 3.0);
+        for (how, first) in [
+            (Breakage::DoubleBackStress, names::PROJECTION_IN_SET),
+            (Breakage::WrongMetricWeight, names::VARIATIONAL_INEQUALITY),
+            (Breakage::LocalLawWithoutC, names::LOCAL_LAW_IS_PROJECTION),
+            (Breakage::ConeWithoutBackStress, names::CONE_MEMBERSHIP),
+        ] {
+            let e: KitFailure = conformance::check_all(&Broken { p, how }, &cfg).unwrap_err();
+            assert_eq!(e.check, first, "{how:?}: {e}");
+        }
+        conformance::check_all(&p, &cfg).unwrap();
+    }
+}
