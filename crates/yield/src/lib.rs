@@ -98,11 +98,13 @@
 pub mod conformance;
 mod drucker_prager;
 mod elastic;
+mod tresca;
 mod von_mises;
 mod von_mises_kinematic;
 
 pub use drucker_prager::DruckerPrager;
 pub use elastic::Elastic;
 pub use saddle_core::problem::stresses::AdmissibleStresses;
+pub use tresca::{Tresca, TrescaReturn};
 pub use von_mises::VonMises;
 pub use von_mises_kinematic::VonMisesKinematic;
