@@ -217,3 +217,38 @@ fn the_interior_point_on_the_kinematic_cone_agrees_with_newton() {
         assert!(a.u_rel <= 1e-7 && a.stress_rel <= 1e-6, "h = {h}: U {:e}, σ̂ {:e}", a.u_rel, a.stress_rel);
     }
 }
+
+/// Output by name: `solution.vtu` carries the plugin's own hardening fields, `xi` (1 component)
+/// and `back_stress` (5), with the values of the closed form — read back from the appended
+/// data by their declared offsets.
+#[test]
+fn the_vtu_names_the_hardening_fields_of_the_plugin() {
+    let (h, c, f) = (2.0, 3.0, 2.0);
+    let mut t = example("homogeneous.toml");
+    t.insert("yield".into(), kinematic(1.0, h, c));
+    set(&mut t, "obstacle.F", toml::Value::Float(f));
+    let (l, _) = build(&t);
+    let sol = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("solution.vtu");
+    saddle::output::write_vtu(&path, &l, &sol).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let start = bytes.windows(2).position(|w| w == b"\n_").unwrap() + 2; // the appended block
+    let head = String::from_utf8_lossy(&bytes[..start]).to_string();
+    let (_, xi, chi, _, _) = closed_form(100.0, 0.3, 1.0, h, c, f);
+    for (name, comps, exact) in [("xi", 1, vec![xi]), ("back_stress", 5, chi.to_vec())] {
+        let tag = format!("Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"appended\" offset=\"");
+        let at = head.find(&tag).unwrap_or_else(|| panic!("no {tag} in {head}")) + tag.len();
+        let offset: usize = head[at..].split('"').next().unwrap().parse().unwrap();
+        let block = &bytes[start + offset..];
+        let len = u64::from_le_bytes(block[..8].try_into().unwrap()) as usize;
+        assert_eq!(len, 8 * comps * l.n_points(), "{name}: byte count");
+        let values: Vec<f64> = block[8..8 + len].chunks(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect();
+        for cell in values.chunks(comps) {
+            for (v, e) in cell.iter().zip(&exact) {
+                assert!((v - e).abs() <= 1e-10 * (1.0 + e.abs()), "{name}: {v} against the closed form {e}");
+            }
+        }
+    }
+    assert!(!head.contains("Name=\"q\""), "no anonymous hardening field");
+}

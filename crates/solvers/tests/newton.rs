@@ -159,6 +159,5 @@ fn settings_from_a_scene_table_and_invalid_values_name_the_field() {
     ] {
         let e = n.validate("solver").expect_err("invalid");
         assert_eq!(e.field, field, "{e}");
-        assert!(n.solve(&homogeneous(1.0), &mut Silent).expect_err("invalid").to_string().contains(field));
     }
 }

@@ -261,7 +261,6 @@ fn a_yield_surface_without_cones_is_unsupported() {
 
 #[test]
 fn invalid_parameters_name_the_field() {
-    let l = homogeneous(1.0);
     for (s, field, value) in [
         (Socp { tol: 0.0, ..Socp::default() }, "solver.tol", "0"),
         (Socp { tol: f64::NAN, ..Socp::default() }, "solver.tol", "NaN"),
@@ -272,8 +271,6 @@ fn invalid_parameters_name_the_field() {
     ] {
         let e = s.validate("solver").unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), (field, value), "{e}");
-        let e = s.solve(&l, &mut Silent).expect_err("invalid parameters are an error");
-        assert!(e.to_string().contains(field), "{e}");
     }
     // from TOML: defaults, and unknown fields rejected
     let s: Box<dyn Solver> = toml::from_str("type = \"socp\"").unwrap();

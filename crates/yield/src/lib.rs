@@ -15,6 +15,12 @@
 //!
 //! * [`VonMises`] (`type = "von_mises"`, `k0`, `h`): `D = {|dev σ| ≤ k₀ + ξ}`, metric ξη/h —
 //!   the material of theory §1;
+//! * [`DruckerPrager`] (`type = "drucker_prager"`, `k0`, `alpha`, `h`):
+//!   `D = {|dev σ| + α tr σ ≤ k₀ + ξ}` (theory §9.1);
+//! * [`Tresca`] (`type = "tresca"`, `sigma0`, `h`): `D = {σ₁ − σ₃ ≤ σ₀ + ξ}` (theory §9.2), no
+//!   second-order-cone description;
+//! * [`VonMisesKinematic`] (`type = "von_mises_kinematic"`, `k0`, `h`, `c`):
+//!   `D = {|dev σ − χ| ≤ k₀ + ξ}` with a back stress χ (theory §9.3);
 //! * [`Elastic`] (`type = "elastic"`): D is the whole space.
 //!
 //! ## Adding a yield surface
