@@ -287,7 +287,7 @@ pub fn scenes() -> Vec<KitScene> {
             exact_u: Some(homogeneous_u(2.0)),
         },
         KitScene { name: "Hertz, elastic", problem: kit_problem(hertz([8, 8, 8], 20.0)), exact_u: None },
-        KitScene { name: "Johnson (SPEC §6)", problem: Johnson::default().problem(), exact_u: None },
+        KitScene { name: "Johnson (theory §6)", problem: Johnson::default().problem(), exact_u: None },
         KitScene {
             name: "Johnson, weak hardening h = 0.5",
             problem: Johnson { h: 0.5, ..Johnson::default() }.problem(),

@@ -36,7 +36,7 @@ fn run_writes_summary_and_vtu() {
     }
     assert_eq!(summary["solver"], "uzawa");
     assert_eq!(summary["converged"], true);
-    // F = 2 on the unit square: U = F/E + plastic part (SPEC §7), force = F
+    // F = 2 on the unit square: U = F/E + plastic part (theory §7), force = F
     assert!((summary["force"].as_f64().unwrap() - 2.0).abs() < 1e-9);
     assert!(summary["kkt_residual"].as_f64().unwrap() <= 1e-10);
     assert_eq!(summary["plastic_elements"], summary["elements"]);

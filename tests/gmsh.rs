@@ -156,7 +156,7 @@ fn physical_surfaces_become_facet_groups() {
         let c = m.facet_centroid(f);
         assert!(c[2].abs() < 1e-12 && c[0].hypot(c[1]) > 0.45 && c[0].abs().max(c[1].abs()) < 0.75, "{c:?}");
     }
-    // the mesh resolves the contact zone (SPEC §6: at least 8 elements across it)
+    // the mesh resolves the contact zone (theory §6: at least 8 elements across it)
     let h = m.groups["contact"]
         .iter()
         .flat_map(|&f| {

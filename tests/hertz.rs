@@ -1,4 +1,4 @@
-//! Hertz verification (SPEC §7) on the elastic quarter model of `examples/hertz.toml`:
+//! Hertz verification (theory §7) on the elastic quarter model of `examples/hertz.toml`:
 //! contact radius a, peak pressure p₀ and approach δ within 3 % of Hertz, and F ∝ δ^{3/2}
 //! (exponent within 2 %).
 //!
@@ -23,7 +23,7 @@ const E: f64 = 100.0;
 const NU: f64 = 0.3;
 const R: f64 = 5.0;
 
-/// Hertz's a, p₀, δ for the whole force `f` (SPEC §7).
+/// Hertz's a, p₀, δ for the whole force `f` (theory §7).
 fn hertz(f: f64) -> (f64, f64, f64) {
     let e_star = E / (1.0 - NU * NU);
     let a = (3.0 * f * R / (4.0 * e_star)).cbrt();

@@ -1,4 +1,4 @@
-//! SPEC §7, homogeneous compression: P1/P0 represent the solution exactly, so every solver must
+//! theory §7, homogeneous compression: P1/P0 represent the solution exactly, so every solver must
 //! reproduce the closed form to its tolerance — below and above first yield.
 
 mod common;
@@ -6,7 +6,7 @@ use common::*;
 use saddle::core::problem::tensor::SQRT2;
 use saddle::core::{Lagrangian, Silent, Solution};
 
-/// The closed form of SPEC §7: (σ₃₃, U, ξ, ε₁₁, ε₃₃).
+/// The closed form of theory §7: (σ₃₃, U, ξ, ε₁₁, ε₃₃).
 fn closed_form(e: f64, nu: f64, k0: f64, h: f64, f: f64) -> (f64, f64, f64, f64, f64) {
     let s_norm = (2.0f64 / 3.0).sqrt() * f;
     // elastic part Aσ with σ = −F e₃⊗e₃

@@ -41,7 +41,7 @@ t = [0.0, 0.0, {p}]
     Scene::from_toml(&text, Path::new("bar.toml")).unwrap().into_problem().unwrap().0
 }
 
-/// ε₁₁ and ε₃₃ of uniaxial tension σ₃₃ = p (SPEC §2 with |s| = sqrt(2/3) p).
+/// ε₁₁ and ε₃₃ of uniaxial tension σ₃₃ = p (theory §2 with |s| = sqrt(2/3) p).
 fn strains(p: f64, plastic: bool) -> (f64, f64) {
     let (e, nu, k0, h) = (100.0, 0.3, 1.0, 5.0);
     let (mut e11, mut e33) = (-nu * p / e, p / e);

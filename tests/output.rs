@@ -1,5 +1,5 @@
 //! solution.vtu reads back, through an independent reader (vtkio), to the solution; the default
-//! scene's mesh resolves the contact zone as SPEC §6 asks.
+//! scene's mesh resolves the contact zone as theory §6 asks.
 
 mod common;
 use common::*;
@@ -122,7 +122,7 @@ fn vtu_reads_back_with_vtkio() {
     }
     assert!(clamped > 0 && clamped < 3 * n_nodes);
 
-    // contact force: λ_i e₃ at the node of each contact row (the punch pushes along x₃, SPEC §3),
+    // contact force: λ_i e₃ at the node of each contact row (the punch pushes along x₃, theory §3),
     // 0 elsewhere; Σ λ_i = F = 0.3
     let force = &point["contact_force"].1;
     let mut expected = vec![0.0; 3 * n_nodes];
@@ -161,7 +161,7 @@ fn vtu_reads_back_with_vtkio() {
 
 #[test]
 fn default_scene_resolves_the_contact_zone() {
-    // SPEC §6: at least 8 elements across the contact diameter (≈ 0.46), i.e. an element size
+    // theory §6: at least 8 elements across the contact diameter (≈ 0.46), i.e. an element size
     // of at most about 0.055 there.
     let scene = Scene::from_file(&repo("examples/johnson.toml")).unwrap();
     let mesh = scene.mesh.build(&repo("examples")).unwrap();

@@ -1,6 +1,6 @@
 //! Issue 5, case 8: **no NaN or Inf escapes.** A property test draws material parameters, the
 //! punch force and the gap over wide finite ranges and runs every solver on a tiny version of the
-//! default scene (SPEC §6 geometry, 6×6×3 graded cells, 1 296 tetrahedra). Each run must end in
+//! default scene (theory §6 geometry, 6×6×3 graded cells, 1 296 tetrahedra). Each run must end in
 //! one of three honest ways:
 //!
 //! * converged, with the KKT residual recomputed from the solution by L (independently of the

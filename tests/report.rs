@@ -1,4 +1,4 @@
-//! `saddle report` (SPEC §5 error measures, §3 Theorem 2): the writers, the error measures and
+//! `saddle report` (theory §5 error measures, §3 Theorem 2): the writers, the error measures and
 //! the transfer between meshes, Richardson and rates on synthetic data, the command end to end,
 //! and the observed stress rate on a cheap mesh sequence of the default scene.
 
@@ -321,7 +321,7 @@ fn report_quick_on_a_small_johnson_scene() {
     }
 }
 
-/// SPEC §3 Theorem 2 / §7: on a cheap sequence of the default scene (3 to 11 cells across the
+/// theory §3 Theorem 2 / §7: on a cheap sequence of the default scene (3 to 11 cells across the
 /// half-width, Newton to 1e-13 on each) the energy-norm stress error decreases at an observed
 /// rate of at least 1/2. Measured: errors 0.71, 0.56, 0.46, 0.39 against the 22×22×11 level,
 /// fitted rate 0.59; the consecutive differences 0.67. The stresses converge no faster than

@@ -1,4 +1,4 @@
-//! Mesh convergence (SPEC §3 Theorem 2, §7): a sequence of refined box meshes of one scene, each
+//! Mesh convergence (theory §3 Theorem 2, §7): a sequence of refined box meshes of one scene, each
 //! solved tightly, errors against the finest level, observed rates and a Richardson
 //! extrapolation of U.
 //!
@@ -6,7 +6,7 @@
 //! h = (|Ω| / #elements)^{1/3}. On the graded box family every measure of the mesh size scales
 //! like 1/cells; the mean does so smoothly, whereas the largest element touching the contact
 //! zone Γ₀ jumps with the position of the zone's rim among the graded cells (it is reported
-//! alongside, `h_contact`, to compare with SPEC §6's resolution requirement).
+//! alongside, `h_contact`, to compare with theory §6's resolution requirement).
 //!
 //! **Against the finest level.** Errors measured against the finest level rather than the exact
 //! solution are too small on the levels next to it, so rates between the finer levels come out

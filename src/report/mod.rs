@@ -1,5 +1,5 @@
-//! `saddle report`: accuracy and cost of the solvers on a scene (SPEC §4, §5) and the mesh
-//! convergence of the discretisation (SPEC §3 Theorem 2, §7).
+//! `saddle report`: accuracy and cost of the solvers on a scene (theory §4, §5) and the mesh
+//! convergence of the discretisation (theory §3 Theorem 2, §7).
 //!
 //! [`generate`] writes into a folder:
 //!

@@ -2,10 +2,10 @@
 //! SVG, in pure Rust — the PNG's text is rasterised from an embedded DejaVu Sans (no fontconfig
 //! or freetype), the SVG names the font family.
 //!
-//! * `work_precision.{png,svg}`: error against wall time (SPEC §5), σ̂ in the energy norm and U in
+//! * `work_precision.{png,svg}`: error against wall time (theory §5), σ̂ in the energy norm and U in
 //!   two panels, one line with markers per solver through its converged runs; runs that stopped
 //!   short are open markers off the line; errors of exactly 0 (the reference) are not drawn.
-//! * `convergence.{png,svg}`: errors against the mesh size h (SPEC §3 Theorem 2) with a reference
+//! * `convergence.{png,svg}`: errors against the mesh size h (theory §3 Theorem 2) with a reference
 //!   line of slope 1/2.
 //!
 //! The legend is drawn in a strip below the panels, so it never covers data.

@@ -1,10 +1,10 @@
-//! Work–precision runs (SPEC §4, §5): every solver along a ladder of settings on one mesh, each
+//! Work–precision runs (theory §4, §5): every solver along a ladder of settings on one mesh, each
 //! run timed and compared with a tightly converged reference of the same discrete problem.
 //!
-//! Errors (SPEC §5), all relative to the reference:
+//! Errors (theory §5), all relative to the reference:
 //! * U: |U − U_ref| / |U_ref| (the largest over the extra unknowns; without extras the max-norm
 //!   of u, as in [`crate::conformance::agreement`]);
-//! * σ̂: [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} in the energy norm of SPEC §1
+//! * σ̂: [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} in the energy norm of theory §1
 //!   ([`crate::conformance::energy_distance`]) — the σ̂ the solver returns;
 //! * ε(u): ‖ε(u − u_ref)‖_{L²} / ‖ε(u_ref)‖_{L²}, element volumes as weights.
 //!

@@ -232,7 +232,7 @@ pub fn markdown(report: &Report) -> String {
         let _ = writeln!(
             s,
             "Errors are relative and measured against the reference, {} ({}: KKT residual {}, U = {:.12e}, \
-             {:.1} s), which solves the same discrete problem (SPEC §3, §5): U; σ̂ in the energy norm \
+             {:.1} s), which solves the same discrete problem (theory §3, §5): U; σ̂ in the energy norm \
              [σ̂ − σ̂_ref]^½/[σ̂_ref]^½; ε(u) in L². Wall time is measured around each solve. Runs that stop short are listed with their status and drawn as open markers off \
              the lines; the reference itself has error 0 and is not drawn.\n",
             r.label(),
@@ -260,7 +260,7 @@ pub fn markdown(report: &Report) -> String {
             md_time(r.wall_s)
         );
     }
-    let _ = writeln!(s, "\n## Mesh convergence (SPEC §3 Theorem 2, §7)\n");
+    let _ = writeln!(s, "\n## Mesh convergence (theory §3 Theorem 2, §7)\n");
     match &report.convergence {
         Err(why) => {
             let _ = writeln!(s, "Skipped: {why}.");

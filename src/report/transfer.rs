@@ -1,4 +1,4 @@
-//! Comparing P0 fields across meshes (SPEC §5 errors in a mesh convergence study, §7 Theorem 2):
+//! Comparing P0 fields across meshes (theory §5 errors in a mesh convergence study, §7 Theorem 2):
 //! a point locator for tetrahedral meshes and the transfer of a coarse P0 field to a fine mesh.
 //!
 //! The coarse field is evaluated at sample points of every fine element (the element of the
@@ -303,10 +303,10 @@ pub fn strains(l: &dyn Lagrangian, u: &[f64]) -> Vec<Sym> {
     eps
 }
 
-/// The differences of a coarse solution to a fine one on the fine mesh (SPEC §5).
+/// The differences of a coarse solution to a fine one on the fine mesh (theory §5).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FieldDistance {
-    /// [σ̂_c − σ̂_f]^{1/2} / [σ̂_f]^{1/2}, the energy norm of SPEC §1 on the fine mesh.
+    /// [σ̂_c − σ̂_f]^{1/2} / [σ̂_f]^{1/2}, the energy norm of theory §1 on the fine mesh.
     pub stress_energy: f64,
     /// ‖ε(u_c) − ε(u_f)‖_{L²} / ‖ε(u_f)‖_{L²}.
     pub strain_l2: f64,

@@ -244,7 +244,7 @@ fn the_rim_warning_fires_only_for_contact_at_the_rim() {
         "{w}"
     );
     assert_eq!(r.contact_radius, 0.5);
-    // a zone covering the whole face facing the punch has no rim (homogeneous compression, SPEC §7)
+    // a zone covering the whole face facing the punch has no rim (homogeneous compression, theory §7)
     let d = DofMap::new(&m, &[Dirichlet::clamped(Region::Group("zmax".into()))]).unwrap();
     let k = RigidPunch::new(0.3, Region::Group("zmin".into()), Box::new(Flat::default()));
     let rows = k.discretise(&m, &d, "obstacle").unwrap();

@@ -1,4 +1,4 @@
-//! Von Mises with linear isotropic hardening (SPEC §1–§2): D = {(σ, ξ) : |dev σ| ≤ k₀ + ξ},
+//! Von Mises with linear isotropic hardening (theory §1–§2): D = {(σ, ξ) : |dev σ| ≤ k₀ + ξ},
 //! hardening metric ξη/h.
 //!
 //! In the energy metric `Aσ:τ + ξη/h` the volumetric part of σ is orthogonal to everything D
@@ -14,7 +14,7 @@
 //! * at the apex (`s' = 0`, `ξ' = −k₀`) when `2G t₀ + h r ≤ 0`, i.e. `t₀ ≤ −h r/(2G)`.
 //!
 //! For ξ = 0 (the local law) `t₀ = k₀ ≥ 0`, the apex is never reached and
-//! `t = (h r + 2G k₀)/(h + 2G)` is exactly SPEC §2.
+//! `t = (h r + 2G k₀)/(h + 2G)` is exactly theory §2.
 
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
@@ -22,7 +22,7 @@ use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlo
 use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
-/// Von Mises yield with linear isotropic hardening (SPEC §1): `D = {|dev σ| ≤ k₀ + ξ}`,
+/// Von Mises yield with linear isotropic hardening (theory §1): `D = {|dev σ| ≤ k₀ + ξ}`,
 /// `[σ̂, τ̂] = Aσ:τ + ξη/h`. Scene table: `type = "von_mises"`, `k0`, `h`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -74,7 +74,7 @@ impl AdmissibleStresses for VonMises {
         1
     }
 
-    /// ξη/h (SPEC §1). For h = 0 the metric is infinite in ξ: 0 when ξη = 0, else ±∞ with
+    /// ξη/h (theory §1). For h = 0 the metric is infinite in ξ: 0 when ξη = 0, else ±∞ with
     /// the sign of ξη.
     fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
         let p = q[0] * r[0];
@@ -96,7 +96,7 @@ impl AdmissibleStresses for VonMises {
         deviator(sigma).norm() <= self.k0 + xi + tol * scale
     }
 
-    /// Projection onto D in the energy metric (SPEC §2), for a general point (σ, ξ) — see the
+    /// Projection onto D in the energy metric (theory §2), for a general point (σ, ξ) — see the
     /// module docs for the derivation. The volumetric part is unchanged. For h = 0 ξ is frozen
     /// (infinite metric) and s is returned radially to |s| = k₀ + ξ; if k₀ + ξ < 0 the slice of
     /// D is empty and the point goes to the apex (s = 0, ξ = −k₀), the limit h → 0.
@@ -123,7 +123,7 @@ impl AdmissibleStresses for VonMises {
         true
     }
 
-    /// SPEC §2 in closed form: σ̂ = P_D(Cε, 0) and the consistent tangent
+    /// theory §2 in closed form: σ̂ = P_D(Cε, 0) and the consistent tangent
     /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + h/(h+2G) n⊗n]` when plastic, C when elastic.
     fn local_law(
         &self,
@@ -159,14 +159,14 @@ impl AdmissibleStresses for VonMises {
         true
     }
 
-    /// `ψ(ε) = ½Cε:ε − (2G|dev ε| − k₀)₊² / (2(2G + h))` (SPEC §2).
+    /// `ψ(ε) = ½Cε:ε − (2G|dev ε| − k₀)₊² / (2(2G + h))` (theory §2).
     fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
         let g2 = 2.0 * law.shear_modulus();
         let over = (g2 * deviator(eps).norm() - self.k0).max(0.0);
         0.5 * eps.dot(&law.stress(eps)) - over * over / (2.0 * (g2 + self.h))
     }
 
-    /// One second-order cone of dimension 6 (SPEC §3): `t = k₀ + ξ`, `x = (e_k·σ)_{k=1..5}`
+    /// One second-order cone of dimension 6 (theory §3): `t = k₀ + ξ`, `x = (e_k·σ)_{k=1..5}`
     /// in the orthonormal deviatoric basis [`VonMises::deviatoric_basis`], so `|x| = |dev σ|`.
     /// The map is 6 × 7 row-major on (σ Mandel, ξ).
     fn cone(&self) -> Option<ConeDescription> {
@@ -182,13 +182,13 @@ impl AdmissibleStresses for VonMises {
         Some(ConeDescription { blocks: vec![SocBlock { dim: 6, offset, map }] })
     }
 
-    /// h = 0 (perfect plasticity): the solution need not be unique (SPEC §1, Theorem 1).
+    /// h = 0 (perfect plasticity): the solution need not be unique (theory §1, Theorem 1).
     fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
         if self.h == 0.0 {
             w.push(format!(
                 "yield.h = 0 (perfect plasticity): the solution need not be unique and displacements may be \
-                 discontinuous (SPEC §1, Theorem 1); stresses are still determined{}",
+                 discontinuous (theory §1, Theorem 1); stresses are still determined{}",
                 if self.k0 == 0.0 { ", but with k0 = 0 the deviatoric stress vanishes identically" } else { "" }
             ));
         }
@@ -209,7 +209,7 @@ mod tests {
         (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
     }
 
-    /// The hand-checkable case of the SPEC §2 radial return (theory §2). Every expected number
+    /// The hand-checkable case of the theory §2 radial return (theory §2). Every expected number
     /// below is a short decimal worked out by hand from E, ν, k₀, h and the trial strain:
     ///
     /// * E = 100, ν = 1/4: G = E/(2(1+ν)) = 40, so 2G = 80; 3K_b = E/(1−2ν) = 200.
@@ -305,7 +305,7 @@ mod tests {
                 let best = primal(&(n * alpha));
                 let psi = vm.energy(&law, &eps);
                 assert!(close(psi, best, 1e-12), "k0={k0} h={h}: closed form {psi} vs primal {best}");
-                // α is the plastic strain magnitude |p| = (r − k0)₊/(h + 2G) of SPEC §2
+                // α is the plastic strain magnitude |p| = (r − k0)₊/(h + 2G) of theory §2
                 let r = 2.0 * law.shear_modulus() * d.norm();
                 let expected = (r - k0).max(0.0) / (h + 2.0 * law.shear_modulus());
                 assert!((alpha - expected).abs() < 1e-7 * d.norm(), "α = {alpha}, expected {expected}");

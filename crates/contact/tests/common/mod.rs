@@ -1,4 +1,4 @@
-//! The small default-scene setup shared by the tests (SPEC §6 on a coarse box mesh).
+//! The small default-scene setup shared by the tests (theory §6 on a coarse box mesh).
 #![allow(dead_code)]
 
 use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid};
@@ -9,7 +9,7 @@ pub fn mesh() -> TetMesh {
     BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [8, 8, 4]).mesh().unwrap()
 }
 
-/// Clamped everywhere except the bottom face with |x₁|, |x₂| < 0.75 (Γ₂ of SPEC §6).
+/// Clamped everywhere except the bottom face with |x₁|, |x₂| < 0.75 (Γ₂ of theory §6).
 pub fn clamped() -> Dirichlet {
     Dirichlet::clamped(Region::Not(Box::new(Region::All(vec![
         Region::Group("zmin".into()),

@@ -1,11 +1,11 @@
-//! **L** — the discrete Lagrangian (SPEC §1 (1.11), §3):
+//! **L** — the discrete Lagrangian (theory §1 (1.11), §3):
 //! `L(τ̂, (v, V)) = ½[τ̂, τ̂] − (ε(v), τ) + f·V` on P_h × K_h.
 //!
 //! Every solver consumes the discrete problem through this trait, in algebraic terms: stress
 //! points with weights w_T (the volumes |T|), the strain operator ε = B u and its transpose,
 //! the local law of P at each point, the rows of K_h, the load f, and sparse assembly of
 //! `Σ_T w_T B_Tᵀ C_T B_T` on a fixed pattern. From these the provided methods evaluate the
-//! primal energy J (SPEC §3 form 1), the dual energy (form 3) and the KKT residuals (form 2) of
+//! primal energy J (theory §3 form 1), the dual energy (form 3) and the KKT residuals (form 2) of
 //! any iterate — independently of the solver that produced it.
 
 use crate::problem::displacements::ConstraintRows;
@@ -118,7 +118,7 @@ pub struct Iterate<'a> {
     pub lambda: &'a [f64],
 }
 
-/// The KKT residuals of SPEC §3 (form 2), each relative and dimensionless.
+/// The KKT residuals of theory §3 (form 2), each relative and dimensionless.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct KktResiduals {
     /// ‖Bᵀσ(u) − f_u − Gᵀλ‖ / max(‖Bᵀσ(u)‖, ‖Gᵀλ + f_u‖): internal forces against contact
@@ -130,7 +130,7 @@ pub struct KktResiduals {
     /// natural residual; λ_s = max|λ|, g_s the displacement scale.
     pub complementarity: f64,
     /// [σ̂ − P_D(Cε(u), 0)]^{1/2} / [P_D(Cε(u), 0)]^{1/2}: the returned stresses against the
-    /// local law of SPEC §2 in the energy norm.
+    /// local law of theory §2 in the energy norm.
     pub constitutive: f64,
 }
 
@@ -221,7 +221,7 @@ pub trait Lagrangian: Sync {
     fn weights(&self) -> &[f64];
     /// ε_T = (B u)_T at every point.
     fn strain(&self, u: &[f64], eps: &mut [Sym]);
-    /// f = Σ_T w_T B_Tᵀ σ_T: the internal forces of a stress field (Bᵀ of SPEC §3).
+    /// f = Σ_T w_T B_Tᵀ σ_T: the internal forces of a stress field (Bᵀ of theory §3).
     fn divergence(&self, sigma: &[Sym], f: &mut [f64]);
     /// The strain operator B as explicit entries `(point, component, dof, value)`:
     /// ε_T[c] = Σ value · u[dof] (Mandel components), for solvers that need B as a matrix
@@ -307,7 +307,7 @@ pub trait Lagrangian: Sync {
         LocalLaw { plastic, projected }
     }
 
-    /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (SPEC §2).
+    /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (theory §2).
     fn energy_of_strain(&self, eps: &[Sym]) -> f64 {
         let law = *self.elasticity();
         let w = self.weights();
@@ -317,7 +317,7 @@ pub trait Lagrangian: Sync {
         }
     }
 
-    /// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V (SPEC §3 form 1).
+    /// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V (theory §3 form 1).
     fn energy(&self, u: &[f64], extras: &[f64], ws: &mut Workspace) -> f64 {
         self.strain(u, &mut ws.eps);
         self.energy_of_strain(&ws.eps)
@@ -339,14 +339,14 @@ pub trait Lagrangian: Sync {
             .sum()
     }
 
-    /// The dual energy −(½[σ̂, σ̂] + λ·c) (SPEC §3 form 3). For a dual-feasible pair it is a
+    /// The dual energy −(½[σ̂, σ̂] + λ·c) (theory §3 form 3). For a dual-feasible pair it is a
     /// lower bound of J, with equality at the solution: J − dual is the duality gap.
     fn dual_energy(&self, stress: &StressField, lambda: &[f64]) -> f64 {
         let c = &self.constraints().offset;
         -(self.stress_energy(stress) + lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>())
     }
 
-    /// The KKT residuals of an iterate (SPEC §3 form 2), recomputed from scratch: σ(u) by the
+    /// The KKT residuals of an iterate (theory §3 form 2), recomputed from scratch: σ(u) by the
     /// local law, internal forces, gaps.
     fn kkt(&self, it: &Iterate<'_>, ws: &mut Workspace) -> KktResiduals {
         self.strain(it.u, &mut ws.eps);
