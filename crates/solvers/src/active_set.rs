@@ -7,12 +7,14 @@
 //! G_A du + H_A dV = −g_A(u, V)      (the active rows touch after the step)
 //! ```
 //!
-//! Each contact row acts on one displacement dof s (node-to-rigid-obstacle along an axis), so an
-//! active row fixes du_s in terms of dV. The fixed dofs are imposed on the *fixed* sparsity
-//! pattern of L by identity rows and columns (the diagonal kept for scaling), so the symbolic
-//! Cholesky analysis is done once; du depends affinely on dV, `du = du⁰ + W dV`, from one solve
-//! with 1 + n_extras right-hand sides, and dV follows from an n_extras × n_extras system. The
-//! contact forces are the reactions at the fixed dofs.
+//! The system is solved in the coordinates of [`RowBasis`] (theory §8), in which each contact
+//! row acts on one coordinate s of its own (for the axis-aligned punch the coordinates are the
+//! dofs themselves and nothing is transformed), so an active row fixes dy_s in terms of dV. The
+//! fixed coordinates are imposed on the *fixed* sparsity pattern of TᵀKT by identity rows and
+//! columns (the diagonal kept for scaling), so the symbolic Cholesky analysis is done once; dy
+//! depends affinely on dV, `dy = dy⁰ + W dV`, from one solve with 1 + n_extras right-hand sides,
+//! and dV follows from an n_extras × n_extras system. The contact forces are the reactions at
+//! the fixed coordinates, and du = T dy.
 //!
 //! The systems are solved by one of two [`LinearBackend`]s: a sparse Cholesky factorisation of
 //! every tangent (symbolic analysis once), or conjugate gradients preconditioned by a
@@ -21,9 +23,10 @@
 //! relative tolerance the caller sets per step (inexact Newton).
 
 use crate::linear::{self, InSolver, lower, near_null_space};
+use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
 use saddle_core::linalg::{AmgParams, Csr, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
-use saddle_core::{ConstraintRows, Lagrangian, Material, SolveError, SymmetricPattern};
+use saddle_core::{Lagrangian, Material, SolveError, SymmetricPattern};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
 
@@ -88,10 +91,12 @@ pub struct IterativeSolve {
     previous: Vec<f64>,
 }
 
-/// The AMG preconditioner with the active (fixed) dofs split off as a diagonal block:
-/// z_F = M⁻¹ r_F (r zero on the fixed dofs), z_s = r_s / d_s on a fixed dof s.
+/// The AMG preconditioner with the active (fixed) coordinates split off as a diagonal block:
+/// z_F = T⁻¹M⁻¹T⁻ᵀ r_F (r zero on the fixed coordinates; M the multigrid of K, TᵀKT in the
+/// coordinates of the rows), z_s = r_s / d_s on a fixed coordinate s.
 struct FixedDofs<'a> {
     amg: &'a SmoothedAggregation,
+    basis: &'a RowBasis,
     /// The fixed dofs s with their diagonal entries d_s.
     fixed: &'a [(usize, f64)],
     scratch: &'a Mutex<Vec<f64>>,
@@ -104,49 +109,12 @@ impl Preconditioner for FixedDofs<'_> {
         for &(s, _) in self.fixed {
             t[s] = 0.0;
         }
+        self.basis.force_from_coordinates(&mut t);
         self.amg.apply(&t, z);
+        self.basis.displacement_to_coordinates(z);
         for &(s, d) in self.fixed {
             z[s] = r[s] / d;
         }
-    }
-}
-
-/// The slave dof and coefficient of each contact row.
-#[derive(Clone, Debug)]
-pub struct SlaveRows {
-    /// dof s_i of row i.
-    pub dof: Vec<usize>,
-    /// G_{i s_i}.
-    pub coef: Vec<f64>,
-}
-
-impl SlaveRows {
-    /// Checks that each row acts on exactly one dof and no two rows share one.
-    pub fn new(rows: &ConstraintRows, n_dofs: usize, solver: &str) -> Result<Self, SolveError> {
-        let mut taken = vec![false; n_dofs];
-        let mut dof = Vec::with_capacity(rows.n_rows());
-        let mut coef = Vec::with_capacity(rows.n_rows());
-        for i in 0..rows.n_rows() {
-            let (cols, vals) = rows.row(i);
-            let nz: Vec<(usize, f64)> =
-                cols.iter().zip(vals).filter(|(_, v)| **v != 0.0).map(|(c, v)| (*c, *v)).collect();
-            if nz.len() != 1 || taken[nz[0].0] {
-                return Err(SolveError::Unsupported {
-                    solver: solver.into(),
-                    message: format!(
-                        "contact row {i} (node {}) acts on {} displacement dofs{}; this solver needs each row to act on one dof \
-                         of its own (node-to-rigid-obstacle contact along an axis)",
-                        rows.node[i],
-                        nz.len(),
-                        if nz.len() == 1 { " already used by another row" } else { "" }
-                    ),
-                });
-            }
-            taken[nz[0].0] = true;
-            dof.push(nz[0].0);
-            coef.push(nz[0].1);
-        }
-        Ok(Self { dof, coef })
     }
 }
 
@@ -195,7 +163,11 @@ pub struct Step {
 
 /// The linearised problem for one active set, and the solver of its systems.
 pub struct ActiveSetSystem {
-    slaves: SlaveRows,
+    basis: RowBasis,
+    /// The tangent TᵀKT in the rows' coordinates, on the basis's pattern (empty when T = I).
+    kt: Vec<f64>,
+    /// Tᵀ∇E (empty when T = I).
+    grad_t: Vec<f64>,
     /// The solver this system serves, for error messages.
     solver: String,
     transpose: TransposeIndex,
@@ -214,10 +186,10 @@ impl ActiveSetSystem {
     /// The direct backend: the symbolic analysis of L's pattern, once; `solver` names the
     /// solver this system serves in errors.
     pub fn new(l: &dyn Lagrangian, solver: &str) -> Result<Self, SolveError> {
-        let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
+        let basis = RowBasis::new(l.constraints(), l.n_dofs(), l.pattern(), solver)?;
         let mut symbolic_analyses = 0;
-        let chol = linear::analyse(l.pattern(), "tangent stiffness", solver, &mut symbolic_analyses)?;
-        let mut system = Self::with(l, solver, slaves, LinearBackend::Direct(Box::new(chol)));
+        let chol = linear::analyse(basis.pattern(l.pattern()), "tangent stiffness", solver, &mut symbolic_analyses)?;
+        let mut system = Self::with(l, solver, basis, LinearBackend::Direct(Box::new(chol)));
         system.symbolic_analyses = symbolic_analyses;
         Ok(system)
     }
@@ -230,7 +202,7 @@ impl ActiveSetSystem {
         amg: &AmgParams,
         cg_max_iter: usize,
     ) -> Result<Self, SolveError> {
-        let slaves = SlaveRows::new(l.constraints(), l.n_dofs(), solver)?;
+        let basis = RowBasis::new(l.constraints(), l.n_dofs(), l.pattern(), solver)?;
         let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
             solver: solver.into(),
             message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
@@ -242,10 +214,18 @@ impl ActiveSetSystem {
             message: format!("multigrid set-up: {e}"),
         })?;
         let n = l.n_dofs();
+        // the system matrix lives on the pattern of TᵀKT
+        let a = if basis.is_identity() {
+            k
+        } else {
+            let mut kt = vec![0.0; basis.pattern(l.pattern()).nnz()];
+            basis.stiffness(&l.stiffness(Material::Uniform(&c)), &mut kt);
+            Csr::from_symmetric_lower(lower(basis.pattern(l.pattern())), &kt)
+        };
         let iterative = IterativeSolve {
             amg,
             pcg: Pcg::new(n),
-            a: k,
+            a,
             fill: Vec::new(),
             scratch: Mutex::new(vec![0.0; n]),
             col: vec![0.0; n],
@@ -254,17 +234,20 @@ impl ActiveSetSystem {
             unconverged: 0,
             previous: Vec::new(),
         };
-        Ok(Self::with(l, solver, slaves, LinearBackend::Amg(Box::new(iterative))))
+        Ok(Self::with(l, solver, basis, LinearBackend::Amg(Box::new(iterative))))
     }
 
-    /// The system for the rows' `slaves` on `backend`.
-    fn with(l: &dyn Lagrangian, solver: &str, slaves: SlaveRows, backend: LinearBackend) -> Self {
+    /// The system for the rows' coordinates `basis` on `backend`.
+    fn with(l: &dyn Lagrangian, solver: &str, basis: RowBasis, backend: LinearBackend) -> Self {
+        let p = basis.pattern(l.pattern());
         Self {
-            slaves,
             solver: solver.to_string(),
-            transpose: TransposeIndex::new(l.pattern()),
+            transpose: TransposeIndex::new(p),
             backend,
-            work: vec![0.0; l.pattern().nnz()],
+            work: vec![0.0; p.nnz()],
+            kt: if basis.is_identity() { Vec::new() } else { vec![0.0; p.nnz()] },
+            grad_t: if basis.is_identity() { Vec::new() } else { vec![0.0; l.n_dofs()] },
+            basis,
             symbolic_analyses: 0,
             factorisations: 0,
             solves: 0,
@@ -287,15 +270,15 @@ impl ActiveSetSystem {
         }
     }
 
-    /// The slave dofs of the rows.
-    pub fn slaves(&self) -> &SlaveRows {
-        &self.slaves
+    /// The coordinates of the rows (theory §8).
+    pub fn basis(&self) -> &RowBasis {
+        &self.basis
     }
 
     /// The step for active set `active`, tangent `k` (values on L's pattern), internal force
     /// `grad` = ∇E(u) and current gaps `gap`; the iterative backend solves to the relative
     /// residual `cg_tol` (the direct one is exact). The extras' system must be regular: every
-    /// extra with a load needs an active row.
+    /// extra with a load needs an active row. Solved in the rows' coordinates y (module docs).
     pub fn step(
         &mut self,
         l: &dyn Lagrangian,
@@ -305,14 +288,23 @@ impl ActiveSetSystem {
         gap: &[f64],
         cg_tol: f64,
     ) -> Result<Step, SolveError> {
-        let p = l.pattern();
         let rows = l.constraints();
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
+        let basis = &self.basis;
+        let p = basis.pattern(l.pattern());
         let cp = p.col_ptr();
-        // K with the active slave dofs fixed: identity rows and columns, diagonal kept
+        // the tangent TᵀKT and the force Tᵀ∇E in the rows' coordinates (T = I: K and ∇E)
+        let (k, grad): (&[f64], &[f64]) = if basis.is_identity() {
+            (k, grad)
+        } else {
+            basis.stiffness(k, &mut self.kt);
+            basis.force_to_coordinates(grad, &mut self.grad_t);
+            (&self.kt, &self.grad_t)
+        };
+        // TᵀKT with the active coordinates fixed: identity rows and columns, diagonal kept
         self.work.copy_from_slice(k);
         for i in (0..nr).filter(|&i| active[i]) {
-            let s = self.slaves.dof[i];
+            let s = basis.dof[i];
             self.work[cp[s] + 1..cp[s + 1]].iter_mut().for_each(|v| *v = 0.0);
             for &q in &self.transpose.pos[self.transpose.ptr[s]..self.transpose.ptr[s + 1]] {
                 self.work[q] = 0.0;
@@ -322,17 +314,17 @@ impl ActiveSetSystem {
             chol.factorise(&self.work).in_solver(&self.solver)?;
             self.factorisations += 1;
         }
-        // prescribed values δ at the fixed dofs: column 0 for the gaps, column 1 + k for dV_k
+        // prescribed values δ at the fixed coordinates: column 0 for the gaps, 1 + k for dV_k
         let nc = 1 + ne;
         let mut delta = vec![0.0; n * nc];
         for i in (0..nr).filter(|&i| active[i]) {
-            let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
+            let (s, a) = (basis.dof[i], basis.coef[i]);
             delta[s] = -gap[i] / a;
             for (kx, h) in rows.extra_row(i).iter().enumerate() {
                 delta[(1 + kx) * n + s] = -h / a;
             }
         }
-        // right-hand sides: −∇E − K δ (column 0), −K δ (others), then δ·diag at the fixed dofs
+        // right-hand sides: −∇E − K δ (column 0), −K δ (others), then δ·diag at the fixed ones
         let mut x = vec![0.0; n * nc];
         for c in 0..nc {
             let (dcol, xcol) = (&delta[c * n..(c + 1) * n], &mut x[c * n..(c + 1) * n]);
@@ -341,7 +333,7 @@ impl ActiveSetSystem {
                 xcol[j] = -xcol[j] - if c == 0 { grad[j] } else { 0.0 };
             }
             for i in (0..nr).filter(|&i| active[i]) {
-                let s = self.slaves.dof[i];
+                let s = basis.dof[i];
                 xcol[s] = self.work[cp[s]] * dcol[s];
             }
         }
@@ -351,11 +343,9 @@ impl ActiveSetSystem {
                 let IterativeSolve { amg, pcg, a, fill, scratch, col, previous, max_iter, iterations, unconverged } =
                     &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
-                let fixed: Vec<(usize, f64)> = (0..nr)
-                    .filter(|&i| active[i])
-                    .map(|i| (self.slaves.dof[i], self.work[cp[self.slaves.dof[i]]]))
-                    .collect();
-                let pre = FixedDofs { amg, fixed: &fixed, scratch };
+                let fixed: Vec<(usize, f64)> =
+                    (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
+                let pre = FixedDofs { amg, basis, fixed: &fixed, scratch };
                 previous.resize(n * (nc - 1), 0.0);
                 for c in 0..nc {
                     let b = &x[c * n..(c + 1) * n];
@@ -379,14 +369,14 @@ impl ActiveSetSystem {
             }
         }
         self.solves += nc;
-        // reactions at the fixed dofs: λ = (∇E + K du)_s / a, affine in dV
+        // reactions at the fixed coordinates: λ = (Tᵀ∇E + TᵀKT dy)_s / a, affine in dV
         let mut kx = vec![0.0; n];
         let mut lam0 = vec![0.0; nr];
         let mut lam_v = DMatrix::zeros(nr, ne);
         for c in 0..nc {
             p.matvec(k, &x[c * n..(c + 1) * n], &mut kx);
             for i in (0..nr).filter(|&i| active[i]) {
-                let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
+                let (s, a) = (basis.dof[i], basis.coef[i]);
                 if c == 0 {
                     lam0[i] = (grad[s] + kx[s]) / a;
                 } else {
@@ -403,7 +393,8 @@ impl ActiveSetSystem {
             let sol = s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| {
                 SolveError::Unsupported {
                     solver: self.solver.clone(),
-                    message: "an extra unknown with a load has no active contact row (the obstacle does not touch)"
+                    message: "an extra unknown with a load has no active contact row that determines it (the \
+                              obstacle does not touch, or touches where it cannot hold that extra)"
                         .into(),
                 }
             })?;
@@ -415,33 +406,11 @@ impl ActiveSetSystem {
                 *u += d * w;
             }
         }
+        basis.displacement_from_coordinates(&mut du);
         let mut lambda = vec![0.0; nr];
         for i in (0..nr).filter(|&i| active[i]) {
             lambda[i] = lam0[i] + (0..ne).map(|kx| lam_v[(i, kx)] * dv[kx]).sum::<f64>();
         }
         Ok(Step { du, dv, lambda })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rows_on_several_or_shared_dofs_are_refused_with_the_node() {
-        let mut rows = ConstraintRows::new(1);
-        rows.push(&[(3, 1.0)], &[-1.0], 0.0, 10);
-        rows.push(&[(4, 0.6), (5, 0.8)], &[-1.0], 0.0, 11);
-        let e = SlaveRows::new(&rows, 6, "newton").expect_err("two dofs in one row");
-        assert!(e.to_string().contains("row 1 (node 11) acts on 2 displacement dofs"), "{e}");
-        let mut rows = ConstraintRows::new(1);
-        rows.push(&[(3, 1.0)], &[-1.0], 0.0, 10);
-        rows.push(&[(3, 1.0)], &[-1.0], 0.0, 12);
-        let e = SlaveRows::new(&rows, 6, "newton").expect_err("shared dof");
-        assert!(e.to_string().contains("already used by another row"), "{e}");
-        let mut rows = ConstraintRows::new(1);
-        rows.push(&[(3, 2.0)], &[-1.0], 0.0, 10);
-        let s = SlaveRows::new(&rows, 6, "newton").unwrap();
-        assert_eq!((s.dof[0], s.coef[0]), (3, 2.0));
     }
 }

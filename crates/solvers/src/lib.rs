@@ -15,6 +15,7 @@ pub mod linear;
 pub mod newton;
 pub mod penalty;
 mod residual;
+pub mod row_basis;
 #[cfg(feature = "socp")]
 pub mod socp;
 pub mod uzawa;

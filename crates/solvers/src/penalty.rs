@@ -7,7 +7,9 @@
 //! (theory §4.3) in its scaled units. Here μ is a *dimensionless* number that means the same thing in any
 //! units and on any mesh: every term is measured against the elastic stiffness
 //! K_el = Σ_T |T| B_Tᵀ C B_T where it acts. With the rows g(u, V) = G u + H V + c ≥ 0 of K_h
-//! (theory §3), each acting on one displacement dof s_i with coefficient a_i = G_{i s_i},
+//! (theory §3), each acting on one coordinate s_i of its own with coefficient a_i (the
+//! displacement dof itself for the punch; for general rows the coordinates of
+//! [`crate::row_basis::RowBasis`], theory §8, in which the Newton systems below are solved),
 //! maximising L_μ over (v, V) ∈ W_h × R is minimising
 //!
 //! ```text
@@ -101,10 +103,10 @@
 //! the displacement scale), `load_defect` = ‖f + Hᵀχ‖ (|Σχ − F| for the punch; absolute and
 //! relative to ‖f‖), `mu`, and `condition_estimate` (see [`PenaltySystem`]).
 
-use crate::active_set::SlaveRows;
 use crate::linear::{self, InSolver};
 use crate::newton::{ARMIJO, SLOPE_ROUND_OFF};
 use crate::residual;
+use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use saddle_core::error::{ParameterError, check};
@@ -215,7 +217,8 @@ impl Solver for Penalty {
 /// bound of its spectral condition number, which the penalty raises by ~1/μ.
 pub struct PenaltySystem {
     mu: f64,
-    slaves: SlaveRows,
+    /// The rows' coordinates (theory §8): each row acts on one coordinate s_i, a_i = G_{i s_i}.
+    slaves: RowBasis,
     /// k_i = (K_el)_{ss} / (μ a_i²).
     k: Vec<f64>,
     /// k_V,k = Σ_i H_ik² (K_el)_{ss}.
@@ -224,6 +227,9 @@ pub struct PenaltySystem {
     chol: SparseCholesky,
     /// K' = K_t + μK_el on L's pattern.
     kprime: Vec<f64>,
+    /// TᵀK'T in the rows' coordinates, and Tᵀr.
+    kprime_t: Vec<f64>,
+    r_t: Vec<f64>,
     /// K' + D_A, factorised.
     hess: Vec<f64>,
     /// n × (1 + n_extras): [z, P_1, …].
@@ -271,11 +277,10 @@ impl PenaltySystem {
     /// pattern (once).
     pub fn new(l: &dyn Lagrangian, mu: f64) -> Result<Self, SolveError> {
         let rows = l.constraints();
-        let slaves = SlaveRows::new(rows, l.n_dofs(), "penalty")?;
+        let slaves = RowBasis::new(rows, l.n_dofs(), l.pattern(), "penalty")?;
         let c_el = l.elasticity().stiffness_matrix();
         let mut kprime = l.stiffness(Material::Uniform(&c_el));
-        let diag = l.pattern().diagonal(&kprime);
-        let k: Vec<f64> = (0..rows.n_rows()).map(|i| diag[slaves.dof[i]] / (mu * slaves.coef[i].powi(2))).collect();
+        let k: Vec<f64> = slaves.row_stiffness(l.pattern(), &kprime).iter().map(|k| k / mu).collect();
         if let Some(i) = k.iter().position(|k| !k.is_finite()) {
             let why =
                 format!("is too small: the penalty stiffness (elastic stiffness / mu) of contact row {i} overflows");
@@ -301,7 +306,9 @@ impl PenaltySystem {
         let n = l.n_dofs();
         kprime.iter_mut().for_each(|x| *x = 0.0);
         let mut symbolic_analyses = 0;
-        let chol = linear::analyse(l.pattern(), "penalty Hessian", "penalty", &mut symbolic_analyses)?;
+        let pattern = slaves.pattern(l.pattern());
+        let chol = linear::analyse(pattern, "penalty Hessian", "penalty", &mut symbolic_analyses)?;
+        let nnz = pattern.nnz();
         Ok(Self {
             mu,
             slaves,
@@ -309,7 +316,9 @@ impl PenaltySystem {
             k_v,
             c_el,
             chol,
-            hess: vec![0.0; kprime.len()],
+            hess: vec![0.0; nnz],
+            kprime_t: vec![0.0; nnz],
+            r_t: vec![0.0; n],
             kprime,
             cols: vec![0.0; n * (1 + ne)],
             kcols: vec![0.0; n * (1 + ne)],
@@ -381,10 +390,13 @@ impl PenaltySystem {
         at: &Point<'_>,
         d: &mut Direction<'_>,
     ) -> Result<(), SolveError> {
-        let p = l.pattern();
+        let p = self.slaves.pattern(l.pattern());
         let rows = l.constraints();
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let nc = 1 + ne;
+        // K' and r in the rows' coordinates (T = I for rows on dofs of their own)
+        self.slaves.stiffness(&self.kprime, &mut self.kprime_t);
+        self.slaves.force_to_coordinates(at.r, &mut self.r_t);
         // z and P on the active slave dofs; K' times them, plus r in column 0
         self.cols.iter_mut().for_each(|x| *x = 0.0);
         for i in (0..nr).filter(|&i| active[i]) {
@@ -395,14 +407,14 @@ impl PenaltySystem {
             }
         }
         for c in 0..nc {
-            p.matvec(&self.kprime, &self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
+            p.matvec(&self.kprime_t, &self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
         }
-        for (x, ri) in self.kcols[..n].iter_mut().zip(at.r) {
+        for (x, ri) in self.kcols[..n].iter_mut().zip(&self.r_t) {
             *x += ri;
         }
         // A = K' + D_A on the fixed pattern
         let cp = p.col_ptr();
-        self.hess.copy_from_slice(&self.kprime);
+        self.hess.copy_from_slice(&self.kprime_t);
         for i in (0..nr).filter(|&i| active[i]) {
             self.hess[cp[self.slaves.dof[i]]] += self.k[i] * self.slaves.coef[i].powi(2);
         }
@@ -457,6 +469,8 @@ impl PenaltySystem {
                 at.gap[i] + a * d.du[s] + rows.extra_row(i).iter().zip(d.dv.iter()).map(|(h, x)| h * x).sum::<f64>()
             };
         }
+        // du = T dy
+        self.slaves.displacement_from_coordinates(d.du);
         Ok(())
     }
 }

@@ -1,0 +1,483 @@
+//! General contact rows made slave coordinates (theory §8): a change of basis of the displacement
+//! dofs, `x = T y`, in which every contact row acts on one coordinate of its own,
+//! `g_i = a_i y_{s_i} + H_i V + c_i`. Active-set methods (Newton, the penalty's Newton) then
+//! impose an active row by fixing one coordinate, exactly as for the axis-aligned punch, and
+//! stay exact and sparse for rows that act on several dofs (a normal that is not an axis) and
+//! for dofs shared by several rows (two obstacles touching one node).
+//!
+//! The rows are grouped into **blocks**: connected sets of rows and the dofs they act on (two
+//! rows are connected when they share a dof). A block of one row on one dof needs no change of
+//! basis: its coordinate is the dof itself, its coefficient a_i = G_{i s}. That is the punch, and
+//! then T = I and nothing here costs anything. In any other block, with dofs D (d of them) and
+//! rows R (r ≤ d, linearly independent), the new coordinates of D are
+//!
+//! ```text
+//! y_D = T_D⁻¹ x_D,   T_D⁻¹ = [ G_R ]   (the rows themselves, a_i = 1)
+//!                            [ N   ]   (an orthonormal basis of the complement of their span)
+//! ```
+//!
+//! so that y_i = G_i x for the block's rows. In the new coordinates the stiffness is `TᵀKT` and
+//! the gradient `Tᵀ∇E`. T is block diagonal, so `TᵀKT` couples what K couples, widened to whole
+//! blocks: for node-to-obstacle rows (a block is the dofs of one node) the pattern of L is
+//! unchanged. Its pattern and the recipe of its values are built once (symbolic/numeric
+//! split): each step only re-weights K's values.
+//!
+//! Rows that cannot be given coordinates of their own are refused with the rows named: rows
+//! acting on no displacement dof, linearly dependent rows in a block (parallel normals of two
+//! obstacles at one node: the contact forces are then not unique), and blocks of more than
+//! [`MAX_BLOCK_DOFS`] dofs (a row coupling a whole surface; the change of basis would be dense
+//! there).
+
+use saddle_core::{ConstraintRows, SolveError, SymmetricPattern};
+
+/// The largest block (dofs coupled through shared rows) given a dense change of basis. Node-to-
+/// obstacle rows give blocks of at most 3 dofs (one node); a node-to-segment rule a few nodes'
+/// worth. Beyond this the dense d × d blocks of T and of TᵀKT would cost more than they save.
+pub const MAX_BLOCK_DOFS: usize = 48;
+
+/// Relative size below which a row's component outside the span of the block's other rows
+/// counts as zero (linearly dependent rows): far above the round-off of the Gram–Schmidt
+/// sweep (ε_mach ≈ 2e-16 times a few rows), far below any real angle between contact normals
+/// (1e-8 rad).
+pub const DEPENDENCE_TOL: f64 = 1e-8;
+
+/// A block of dofs with a dense change of basis.
+#[derive(Clone, Debug)]
+struct Block {
+    /// Its dofs, sorted; the new coordinates reuse these indices (rows first).
+    dofs: Vec<usize>,
+    /// T_D (x_D = T_D y_D), row-major d × d.
+    t: Vec<f64>,
+    /// T_D⁻¹, row-major d × d.
+    t_inv: Vec<f64>,
+}
+
+/// How each entry of TᵀKT is computed from the entries of K (built once).
+#[derive(Clone, Debug)]
+struct Recipe {
+    /// Position in the new pattern of each entry of K that touches no block (else `usize::MAX`).
+    copy: Vec<usize>,
+    /// Sums for the entries that touch a block: (new entry, entry of K, weight).
+    terms: Vec<(usize, usize, f64)>,
+}
+
+/// The change of basis of theory §8 for a set of contact rows (module docs).
+#[derive(Clone, Debug)]
+pub struct RowBasis {
+    n: usize,
+    /// The coordinate s_i of each row.
+    pub dof: Vec<usize>,
+    /// a_i: g_i = a_i y_{s_i} + H_i V + c_i.
+    pub coef: Vec<f64>,
+    blocks: Vec<Block>,
+    /// Block of each dof (`usize::MAX`: none).
+    block_of: Vec<usize>,
+    /// The pattern of TᵀKT and the recipe of its values (`None`: T = I).
+    transformed: Option<(SymmetricPattern, Recipe)>,
+}
+
+impl RowBasis {
+    /// The change of basis for `rows` on `n` dofs with L's pattern `p`; errors name `solver`
+    /// and the rows it cannot handle.
+    pub fn new(rows: &ConstraintRows, n: usize, p: &SymmetricPattern, solver: &str) -> Result<Self, SolveError> {
+        let unsupported = |message: String| SolveError::Unsupported { solver: solver.into(), message };
+        let nr = rows.n_rows();
+        // rows and dofs connected through shared dofs: union–find over dofs
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn root(parent: &mut [usize], mut x: usize) -> usize {
+            while parent[x] != x {
+                parent[x] = parent[parent[x]];
+                x = parent[x];
+            }
+            x
+        }
+        let nonzero = |i: usize| {
+            let (cols, vals) = rows.row(i);
+            cols.iter().zip(vals).filter(|(_, v)| **v != 0.0).map(|(&c, &v)| (c, v))
+        };
+        let mut rows_on = vec![0usize; n];
+        for i in 0..nr {
+            let mut first = None;
+            for (c, _) in nonzero(i) {
+                rows_on[c] += 1;
+                match first {
+                    None => first = Some(c),
+                    Some(f) => {
+                        let (a, b) = (root(&mut parent, f), root(&mut parent, c));
+                        parent[a] = b;
+                    }
+                }
+            }
+            if first.is_none() {
+                return Err(unsupported(format!(
+                    "contact row {i} (node {}) acts on no displacement dof: a constraint on the extra unknowns alone \
+                     cannot be given a coordinate of its own",
+                    rows.node[i]
+                )));
+            }
+        }
+        let mut dof = vec![usize::MAX; nr];
+        let mut coef = vec![0.0; nr];
+        // trivial blocks: one row on one dof of its own
+        let mut block_rows: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for i in 0..nr {
+            let nz: Vec<(usize, f64)> = nonzero(i).collect();
+            if nz.len() == 1 && rows_on[nz[0].0] == 1 {
+                (dof[i], coef[i]) = nz[0];
+            } else {
+                block_rows.entry(root(&mut parent, nz[0].0)).or_default().push(i);
+            }
+        }
+        let mut block_dofs: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for j in (0..n).filter(|&j| rows_on[j] > 0) {
+            let r = root(&mut parent, j);
+            if block_rows.contains_key(&r) {
+                block_dofs.entry(r).or_default().push(j);
+            }
+        }
+        let mut blocks = Vec::with_capacity(block_rows.len());
+        let mut block_of = vec![usize::MAX; n];
+        for (r, members) in &block_rows {
+            let dofs = &block_dofs[r];
+            let block = Self::block(rows, members, dofs).map_err(unsupported)?;
+            for (k, &i) in members.iter().enumerate() {
+                (dof[i], coef[i]) = (dofs[k], 1.0);
+            }
+            for &j in dofs {
+                block_of[j] = blocks.len();
+            }
+            blocks.push(block);
+        }
+        let mut basis = Self { n, dof, coef, blocks, block_of, transformed: None };
+        if !basis.blocks.is_empty() {
+            basis.transformed = Some(basis.recipe(p));
+        }
+        Ok(basis)
+    }
+
+    /// The change of basis of one block: rows `members` on the sorted `dofs` (module docs).
+    fn block(rows: &ConstraintRows, members: &[usize], dofs: &[usize]) -> Result<Block, String> {
+        let (d, r) = (dofs.len(), members.len());
+        let nodes = || members.iter().map(|&i| rows.node[i]).collect::<Vec<_>>();
+        if d > MAX_BLOCK_DOFS {
+            return Err(format!(
+                "contact rows {members:?} (nodes {:?}) couple {d} displacement dofs through shared dofs, more than \
+                 {MAX_BLOCK_DOFS}: rows acting on whole surfaces are not supported by this solver (uzawa handles them)",
+                nodes()
+            ));
+        }
+        let dependent = || {
+            format!(
+                "contact rows {members:?} (nodes {:?}) are linearly dependent (e.g. two obstacles with parallel normals \
+                 at one node, or more rows than dofs): their contact forces are not unique, and this solver needs \
+                 independent rows; uzawa handles them",
+                nodes()
+            )
+        };
+        if r > d {
+            return Err(dependent());
+        }
+        let local = |j: usize| dofs.binary_search(&j).expect("a row's dof is in its block");
+        // T⁻¹ = [G_R; N]: the rows, then an orthonormal completion (modified Gram–Schmidt with
+        // re-orthogonalisation over an orthonormal basis q of the span so far)
+        let mut t_inv = vec![0.0; d * d];
+        let mut q: Vec<Vec<f64>> = Vec::with_capacity(d);
+        let project_out = |v: &mut [f64], q: &[Vec<f64>]| {
+            for _ in 0..2 {
+                for b in q {
+                    let c: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
+                    v.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
+                }
+            }
+        };
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for (k, &i) in members.iter().enumerate() {
+            let (cols, vals) = rows.row(i);
+            let mut g = vec![0.0; d];
+            for (&c, &v) in cols.iter().zip(vals) {
+                if v != 0.0 {
+                    g[local(c)] += v;
+                }
+            }
+            t_inv[k * d..(k + 1) * d].copy_from_slice(&g);
+            let size = norm(&g);
+            project_out(&mut g, &q);
+            let rest = norm(&g);
+            if rest <= DEPENDENCE_TOL * size {
+                return Err(dependent());
+            }
+            g.iter_mut().for_each(|x| *x /= rest);
+            q.push(g);
+        }
+        // completion: the unit vectors that keep the most outside the span, in turn
+        for k in r..d {
+            let best = (0..d)
+                .map(|e| {
+                    let mut v = vec![0.0; d];
+                    v[e] = 1.0;
+                    project_out(&mut v, &q);
+                    (norm(&v), v)
+                })
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .expect("a block has dofs");
+            let (size, mut v) = best;
+            v.iter_mut().for_each(|x| *x /= size);
+            t_inv[k * d..(k + 1) * d].copy_from_slice(&v);
+            q.push(v);
+        }
+        let m = nalgebra::DMatrix::from_row_slice(d, d, &t_inv);
+        let t =
+            m.try_inverse().ok_or_else(|| format!("the change of basis of contact rows {members:?} is singular"))?;
+        let t: Vec<f64> = (0..d).flat_map(|a| (0..d).map(move |b| (a, b))).map(|(a, b)| t[(a, b)]).collect();
+        Ok(Block { dofs: dofs.to_vec(), t, t_inv })
+    }
+
+    /// The pattern of TᵀKT and the recipe of its values from K's (module docs).
+    fn recipe(&self, p: &SymmetricPattern) -> (SymmetricPattern, Recipe) {
+        let (cp, ri) = (p.col_ptr(), p.row_idx());
+        // x_j = Σ_a T_ja y_a: the coordinates a dof is made of
+        let coords = |j: usize| -> Vec<(usize, f64)> {
+            match self.block_of[j] {
+                usize::MAX => vec![(j, 1.0)],
+                b => {
+                    let blk = &self.blocks[b];
+                    let (d, lj) = (blk.dofs.len(), blk.dofs.binary_search(&j).unwrap());
+                    (0..d).map(|a| (blk.dofs[a], blk.t[lj * d + a])).filter(|(_, w)| *w != 0.0).collect()
+                }
+            }
+        };
+        // (K')_ab += T_ia K_ij T_jb over both triangles of K, kept for a ≥ b
+        let mut touched: Vec<(usize, usize, usize, f64)> = Vec::new(); // (column b, row a, entry, weight)
+        let mut plain: Vec<(usize, usize, usize)> = Vec::new(); // (column, row, entry)
+        for j in 0..p.n() {
+            for (q, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j]) {
+                if self.block_of[i] == usize::MAX && self.block_of[j] == usize::MAX {
+                    plain.push((j, i, q));
+                    continue;
+                }
+                let (ci, cj) = (coords(i), coords(j));
+                let mut put = |x: &[(usize, f64)], y: &[(usize, f64)]| {
+                    for &(a, ta) in x {
+                        for &(b, tb) in y {
+                            if a >= b {
+                                touched.push((b, a, q, ta * tb));
+                            }
+                        }
+                    }
+                };
+                put(&ci, &cj);
+                if i != j {
+                    put(&cj, &ci);
+                }
+            }
+        }
+        // the new pattern: K's entries and the touched ones, by column, rows sorted
+        let mut keys: Vec<(usize, usize)> =
+            plain.iter().map(|&(c, r, _)| (c, r)).chain(touched.iter().map(|&(c, r, _, _)| (c, r))).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let mut col_ptr = vec![0usize; p.n() + 1];
+        for &(c, _) in &keys {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..p.n() {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx: Vec<usize> = keys.iter().map(|&(_, r)| r).collect();
+        let at = |c: usize, r: usize| col_ptr[c] + row_idx[col_ptr[c]..col_ptr[c + 1]].binary_search(&r).unwrap();
+        let mut copy = vec![usize::MAX; p.nnz()];
+        for &(c, r, q) in &plain {
+            copy[q] = at(c, r);
+        }
+        let terms = touched.iter().map(|&(c, r, q, w)| (at(c, r), q, w)).collect();
+        // every column keeps its diagonal first (T's diagonal blocks are regular)
+        let pattern = SymmetricPattern::new(p.n(), col_ptr, row_idx);
+        (pattern, Recipe { copy, terms })
+    }
+
+    /// True when T = I (every row on a dof of its own): nothing is transformed.
+    pub fn is_identity(&self) -> bool {
+        self.transformed.is_none()
+    }
+
+    /// The pattern of TᵀKT: `p` (L's) when T = I.
+    pub fn pattern<'a>(&'a self, p: &'a SymmetricPattern) -> &'a SymmetricPattern {
+        self.transformed.as_ref().map_or(p, |(q, _)| q)
+    }
+
+    /// `out` = TᵀKT on [`RowBasis::pattern`] from K's values `k` on L's pattern.
+    pub fn stiffness(&self, k: &[f64], out: &mut [f64]) {
+        match &self.transformed {
+            None => out.copy_from_slice(k),
+            Some((_, recipe)) => {
+                out.iter_mut().for_each(|x| *x = 0.0);
+                for (q, &at) in recipe.copy.iter().enumerate() {
+                    if at != usize::MAX {
+                        out[at] = k[q];
+                    }
+                }
+                for &(at, q, w) in &recipe.terms {
+                    out[at] += w * k[q];
+                }
+            }
+        }
+    }
+
+    /// `out` = Tᵀ f: a force (gradient) in the new coordinates.
+    pub fn force_to_coordinates(&self, f: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(f);
+        for b in &self.blocks {
+            let d = b.dofs.len();
+            for a in 0..d {
+                out[b.dofs[a]] = (0..d).map(|j| b.t[j * d + a] * f[b.dofs[j]]).sum();
+            }
+        }
+    }
+
+    /// `x` = T y in place: a displacement from the new coordinates.
+    pub fn displacement_from_coordinates(&self, y: &mut [f64]) {
+        self.apply_blocks(y, |b| &b.t);
+    }
+
+    /// `y` = T⁻¹ x in place: a displacement in the new coordinates.
+    pub fn displacement_to_coordinates(&self, x: &mut [f64]) {
+        self.apply_blocks(x, |b| &b.t_inv);
+    }
+
+    /// `r` = T⁻ᵀ r in place: a force from the new coordinates.
+    pub fn force_from_coordinates(&self, r: &mut [f64]) {
+        let mut tmp = [0.0; MAX_BLOCK_DOFS];
+        for b in &self.blocks {
+            let d = b.dofs.len();
+            for (j, t) in tmp[..d].iter_mut().enumerate() {
+                *t = (0..d).map(|a| b.t_inv[a * d + j] * r[b.dofs[a]]).sum();
+            }
+            for (&j, t) in b.dofs.iter().zip(&tmp) {
+                r[j] = *t;
+            }
+        }
+    }
+
+    /// v_D ← M v_D for every block, with M = `m(block)` row-major.
+    fn apply_blocks(&self, v: &mut [f64], m: impl Fn(&Block) -> &Vec<f64>) {
+        debug_assert_eq!(v.len(), self.n);
+        let mut tmp = [0.0; MAX_BLOCK_DOFS];
+        for b in &self.blocks {
+            let (d, m) = (b.dofs.len(), m(b));
+            for (a, t) in tmp[..d].iter_mut().enumerate() {
+                *t = (0..d).map(|j| m[a * d + j] * v[b.dofs[j]]).sum();
+            }
+            for (&j, t) in b.dofs.iter().zip(&tmp) {
+                v[j] = *t;
+            }
+        }
+    }
+
+    /// Each row's stiffness in its own direction, (TᵀKT)_{ss} / a_i², from K's values `k`:
+    /// force per unit of gap.
+    pub fn row_stiffness(&self, p: &SymmetricPattern, k: &[f64]) -> Vec<f64> {
+        let mut kt = vec![0.0; self.pattern(p).nnz()];
+        self.stiffness(k, &mut kt);
+        let diag = self.pattern(p).diagonal(&kt);
+        self.dof.iter().zip(&self.coef).map(|(&s, a)| diag[s] / (a * a)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The full 6 × 6 pattern (two nodes of three dofs, every entry coupled).
+    fn full(n: usize) -> SymmetricPattern {
+        let mut col_ptr = vec![0];
+        let mut row_idx = vec![];
+        for j in 0..n {
+            row_idx.extend(j..n);
+            col_ptr.push(row_idx.len());
+        }
+        SymmetricPattern::new(n, col_ptr, row_idx)
+    }
+
+    /// A symmetric positive definite matrix as dense and as lower values on `full(n)`.
+    fn spd(n: usize) -> (nalgebra::DMatrix<f64>, Vec<f64>) {
+        let b = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+            ((i * 7 + j * 3) % 5) as f64 - 1.5 + if i == j { 4.0 } else { 0.0 }
+        });
+        let k = &b * b.transpose();
+        let vals = (0..n).flat_map(|j| (j..n).map(move |i| (i, j))).map(|(i, j)| k[(i, j)]).collect();
+        (k, vals)
+    }
+
+    #[test]
+    fn rows_become_coordinates_and_the_stiffness_transforms_like_t_transpose_k_t() {
+        // dof 0..3 one node, 3..6 another; row 0: a unit normal (0.6, 0, 0.8) on node 0; row 1 on
+        // node 0 too (shares dofs): (0, 1, 0.5); row 2: the punch row on dof 5 alone
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(0, 0.6), (2, 0.8)], &[-1.0], 0.1, 0);
+        rows.push(&[(1, 1.0), (2, 0.5)], &[0.0], 0.2, 0);
+        rows.push(&[(5, 2.0)], &[-1.0], 0.3, 1);
+        let p = full(6);
+        let basis = RowBasis::new(&rows, 6, &p, "newton").unwrap();
+        assert!(!basis.is_identity());
+        assert_eq!((basis.dof[2], basis.coef[2]), (5, 2.0));
+        // row values are coordinates: G_i x = a_i y_{s_i} for a random x
+        let x: Vec<f64> = (0..6).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut y = x.clone();
+        basis.displacement_to_coordinates(&mut y);
+        let mut g = vec![0.0; 3];
+        rows.gap(&x, &[0.0], &mut g);
+        for i in 0..3 {
+            let gx = g[i] - rows.offset[i];
+            assert!((gx - basis.coef[i] * y[basis.dof[i]]).abs() < 1e-14, "row {i}: {gx} vs {}", y[basis.dof[i]]);
+        }
+        let mut back = y.clone();
+        basis.displacement_from_coordinates(&mut back);
+        assert!(back.iter().zip(&x).all(|(a, b)| (a - b).abs() < 1e-14));
+        // TᵀKT against dense algebra: yᵀ(TᵀKT)y = xᵀKx with x = Ty
+        let (k, vals) = spd(6);
+        let mut kt = vec![0.0; basis.pattern(&p).nnz()];
+        basis.stiffness(&vals, &mut kt);
+        let mut kty = vec![0.0; 6];
+        basis.pattern(&p).matvec(&kt, &y, &mut kty);
+        let kx = &k * nalgebra::DVector::from_column_slice(&x);
+        // Tᵀ(Kx) = (TᵀKT)y
+        let mut tkx = vec![0.0; 6];
+        basis.force_to_coordinates(kx.as_slice(), &mut tkx);
+        for j in 0..6 {
+            assert!((tkx[j] - kty[j]).abs() < 1e-12 * kx.amax(), "{j}: {} vs {}", tkx[j], kty[j]);
+        }
+        // T⁻ᵀ undoes Tᵀ
+        basis.force_from_coordinates(&mut tkx);
+        assert!(tkx.iter().zip(kx.iter()).all(|(a, b)| (a - b).abs() < 1e-12 * kx.amax()));
+    }
+
+    #[test]
+    fn punch_rows_need_no_change_of_basis() {
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(2, 1.0)], &[-1.0], 0.0, 0);
+        rows.push(&[(5, 1.0)], &[-1.0], 0.0, 1);
+        let p = full(6);
+        let basis = RowBasis::new(&rows, 6, &p, "newton").unwrap();
+        assert!(basis.is_identity());
+        assert_eq!(basis.dof, vec![2, 5]);
+    }
+
+    #[test]
+    fn dependent_rows_and_rows_without_dofs_are_refused_with_the_rows() {
+        let p = full(6);
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(2, 1.0)], &[-1.0], 0.0, 7);
+        rows.push(&[(2, 1.0)], &[-2.0], 0.0, 7);
+        let e = RowBasis::new(&rows, 6, &p, "newton").unwrap_err().to_string();
+        assert!(e.contains("rows [0, 1] (nodes [7, 7]) are linearly dependent"), "{e}");
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[(0, 0.6), (2, 0.8)], &[-1.0], 0.0, 3);
+        rows.push(&[(0, 1.2), (2, 1.6)], &[0.0], 0.0, 3);
+        let e = RowBasis::new(&rows, 6, &p, "penalty").unwrap_err().to_string();
+        assert!(e.contains("linearly dependent") && e.contains("penalty"), "{e}");
+        let mut rows = ConstraintRows::new(1);
+        rows.push(&[], &[-1.0], 0.0, 4);
+        let e = RowBasis::new(&rows, 6, &p, "newton").unwrap_err().to_string();
+        assert!(e.contains("row 0 (node 4) acts on no displacement dof"), "{e}");
+    }
+}
