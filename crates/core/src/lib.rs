@@ -41,6 +41,7 @@ pub use mesh::region::Region;
 pub use mesh::{MeshQuality, MeshSource, TetMesh};
 pub use problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
 pub use problem::elasticity::Elasticity;
+pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};
 pub use problem::lagrangian::{Iterate, KktResiduals, Lagrangian, Material, RigidBodyModes, StressField, Workspace};
 pub use problem::pattern::SymmetricPattern;
 pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
