@@ -29,8 +29,8 @@ use crate::scene::Scene;
 use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid, RigidPunch};
 use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{
-    AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, Obstacles, P1P0Lagrangian, Region, SceneError,
-    Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
+    AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, Obstacles, P1P0Lagrangian, Region,
+    SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
 };
 use saddle_yield::VonMises;
 use std::path::PathBuf;

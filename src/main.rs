@@ -166,7 +166,10 @@ fn print_summary(s: &Summary) {
     // each obstacle's own quantities by name: the summary assumes no particular obstacle
     for o in &s.obstacles {
         let label = o.name.as_ref().map_or_else(|| "obstacle".to_string(), |n| format!("obstacle {n}"));
-        rows.push((label.clone(), format!("{} ({} contact nodes, radius {:.4})", o.type_name, o.contact_nodes, o.contact_radius)));
+        rows.push((
+            label.clone(),
+            format!("{} ({} contact nodes, radius {:.4})", o.type_name, o.contact_nodes, o.contact_radius),
+        ));
         let prefix = o.name.as_ref().map_or_else(String::new, |n| format!("{n}."));
         for (q, v) in &o.quantities {
             rows.push((format!("  {prefix}{q}"), format!("{v:.6e}")));

@@ -13,7 +13,9 @@
 use super::transfer::{l2_distance, strains};
 use crate::conformance::agreement;
 use crate::output::single_quantity;
-use saddle_core::{Discretisation, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace};
+use saddle_core::{
+    Discretisation, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace,
+};
 use saddle_solvers::{Newton, Penalty, Start, Uzawa};
 use std::time::Instant;
 
