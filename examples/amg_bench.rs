@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = args.get(1).map_or("examples/johnson.toml", |s| s.as_str());
     let mut scene = Scene::from_file(path.as_ref())?;
     scene.yield_surface = None;
-    scene.obstacle = None;
+    scene.obstacle = saddle::core::Obstacles::none();
     scene.solver = None;
     if let Some(cells) = args.get(2).filter(|s| *s != "-") {
         let cells: Vec<usize> = cells.split(',').map(|c| c.trim().parse::<usize>()).collect::<Result<_, _>>()?;

@@ -17,7 +17,7 @@
 use crate::report::{ReportError, SceneSource};
 use saddle_core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
 use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
-use saddle_core::{Lagrangian, Load, Material, P1P0Lagrangian, Silent, Solver, Workspace};
+use saddle_core::{Lagrangian, Load, Material, Obstacles, P1P0Lagrangian, Silent, Solver, Workspace};
 use saddle_solvers::{LinearSolver, Newton};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -324,7 +324,7 @@ fn bench_error(e: impl std::fmt::Display) -> ReportError {
 fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<P1P0Lagrangian, ReportError> {
     let mut scene = source.scene(Some(cells))?;
     scene.yield_surface = None;
-    scene.obstacle = None;
+    scene.obstacle = Obstacles::none();
     scene.solver = None;
     scene.load = vec![Load::BodyForce { b: [0.0, 0.0, -1e-3] }];
     Ok(scene.into_problem()?.0)

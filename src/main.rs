@@ -161,22 +161,31 @@ impl Progress for RunsBar {
 }
 
 fn print_summary(s: &Summary) {
-    let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.6e}"));
-    let rows = [
-        ("solver", s.solver.clone()),
-        ("converged", format!("{} ({:?})", s.converged, s.stop_reason)),
-        ("U", opt(s.U)),
-        ("contact force", opt(s.force)),
-        ("contact nodes", format!("{} of {}", s.contact_nodes, s.contact_rows)),
-        ("contact radius", format!("{:.4}", s.contact_radius)),
-        ("plastic elements", format!("{} of {}", s.plastic_elements, s.elements)),
-        ("max von Mises stress", format!("{:.6}", s.max_von_mises)),
-        ("J", format!("{:.10e}", s.J)),
-        ("KKT residual", format!("{:.2e} (tolerance {:.0e})", s.kkt_residual, s.tolerance)),
-        ("iterations", s.iterations.to_string()),
-        ("wall time", format!("{:.2} s", s.wall_s)),
-        ("dofs / elements", format!("{} / {}", s.dofs, s.elements)),
-    ];
+    let mut rows = vec![("solver".to_string(), s.solver.clone())];
+    rows.push(("converged".into(), format!("{} ({:?})", s.converged, s.stop_reason)));
+    // each obstacle's own quantities by name: the summary assumes no particular obstacle
+    for o in &s.obstacles {
+        let label = o.name.as_ref().map_or_else(|| "obstacle".to_string(), |n| format!("obstacle {n}"));
+        rows.push((
+            label.clone(),
+            format!("{} ({} contact nodes, radius {:.4})", o.type_name, o.contact_nodes, o.contact_radius),
+        ));
+        let prefix = o.name.as_ref().map_or_else(String::new, |n| format!("{n}."));
+        for (q, v) in &o.quantities {
+            rows.push((format!("  {prefix}{q}"), format!("{v:.6e}")));
+        }
+    }
+    rows.extend([
+        ("contact nodes".into(), format!("{} of {}", s.contact_nodes, s.contact_rows)),
+        ("contact radius".into(), format!("{:.4}", s.contact_radius)),
+        ("plastic elements".into(), format!("{} of {}", s.plastic_elements, s.elements)),
+        ("max von Mises stress".into(), format!("{:.6}", s.max_von_mises)),
+        ("J".into(), format!("{:.10e}", s.J)),
+        ("KKT residual".into(), format!("{:.2e} (tolerance {:.0e})", s.kkt_residual, s.tolerance)),
+        ("iterations".into(), s.iterations.to_string()),
+        ("wall time".into(), format!("{:.2} s", s.wall_s)),
+        ("dofs / elements".into(), format!("{} / {}", s.dofs, s.elements)),
+    ]);
     for (k, v) in rows {
         println!("  {k:<22} {v}");
     }

@@ -1,8 +1,13 @@
 //! Output of a solve: `summary.json` (the numbers scripts read) and `solution.vtu` (fields for
 //! ParaView: u, σ, von Mises stress, ξ, plastic flag, contact force).
+//!
+//! The summary knows no particular obstacle: every obstacle reports its own quantities by name
+//! ([`saddle_core::ObstacleReport`]), listed under `obstacles`; the extra unknowns are listed by
+//! name under `extras`. The older keys `U`, `force`, `contact_nodes`, `contact_radius` and
+//! `contact` are filled from the obstacle's report when the scene has exactly one.
 
 use saddle_core::problem::tensor::{to_vtk, von_mises};
-use saddle_core::{Discretisation, KktResiduals, MeshQuality, Solution, StopReason, Workspace};
+use saddle_core::{Discretisation, KktResiduals, MeshQuality, ObstacleReport, Solution, StopReason, Workspace};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -25,13 +30,15 @@ pub struct Summary {
     pub iterations: usize,
     /// Wall time of the solve in seconds (set-up of the problem excluded).
     pub wall_s: f64,
-    /// The punch's displacement U (null without obstacle).
+    /// The quantity `U` of the obstacle's report (null without obstacle, with several
+    /// obstacles, or when the obstacle reports no `U`; see `obstacles`).
     pub U: Option<f64>,
-    /// Total contact force Σλ (null without obstacle).
+    /// The quantity `force` of the obstacle's report (null as `U`).
     pub force: Option<f64>,
-    /// Number of contact nodes.
+    /// Number of contact nodes (the total over the obstacles).
     pub contact_nodes: usize,
-    /// Largest distance of a contact node from the punch centre.
+    /// Largest distance of a contact node from its obstacle's centre (the largest over the
+    /// obstacles).
     pub contact_radius: f64,
     /// Number of plastic elements.
     pub plastic_elements: usize,
@@ -55,8 +62,13 @@ pub struct Summary {
     pub nodes: usize,
     /// Rows of K_h (candidate contact nodes).
     pub contact_rows: usize,
-    /// Everything the obstacle reports (U, force, peak and mean contact pressure, ...).
+    /// Everything the obstacle reports (U, force, peak and mean contact pressure, ...); with
+    /// several obstacles every quantity as `name.quantity`.
     pub contact: BTreeMap<String, f64>,
+    /// The extra unknowns V by name (`U`; with several obstacles `left.U`, ...).
+    pub extras: BTreeMap<String, f64>,
+    /// One entry per obstacle, in the scene's order.
+    pub obstacles: Vec<ObstacleSummary>,
     /// Element shape statistics (aspect ratio: 1 for a regular tetrahedron).
     pub mesh_quality: MeshQuality,
     /// Wall time per solver phase.
@@ -69,14 +81,77 @@ pub struct Summary {
     pub warnings: Vec<String>,
 }
 
+/// What one obstacle reports, as written in `summary.json`: its name, type, contact set, and
+/// every quantity of its report as its own key (`force`, `U`, ...).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObstacleSummary {
+    /// The obstacle's name (null for a single unnamed obstacle).
+    pub name: Option<String>,
+    /// The plugin's `type`.
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// Number of its contact nodes.
+    pub contact_nodes: usize,
+    /// Largest distance of its contact nodes from its centre.
+    pub contact_radius: f64,
+    /// Its quantities by name (a quantity named like one of the keys above is left out here
+    /// and kept in `contact`).
+    #[serde(flatten)]
+    pub quantities: BTreeMap<String, f64>,
+}
+
+impl ObstacleSummary {
+    /// The summary of one report.
+    pub fn new(r: &ObstacleReport) -> Self {
+        let fixed = ["name", "type", "contact_nodes", "contact_radius"];
+        Self {
+            name: r.name.clone(),
+            type_name: r.type_name.clone(),
+            contact_nodes: r.report.contact_nodes,
+            contact_radius: r.report.contact_radius,
+            quantities: r.report.quantities.iter().filter(|(k, _)| !fixed.contains(&k.as_str())).cloned().collect(),
+        }
+    }
+
+    /// The quantity `name`, if reported.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.quantities.get(name).copied()
+    }
+}
+
+/// The quantity `quantity` of the only obstacle's report (None without obstacle, with several,
+/// or when it reports no such quantity): how scenes with one punch read its `U`.
+pub fn single_quantity(l: &dyn Discretisation, sol: &Solution, quantity: &str) -> Option<f64> {
+    match l.contact_reports(&sol.extras, &sol.lambda).as_slice() {
+        [r] => r.report.get(quantity),
+        _ => None,
+    }
+}
+
 impl Summary {
     /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch.
     pub fn new(l: &dyn Discretisation, sol: &Solution, title: Option<String>) -> Self {
         let mut ws = Workspace::new(l);
         let kkt = l.kkt(&sol.iterate(), &mut ws);
         let j = l.energy(&sol.u, &sol.extras, &mut ws);
-        // the obstacle reports from its own rows, extras and multipliers
-        let contact = l.obstacle().map(|k| k.report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda));
+        // each obstacle reports from its own rows, extras and multipliers
+        let reports = l.contact_reports(&sol.extras, &sol.lambda);
+        let single = match reports.as_slice() {
+            [r] => Some(&r.report),
+            _ => None,
+        };
+        let contact: BTreeMap<String, f64> = match single {
+            Some(r) => r.quantities.iter().cloned().collect(),
+            None => reports
+                .iter()
+                .enumerate()
+                .flat_map(|(i, r)| {
+                    let name = r.name.clone().unwrap_or_else(|| l.obstacles().path("obstacle", i));
+                    r.report.quantities.iter().map(move |(q, v)| (format!("{name}.{q}"), *v))
+                })
+                .collect(),
+        };
+        let extras = l.extra_names().into_iter().zip(sol.extras.iter().copied()).collect();
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
         let mesh_quality = l.mesh().quality();
@@ -87,8 +162,11 @@ impl Summary {
                 mesh_quality.max_aspect_ratio, mesh_quality.worst_element
             ));
         }
-        if let Some(c) = &contact {
-            warnings.extend(c.warnings.iter().cloned());
+        for (i, r) in reports.iter().enumerate() {
+            let path = l.obstacles().path("obstacle", i);
+            warnings.extend(r.report.warnings.iter().map(|w| {
+                if reports.len() > 1 && !w.contains(&format!("{path}.")) { format!("{path}: {w}") } else { w.clone() }
+            }));
         }
         Self {
             title,
@@ -97,10 +175,10 @@ impl Summary {
             stop_reason: sol.report.stop_reason,
             iterations: sol.report.iterations,
             wall_s: sol.report.wall_s(),
-            U: contact.as_ref().and_then(|c| c.get("U")),
-            force: contact.as_ref().and_then(|c| c.get("force")),
-            contact_nodes: contact.as_ref().map_or(0, |c| c.contact_nodes),
-            contact_radius: contact.as_ref().map_or(0.0, |c| c.contact_radius),
+            U: single.and_then(|c| c.get("U")),
+            force: single.and_then(|c| c.get("force")),
+            contact_nodes: reports.iter().map(|r| r.report.contact_nodes).sum(),
+            contact_radius: reports.iter().map(|r| r.report.contact_radius).fold(0.0, f64::max),
             plastic_elements: sol.stress.n_plastic(),
             max_von_mises: sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max),
             J: j,
@@ -112,7 +190,9 @@ impl Summary {
             elements: l.n_points(),
             nodes: l.mesh().n_nodes(),
             contact_rows: l.constraints().n_rows(),
-            contact: contact.as_ref().map_or_else(BTreeMap::new, |c| c.quantities.iter().cloned().collect()),
+            contact,
+            extras,
+            obstacles: reports.iter().map(ObstacleSummary::new).collect(),
             mesh_quality,
             phases: sol.report.phases.iter().cloned().collect(),
             counters: sol.report.counters.clone(),

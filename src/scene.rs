@@ -30,11 +30,30 @@
 //! [solver]                     # optional
 //! type = "uzawa"
 //! ```
+//!
+//! Several obstacles (K = K₁ ∩ K₂ ∩ …, theory §8) are an array of tables, each with a unique
+//! `name`; their extras are named `name.U`, … and their errors `obstacle[i].…`. A single
+//! `[obstacle]` table may carry a `name` too. The `name` is read before the plugin reads the rest
+//! of its table ([`saddle_core::Obstacles`]).
+//!
+//! ```toml
+//! [[obstacle]]
+//! name = "left"
+//! type = "rigid_punch"
+//! F = 0.1
+//! zone = { all = [ { group = "zmin" }, { disc = { center = [-0.5, 0.0], radius = 0.3 } } ] }
+//! gap = { type = "paraboloid", R = 5.0, center = [-0.5, 0.0] }
+//! [[obstacle]]
+//! name = "right"
+//! type = "rigid_punch_displacement"
+//! U = 0.001
+//! zone = { all = [ { group = "zmin" }, { disc = { center = [0.5, 0.0], radius = 0.3 } } ] }
+//! gap = { type = "paraboloid", R = 5.0, center = [0.5, 0.0] }
+//! ```
 
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleDisplacements, AdmissibleStresses, Dirichlet, Elasticity, Load, MeshSource, P1P0Lagrangian, SceneError,
-    Solver,
+    AdmissibleStresses, Dirichlet, Elasticity, Load, MeshSource, Obstacles, P1P0Lagrangian, SceneError, Solver,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -61,9 +80,10 @@ pub struct Scene {
     /// Tractions and body forces (`[[load]]`).
     #[serde(default)]
     pub load: Vec<Load>,
-    /// K; absent for no contact.
+    /// K: absent for no contact, one `[obstacle]` table, or several named `[[obstacle]]` tables
+    /// (K = K₁ ∩ K₂ ∩ …, theory §8).
     #[serde(default)]
-    pub obstacle: Option<Box<dyn AdmissibleDisplacements>>,
+    pub obstacle: Obstacles,
     /// The solver; the command line supplies a default when absent.
     #[serde(default)]
     pub solver: Option<Box<dyn Solver>>,
@@ -122,9 +142,7 @@ impl Scene {
         for (i, l) in self.load.iter().enumerate() {
             l.validate(&format!("load[{i}]"))?;
         }
-        if let Some(k) = &self.obstacle {
-            k.validate("obstacle")?;
-        }
+        self.obstacle.validate("obstacle")?;
         if let Some(s) = &self.solver {
             s.validate("solver")?;
         }

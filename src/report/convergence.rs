@@ -164,7 +164,7 @@ pub struct LevelResult {
     pub iterations: usize,
     /// The recomputed relative KKT residual.
     pub kkt: f64,
-    /// U (NaN without extras).
+    /// U as the single obstacle reports it (NaN without such a quantity).
     pub u: f64,
     /// |U − U_finest| / |U_finest|.
     pub err_u: f64,

@@ -304,7 +304,8 @@ pub fn convergence_study(
         *counter += 1;
         Ok((l, timed))
     };
-    let u_of = |s: &Solution| s.extras.first().copied().unwrap_or(f64::NAN);
+    // U as the single obstacle reports it, by name
+    let u_of = |l: &P1P0Lagrangian, s: &Solution| crate::output::single_quantity(l, s, "U").unwrap_or(f64::NAN);
     let level_result = |l: &P1P0Lagrangian, cells: [usize; 3], timed: &Timed| {
         let (status, converged, iterations, kkt, u) = match &timed.result {
             Ok(s) => (
@@ -312,7 +313,7 @@ pub fn convergence_study(
                 s.report.converged,
                 s.report.iterations,
                 l.kkt(&s.iterate(), &mut Workspace::new(l)).max(),
-                u_of(s),
+                u_of(l, s),
             ),
             Err(e) => (format!("error: {e}"), false, 0, f64::NAN, f64::NAN),
         };
@@ -344,7 +345,7 @@ pub fn convergence_study(
     finest_result.err_stress = 0.0;
     finest_result.err_strain = 0.0;
     let fine_strain = transfer::strains(&fl, &fsol.u);
-    let u_f = u_of(&fsol);
+    let u_f = u_of(&fl, &fsol);
     let mut results = vec![finest_result];
     // the next finer level that was solved, for the consecutive differences
     let mut finer: Option<Solved> = None;

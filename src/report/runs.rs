@@ -12,7 +12,10 @@
 
 use super::transfer::{l2_distance, strains};
 use crate::conformance::agreement;
-use saddle_core::{Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace};
+use crate::output::single_quantity;
+use saddle_core::{
+    Discretisation, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace,
+};
 use saddle_solvers::{Newton, Penalty, Start, Uzawa};
 use std::time::Instant;
 
@@ -175,7 +178,8 @@ pub struct RunRecord {
     pub wall_s: f64,
     /// The solver's own time: the sum of its reported phases, seconds (NaN after an error).
     pub solver_s: f64,
-    /// U (NaN without a solution or extras).
+    /// U as the scene's single obstacle reports it, by name (NaN without a solution, without
+    /// or with several obstacles, or when the obstacle reports no `U`).
     pub u: f64,
     /// Errors against the reference (None after an error).
     pub errors: Option<Errors>,
@@ -226,7 +230,7 @@ pub fn timed_polish(newton: &Newton, l: &dyn Lagrangian, start: &Solution, monit
 }
 
 /// The record of a run: its status, time, errors against `reference` and recomputed KKT residual.
-pub fn record(l: &dyn Lagrangian, rung: &Rung, timed: &Timed, reference: &Solution) -> RunRecord {
+pub fn record(l: &dyn Discretisation, rung: &Rung, timed: &Timed, reference: &Solution) -> RunRecord {
     let mut rec = RunRecord {
         solver: rung.solver.to_string(),
         setting: rung.setting.clone(),
@@ -248,7 +252,7 @@ pub fn record(l: &dyn Lagrangian, rung: &Rung, timed: &Timed, reference: &Soluti
             rec.status = status_of(sol.report.stop_reason).to_string();
             rec.iterations = sol.report.iterations;
             rec.solver_s = sol.report.wall_s();
-            rec.u = sol.extras.first().copied().unwrap_or(f64::NAN);
+            rec.u = single_quantity(l, sol, "U").unwrap_or(f64::NAN);
             rec.errors = Some(errors(l, sol, reference));
             rec.kkt = l.kkt(&sol.iterate(), &mut Workspace::new(l)).max();
             rec.note = sol.report.warnings.join("; ");

@@ -14,7 +14,7 @@
 //! | [`error`] | parameter and scene errors that name the field and value | — |
 //! | [`linalg`] | sparse Cholesky, CSR, conjugate gradients, smoothed-aggregation multigrid: matrices and vectors only | `error` |
 //! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
-//! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`], **L** [`Lagrangian`], the [`Solver`] interface | `error`, `mesh` |
+//! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), **L** [`Lagrangian`], the [`Solver`] interface | `error`, `mesh` |
 //! | [`fem`] | discretisations of L: [`P1P0Lagrangian`]; loads as nodal forces | `error`, `mesh`, `problem` |
 //!
 //! Linear algebra knows no mesh and no mechanics (the multigrid takes its near-nullspace as
@@ -42,6 +42,7 @@ pub use mesh::{MeshQuality, MeshSource, TetMesh};
 pub use problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
 pub use problem::elasticity::Elasticity;
 pub use problem::lagrangian::{Iterate, KktResiduals, Lagrangian, Material, RigidBodyModes, StressField, Workspace};
+pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};
 pub use problem::pattern::SymmetricPattern;
 pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
 pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};

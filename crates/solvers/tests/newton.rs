@@ -102,7 +102,7 @@ fn elastic_problems_need_no_line_search() {
         &[Dirichlet::clamped(Region::Group("zmax".into()))],
         Elasticity::new(100.0, 0.3).unwrap(),
         None,
-        Some(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
+        saddle_core::Obstacles::one(Box::new(RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))))),
     )
     .unwrap();
     let sol = Newton::default().solve(&l, &mut Silent).unwrap();

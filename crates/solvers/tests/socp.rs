@@ -247,7 +247,11 @@ fn a_yield_surface_without_cones_is_unsupported() {
         &[Dirichlet::clamped(Region::Group("zmax".into()))],
         Elasticity::new(100.0, 0.3).unwrap(),
         Some(Box::new(NoCone(VonMises::new(1.0, 5.0)))),
-        Some(Box::new(RigidPunch::new(1.0, Region::Group("zmin".into()), Box::new(Flat::default())))),
+        saddle_core::Obstacles::one(Box::new(RigidPunch::new(
+            1.0,
+            Region::Group("zmin".into()),
+            Box::new(Flat::default()),
+        ))),
     )
     .unwrap();
     match Socp::default().solve(&l, &mut Silent) {

@@ -15,6 +15,7 @@ use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows};
 use crate::problem::elasticity::Elasticity;
 use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
+use crate::problem::obstacles::{DiscreteObstacles, ObstacleReport, Obstacles};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
 use crate::problem::tensor::{SQRT2, Sym};
@@ -28,9 +29,8 @@ pub struct P1P0Lagrangian {
     dofs: DofMap,
     law: Elasticity,
     stresses: Option<Box<dyn AdmissibleStresses>>,
-    obstacle: Option<Box<dyn AdmissibleDisplacements>>,
-    rows: ConstraintRows,
-    load: Vec<f64>,
+    /// K = K₁ ∩ K₂ ∩ …: the concatenated rows and load, each obstacle's own part.
+    obstacles: DiscreteObstacles,
     /// Consistent nodal forces of tractions and body forces (empty: none).
     nodal_load: Vec<f64>,
     /// |T|.
@@ -47,17 +47,19 @@ pub struct P1P0Lagrangian {
 }
 
 impl P1P0Lagrangian {
-    /// Assembles L from a mesh, Dirichlet conditions, elasticity, P (`None`: elastic) and K
-    /// (`None`: no contact). The parameters are taken as valid: a scene validates every plugin
+    /// Assembles L from a mesh, Dirichlet conditions, elasticity, P (`None`: elastic) and K:
+    /// [`Obstacles`], or anything that converts into it — `None` (no contact), one boxed
+    /// obstacle, `Some(obstacle)`. The parameters are taken as valid: a scene validates every plugin
     /// once, when it is read; a problem composed in Rust calls each plugin's `validate` (or
-    /// builds it with a constructor that checks). K's rows are discretised here, and errors name
-    /// the scene's paths (`obstacle.zone`).
+    /// builds it with a constructor that checks). K's rows are discretised here, every
+    /// obstacle's concatenated (theory §8), and errors name the scene's paths (`obstacle.zone`,
+    /// `obstacle[1].zone`).
     pub fn new(
         mesh: TetMesh,
         dirichlet: &[Dirichlet],
         law: Elasticity,
         stresses: Option<Box<dyn AdmissibleStresses>>,
-        obstacle: Option<Box<dyn AdmissibleDisplacements>>,
+        obstacles: impl Into<Obstacles>,
     ) -> Result<Self, SceneError> {
         if let Some(p) = &stresses {
             assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
@@ -68,18 +70,13 @@ impl P1P0Lagrangian {
         let (adj_ptr, adj) = node_element_adjacency(&mesh);
         let (dof_node, dof_comp) = dofs.owners();
         let pattern = stiffness_pattern(&mesh, &dofs, &adj_ptr, &adj);
-        let (rows, load) = match &obstacle {
-            Some(k) => (k.discretise(&mesh, &dofs, "obstacle")?, k.load()),
-            None => (ConstraintRows::new(0), vec![]),
-        };
+        let obstacles = obstacles.into().discretise(&mesh, &dofs, crate::problem::obstacles::OBSTACLE_PATH)?;
         Ok(Self {
             mesh,
             dofs,
             law,
             stresses,
-            obstacle,
-            rows,
-            load,
+            obstacles,
             nodal_load: Vec::new(),
             weights,
             grads,
@@ -108,9 +105,19 @@ impl P1P0Lagrangian {
         &self.dofs
     }
 
-    /// K, if the problem has contact.
+    /// The only obstacle when there is exactly one (None without obstacle and with several).
     pub fn obstacle(&self) -> Option<&dyn AdmissibleDisplacements> {
-        self.obstacle.as_deref()
+        self.obstacles.obstacles().only()
+    }
+
+    /// K = K₁ ∩ K₂ ∩ …: none, one or several obstacles.
+    pub fn obstacles(&self) -> &Obstacles {
+        self.obstacles.obstacles()
+    }
+
+    /// The obstacles discretised: concatenated rows and load, each obstacle's own rows and ranges.
+    pub fn discrete_obstacles(&self) -> &DiscreteObstacles {
+        &self.obstacles
     }
 
     /// Nodal displacements (fixed components zero).
@@ -121,7 +128,7 @@ impl P1P0Lagrangian {
     /// Warnings about the set-up (P's parameters, nodes dropped from K_h).
     pub fn warnings(&self) -> Vec<String> {
         let mut w = self.stresses.as_ref().map_or(vec![], |p| p.warnings());
-        w.extend(self.rows.warnings.iter().cloned());
+        w.extend(self.obstacles.rows().warnings.iter().cloned());
         w
     }
 
@@ -275,8 +282,12 @@ impl Discretisation for P1P0Lagrangian {
         self.dofs.nodal(u)
     }
 
-    fn obstacle(&self) -> Option<&dyn AdmissibleDisplacements> {
-        self.obstacle.as_deref()
+    fn obstacles(&self) -> &Obstacles {
+        self.obstacles.obstacles()
+    }
+
+    fn contact_reports(&self, extras: &[f64], lambda: &[f64]) -> Vec<ObstacleReport> {
+        self.obstacles.reports(&self.mesh, extras, lambda)
     }
 
     fn warnings(&self) -> Vec<String> {
@@ -307,11 +318,11 @@ impl Lagrangian for P1P0Lagrangian {
     }
 
     fn constraints(&self) -> &ConstraintRows {
-        &self.rows
+        self.obstacles.rows()
     }
 
     fn load(&self) -> &[f64] {
-        &self.load
+        self.obstacles.load()
     }
 
     fn nodal_load(&self) -> &[f64] {

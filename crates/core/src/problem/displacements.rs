@@ -101,11 +101,12 @@ pub fn contact_set(lambda: &[f64]) -> Vec<usize> {
 /// What an obstacle reports about a solution.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ContactReport {
-    /// Named scalars: the punch reports `U` and `force`.
+    /// Named scalars, each obstacle its own (`U`, `force`, …); reports list them by name.
     pub quantities: Vec<(String, f64)>,
     /// Number of contact nodes (see [`contact_set`]).
     pub contact_nodes: usize,
-    /// Largest distance of a contact node from the punch's centre.
+    /// Largest distance of a contact node from the obstacle's own centre (as the obstacle
+    /// defines it; 0 without contact).
     pub contact_radius: f64,
     /// Things the user should know (contact reaching the rim of the candidate zone, ...).
     pub warnings: Vec<String>,

@@ -90,7 +90,7 @@ pub fn homogeneous(f: f64) -> P1P0Lagrangian {
         ],
         Elasticity::new(100.0, 0.3).unwrap(),
         Some(Box::new(VonMises::new(1.0, 5.0))),
-        Some(Box::new(RigidPunch::new(f, g("zmin"), Box::new(Flat::default())))),
+        saddle_core::Obstacles::one(Box::new(RigidPunch::new(f, g("zmin"), Box::new(Flat::default())))),
     )
     .unwrap()
 }

@@ -1,0 +1,439 @@
+//! Several obstacles: K = K₁ ∩ K₂ ∩ … (theory §8). Each obstacle is a plugin
+//! ([`AdmissibleDisplacements`]) with its own rows, extra unknowns and load; the intersection
+//! concatenates the rows and the extras, and each extra keeps its obstacle's name (`left.U`).
+//!
+//! In a scene, one obstacle is a table and several are an array of tables, each then named:
+//!
+//! ```toml
+//! [[obstacle]]
+//! name = "left"
+//! type = "rigid_punch"
+//! F = 0.1
+//! zone = { all = [ { group = "zmin" }, { disc = { center = [-0.5, 0.0], radius = 0.3 } } ] }
+//! gap = { type = "paraboloid", R = 5.0 }
+//! [[obstacle]]
+//! name = "right"
+//! type = "rigid_punch"
+//! F = 0.2
+//! zone = { all = [ { group = "zmin" }, { disc = { center = [0.5, 0.0], radius = 0.3 } } ] }
+//! gap = { type = "paraboloid", R = 5.0, center = [0.5, 0.0] }
+//! ```
+//!
+//! The `name` key is read (and removed) here before the plugin reads the rest of its table, so
+//! plugins keep `deny_unknown_fields`. Nothing in this module knows a particular plugin: every
+//! obstacle reports its own quantities on its own rows, extras and multipliers
+//! ([`DiscreteObstacles::reports`]).
+
+use crate::error::{ParameterError, SceneError};
+use crate::mesh::TetMesh;
+use crate::mesh::dofs::DofMap;
+use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::ser::{SerializeSeq, Serializer};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::ops::Range;
+
+/// The path of the scene's obstacle table(s): errors of [`Obstacles::new`] name
+/// `obstacle[i].name`.
+pub const OBSTACLE_PATH: &str = "obstacle";
+
+/// One obstacle with an optional name (required when a scene has several).
+#[derive(Clone, Debug)]
+pub struct NamedObstacle {
+    /// The name: the prefix of its extras (`left.U`) and of its quantities in reports.
+    pub name: Option<String>,
+    /// The obstacle.
+    pub k: Box<dyn AdmissibleDisplacements>,
+}
+
+impl NamedObstacle {
+    /// An obstacle called `name`.
+    pub fn new(name: impl Into<String>, k: Box<dyn AdmissibleDisplacements>) -> Self {
+        Self { name: Some(name.into()), k }
+    }
+
+    /// An obstacle without a name (allowed when it is the only one).
+    pub fn unnamed(k: Box<dyn AdmissibleDisplacements>) -> Self {
+        Self { name: None, k }
+    }
+}
+
+/// K = K₁ ∩ K₂ ∩ … (theory §8): no obstacle, one, or several named ones. Remembers whether it was
+/// written as one table (`[obstacle]`, paths `obstacle.…`) or as an array of tables
+/// (`[[obstacle]]`, paths `obstacle[i].…`), and is written back in the same shape.
+#[derive(Clone, Debug, Default)]
+pub struct Obstacles {
+    list: Vec<NamedObstacle>,
+    array: bool,
+}
+
+/// Checks the names of `list`: a given name is non-empty; with two or more obstacles every one
+/// has a name and the names are unique. Errors name `obstacle[i].name` and the value.
+fn check_names(list: &[NamedObstacle]) -> Result<(), ParameterError> {
+    for (i, o) in list.iter().enumerate() {
+        let field = format!("{OBSTACLE_PATH}[{i}].name");
+        match &o.name {
+            Some(n) if n.trim().is_empty() => {
+                return Err(ParameterError::new(field, format!("{n:?}"), "a name must not be empty"));
+            }
+            Some(n) if n.contains('.') => {
+                return Err(ParameterError::new(
+                    field,
+                    format!("{n:?}"),
+                    "a name must not contain '.' (it prefixes the obstacle's extras: name.U)",
+                ));
+            }
+            Some(n) => {
+                if let Some(j) = list[..i].iter().position(|p| p.name.as_deref() == Some(n)) {
+                    return Err(ParameterError::new(
+                        field,
+                        format!("{n:?}"),
+                        format!("names must be unique; {OBSTACLE_PATH}[{j}].name is {n:?} too"),
+                    ));
+                }
+            }
+            None if list.len() > 1 => {
+                return Err(ParameterError::new(
+                    field,
+                    "(none)",
+                    format!(
+                        "with {} obstacles every one needs a unique name (obstacle[{i}] is a {:?})",
+                        list.len(),
+                        o.k.name()
+                    ),
+                ));
+            }
+            None => {}
+        }
+    }
+    Ok(())
+}
+
+impl Obstacles {
+    /// No obstacle: no contact.
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// One unnamed obstacle, as a single `[obstacle]` table.
+    pub fn one(k: Box<dyn AdmissibleDisplacements>) -> Self {
+        Self { list: vec![NamedObstacle::unnamed(k)], array: false }
+    }
+
+    /// One obstacle, possibly named, as a single `[obstacle]` table. Errors name
+    /// `obstacle[0].name` (an empty name).
+    pub fn single(obstacle: NamedObstacle) -> Result<Self, ParameterError> {
+        let list = vec![obstacle];
+        check_names(&list)?;
+        Ok(Self { list, array: false })
+    }
+
+    /// Several obstacles, as an array of `[[obstacle]]` tables. With two or more every one
+    /// needs a name; names are non-empty and unique. Errors name `obstacle[i].name` and the value.
+    pub fn new(list: Vec<NamedObstacle>) -> Result<Self, ParameterError> {
+        check_names(&list)?;
+        Ok(Self { list, array: true })
+    }
+
+    /// True when written as an array of tables (`[[obstacle]]`).
+    pub fn is_array(&self) -> bool {
+        self.array
+    }
+
+    /// The obstacles in order.
+    pub fn iter(&self) -> std::slice::Iter<'_, NamedObstacle> {
+        self.list.iter()
+    }
+
+    /// Number of obstacles.
+    pub fn len(&self) -> usize {
+        self.list.len()
+    }
+
+    /// True without obstacle.
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
+    }
+
+    /// The only obstacle, when there is exactly one (None without obstacle or with several).
+    pub fn only(&self) -> Option<&dyn AdmissibleDisplacements> {
+        match self.list.as_slice() {
+            [o] => Some(o.k.as_ref()),
+            _ => None,
+        }
+    }
+
+    /// The path of obstacle `i` under `root`: `root` for a single table, `root[i]` in an array.
+    pub fn path(&self, root: &str, i: usize) -> String {
+        if self.array { format!("{root}[{i}]") } else { root.to_string() }
+    }
+
+    /// The names of the extra unknowns: each obstacle's `extra_names()`, prefixed `name.` when
+    /// the obstacle has a name (`left.U`), plain otherwise.
+    pub fn extra_names(&self) -> Vec<String> {
+        self.list
+            .iter()
+            .flat_map(|o| {
+                o.k.extra_names().into_iter().map(move |x| match &o.name {
+                    Some(n) => format!("{n}.{x}"),
+                    None => x,
+                })
+            })
+            .collect()
+    }
+
+    /// The load term's coefficients f, concatenated.
+    pub fn load(&self) -> Vec<f64> {
+        self.list.iter().flat_map(|o| o.k.load()).collect()
+    }
+
+    /// Checks the names and every obstacle's parameters under its own path: `path` for a single
+    /// table, `path[i]` in an array.
+    pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        check_names(&self.list)?;
+        for (i, o) in self.list.iter().enumerate() {
+            o.k.validate(&self.path(path, i))?;
+        }
+        Ok(())
+    }
+
+    /// K_h on a mesh: every obstacle's rows (discretised under its own path), concatenated, each
+    /// obstacle's H columns at its own offset among the concatenated extras; the loads
+    /// concatenated; the warnings concatenated, each naming its obstacle's path.
+    pub fn discretise(self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<DiscreteObstacles, SceneError> {
+        let mut parts = Vec::with_capacity(self.list.len());
+        let (mut n_rows, mut n_extras) = (0, 0);
+        for (i, o) in self.list.iter().enumerate() {
+            let p = self.path(path, i);
+            let mut rows = o.k.discretise(mesh, dofs, &p)?;
+            let n = o.k.extra_names().len();
+            assert!(
+                rows.n_extras == n && o.k.load().len() == n,
+                "obstacle plugin {:?}: {} extra names, {} load coefficients, {} columns of H",
+                o.k.name(),
+                n,
+                o.k.load().len(),
+                rows.n_extras
+            );
+            rows.warnings = rows.warnings.into_iter().map(|w| naming_path(&p, w)).collect();
+            parts.push(ObstacleRows {
+                row_range: n_rows..n_rows + rows.n_rows(),
+                extra_range: n_extras..n_extras + n,
+                rows,
+            });
+            n_rows += parts.last().map_or(0, |p| p.rows.n_rows());
+            n_extras += n;
+        }
+        let mut all = ConstraintRows::new(n_extras);
+        let mut h = vec![0.0; n_extras];
+        for part in &parts {
+            for i in 0..part.rows.n_rows() {
+                let (cols, vals) = part.rows.row(i);
+                let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
+                h.iter_mut().for_each(|x| *x = 0.0);
+                h[part.extra_range.clone()].copy_from_slice(part.rows.extra_row(i));
+                all.push(&entries, &h, part.rows.offset[i], part.rows.node[i]);
+            }
+            all.warnings.extend(part.rows.warnings.iter().cloned());
+        }
+        let load = self.load();
+        Ok(DiscreteObstacles { obstacles: self, rows: all, load, parts })
+    }
+}
+
+/// `warning`, prefixed `path: ` unless it already names the path (`obstacle.zone: …`).
+fn naming_path(path: &str, warning: String) -> String {
+    if warning.contains(&format!("{path}.")) || warning.contains(&format!("{path}:")) {
+        warning
+    } else {
+        format!("{path}: {warning}")
+    }
+}
+
+impl From<Box<dyn AdmissibleDisplacements>> for Obstacles {
+    fn from(k: Box<dyn AdmissibleDisplacements>) -> Self {
+        Self::one(k)
+    }
+}
+
+impl From<Option<Box<dyn AdmissibleDisplacements>>> for Obstacles {
+    fn from(k: Option<Box<dyn AdmissibleDisplacements>>) -> Self {
+        k.map_or_else(Self::none, Self::one)
+    }
+}
+
+/// One obstacle's part of the concatenated rows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObstacleRows {
+    /// The obstacle's own rows (its own extras as the columns of H).
+    pub rows: ConstraintRows,
+    /// Its rows among the concatenated rows (and multipliers λ).
+    pub row_range: Range<usize>,
+    /// Its extras among the concatenated extras.
+    pub extra_range: Range<usize>,
+}
+
+/// What one obstacle reports about a solution.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObstacleReport {
+    /// The obstacle's name (None for a single unnamed obstacle).
+    pub name: Option<String>,
+    /// The plugin's `type` ([`AdmissibleDisplacements::name`]).
+    pub type_name: String,
+    /// Its report on its own rows, extras and multipliers.
+    pub report: ContactReport,
+}
+
+/// The obstacles discretised on a mesh: the concatenated rows and load every solver consumes,
+/// and each obstacle's own rows with its row and extra ranges.
+#[derive(Clone, Debug, Default)]
+pub struct DiscreteObstacles {
+    obstacles: Obstacles,
+    rows: ConstraintRows,
+    load: Vec<f64>,
+    parts: Vec<ObstacleRows>,
+}
+
+impl DiscreteObstacles {
+    /// The obstacles.
+    pub fn obstacles(&self) -> &Obstacles {
+        &self.obstacles
+    }
+
+    /// The concatenated rows g(u, V) = G u + H V + c ≥ 0.
+    pub fn rows(&self) -> &ConstraintRows {
+        &self.rows
+    }
+
+    /// The concatenated load coefficients f.
+    pub fn load(&self) -> &[f64] {
+        &self.load
+    }
+
+    /// Each obstacle's rows and ranges, in the order of [`Obstacles::iter`].
+    pub fn parts(&self) -> &[ObstacleRows] {
+        &self.parts
+    }
+
+    /// g(u, V) of the concatenation evaluated directly from the geometry: each obstacle's
+    /// [`AdmissibleDisplacements::gap`] on its own rows, extras and slice of `out`.
+    pub fn gap(&self, mesh: &TetMesh, dofs: &DofMap, u: &[f64], extras: &[f64], out: &mut [f64]) {
+        for (o, p) in self.obstacles.iter().zip(&self.parts) {
+            o.k.gap(mesh, dofs, &p.rows, u, &extras[p.extra_range.clone()], &mut out[p.row_range.clone()]);
+        }
+    }
+
+    /// Each obstacle's report on its own rows, extras and multipliers.
+    pub fn reports(&self, mesh: &TetMesh, extras: &[f64], lambda: &[f64]) -> Vec<ObstacleReport> {
+        self.obstacles
+            .iter()
+            .zip(&self.parts)
+            .map(|(o, p)| ObstacleReport {
+                name: o.name.clone(),
+                type_name: o.k.name().to_string(),
+                report: o.k.report(mesh, &p.rows, &extras[p.extra_range.clone()], &lambda[p.row_range.clone()]),
+            })
+            .collect()
+    }
+}
+
+// ---- scene files: absent, one table, or an array of tables ----
+
+/// A table with its `name` removed, the rest read by the plugin.
+fn named_from_table<E: de::Error>(mut table: toml::Table) -> Result<NamedObstacle, E> {
+    let name = match table.remove("name") {
+        None => None,
+        Some(toml::Value::String(s)) => Some(s),
+        Some(other) => {
+            return Err(E::custom(format!("name = {other}: must be a string")));
+        }
+    };
+    let k: Box<dyn AdmissibleDisplacements> =
+        toml::Value::Table(table).try_into().map_err(|e: toml::de::Error| E::custom(e.message().trim_end()))?;
+    Ok(NamedObstacle { name, k })
+}
+
+/// One element of `[[obstacle]]`.
+struct Entry(NamedObstacle);
+
+impl<'de> Deserialize<'de> for Entry {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let table = toml::Table::deserialize(d)?;
+        named_from_table(table).map(Entry)
+    }
+}
+
+struct ObstaclesVisitor;
+
+impl<'de> Visitor<'de> for ObstaclesVisitor {
+    type Value = Obstacles;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("an [obstacle] table or an array of [[obstacle]] tables")
+    }
+
+    fn visit_none<E: de::Error>(self) -> Result<Obstacles, E> {
+        Ok(Obstacles::none())
+    }
+
+    fn visit_unit<E: de::Error>(self) -> Result<Obstacles, E> {
+        Ok(Obstacles::none())
+    }
+
+    fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<Obstacles, D::Error> {
+        d.deserialize_any(self)
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Obstacles, A::Error> {
+        let table = toml::Table::deserialize(de::value::MapAccessDeserializer::new(map))?;
+        Obstacles::single(named_from_table(table)?).map_err(de::Error::custom)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Obstacles, A::Error> {
+        let mut list = Vec::new();
+        while let Some(Entry(o)) = seq.next_element()? {
+            list.push(o);
+        }
+        Obstacles::new(list).map_err(de::Error::custom)
+    }
+}
+
+impl<'de> Deserialize<'de> for Obstacles {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(ObstaclesVisitor)
+    }
+}
+
+/// An obstacle written back as its table with `name` first.
+struct EntryRef<'a>(&'a NamedObstacle);
+
+impl Serialize for EntryRef<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Flat<'a> {
+            #[serde(skip_serializing_if = "Option::is_none")]
+            name: &'a Option<String>,
+            #[serde(flatten)]
+            k: &'a dyn AdmissibleDisplacements,
+        }
+        Flat { name: &self.0.name, k: self.0.k.as_ref() }.serialize(s)
+    }
+}
+
+impl Serialize for Obstacles {
+    /// The shape it was read in: nothing (none), one table, or an array of tables.
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match (self.array, self.list.as_slice()) {
+            (_, []) if !self.array => s.serialize_none(),
+            (false, [o]) => EntryRef(o).serialize(s),
+            _ => {
+                let mut seq = s.serialize_seq(Some(self.list.len()))?;
+                for o in &self.list {
+                    seq.serialize_element(&EntryRef(o))?;
+                }
+                seq.end()
+            }
+        }
+    }
+}

@@ -1,0 +1,253 @@
+//! Several obstacles (theory §8: K = K₁ ∩ K₂ ∩ …, rows and extras concatenated, each extra keeping
+//! its obstacle's name): two punches on disjoint discs of the default scene's bottom face, read
+//! from `[[obstacle]]`, discretised, solved and summarised obstacle by obstacle; a single
+//! `[obstacle]` table summarised as before; bad names rejected with the field and the value.
+
+mod common;
+use common::*;
+use saddle::core::{Discretisation, Lagrangian, Silent};
+use saddle::output::Summary;
+use saddle::scene::Scene;
+use std::path::Path;
+
+/// Forces of the two punches: different, so that swapped or shared columns of H show.
+const F_LEFT: f64 = 0.1;
+const F_RIGHT: f64 = 0.25;
+
+/// The obstacle table of a punch with force `f` on the disc of radius 0.3 about (`x`, 0), its
+/// paraboloid centred there; `name` first when given.
+fn punch(name: Option<&str>, f: f64, x: f64) -> String {
+    let name = name.map_or(String::new(), |n| format!("name = \"{n}\"\n"));
+    format!(
+        "{name}type = \"rigid_punch\"\nF = {f:?}\n\
+         zone = {{ all = [ {{ group = \"zmin\" }}, {{ disc = {{ center = [{x:?}, 0.0], radius = 0.3 }} }} ] }}\n\
+         gap = {{ type = \"paraboloid\", R = 5.0, center = [{x:?}, 0.0] }}\n"
+    )
+}
+
+/// The default scene on a coarse 8×8×4 mesh with Uzawa to 1e-10, without its obstacle.
+fn base() -> String {
+    let mut t = example("johnson.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([8, 8, 4]).unwrap());
+    set(&mut t, "mesh.grading.ratio", toml::Value::Float(2.0));
+    set(&mut t, "solver.tol", toml::Value::Float(1e-10));
+    set(&mut t, "solver.max_iter", toml::Value::Integer(20000));
+    t.remove("obstacle");
+    toml::to_string(&t).unwrap()
+}
+
+/// The base scene with two named punches, left on x < 0 and right on x > 0.
+fn two_punches() -> String {
+    format!(
+        "{}\n[[obstacle]]\n{}\n[[obstacle]]\n{}",
+        base(),
+        punch(Some("left"), F_LEFT, -0.35),
+        punch(Some("right"), F_RIGHT, 0.35)
+    )
+}
+
+fn scene(text: &str) -> Scene {
+    Scene::from_toml(text, Path::new("s.toml")).unwrap()
+}
+
+fn error(text: &str) -> String {
+    Scene::from_toml(text, Path::new("s.toml")).unwrap_err().to_string()
+}
+
+#[test]
+fn two_punches_parse_and_discretise_as_the_concatenation_of_each() {
+    let s = scene(&two_punches());
+    assert_eq!(s.obstacle.len(), 2);
+    assert!(s.obstacle.is_array());
+    let names: Vec<_> = s.obstacle.iter().map(|o| o.name.clone()).collect();
+    assert_eq!(names, [Some("left".to_string()), Some("right".to_string())]);
+    let (l, _) = s.into_problem().unwrap();
+    assert_eq!(l.extra_names(), ["left.U", "right.U"]);
+    assert_eq!(l.n_extras(), 2);
+    assert_eq!(l.load(), [F_LEFT, F_RIGHT]);
+
+    // each punch alone, as a single [obstacle] table
+    let alone = |text: String| scene(&format!("{}\n[obstacle]\n{text}", base())).into_problem().unwrap().0;
+    let left = alone(punch(None, F_LEFT, -0.35));
+    let right = alone(punch(None, F_RIGHT, 0.35));
+    let (nl, nr) = (left.constraints().n_rows(), right.constraints().n_rows());
+    assert!(nl > 0 && nr > 0);
+    let rows = l.constraints();
+    assert_eq!(rows.n_rows(), nl + nr);
+    assert_eq!(rows.n_extras, 2);
+    // left's rows first with their H in column 0, right's after with theirs in column 1
+    for i in 0..nl {
+        assert_eq!(rows.row(i), left.constraints().row(i));
+        assert_eq!(rows.node[i], left.constraints().node[i]);
+        assert_eq!(rows.offset[i], left.constraints().offset[i]);
+        assert_eq!(rows.extra_row(i), [left.constraints().extra_row(i)[0], 0.0]);
+    }
+    for i in 0..nr {
+        assert_eq!(rows.row(nl + i), right.constraints().row(i));
+        assert_eq!(rows.node[nl + i], right.constraints().node[i]);
+        assert_eq!(rows.offset[nl + i], right.constraints().offset[i]);
+        assert_eq!(rows.extra_row(nl + i), [0.0, right.constraints().extra_row(i)[0]]);
+    }
+    let parts = l.discrete_obstacles().parts();
+    assert_eq!((parts[0].row_range.clone(), parts[1].row_range.clone()), (0..nl, nl..nl + nr));
+    assert_eq!((parts[0].extra_range.clone(), parts[1].extra_range.clone()), (0..1, 1..2));
+
+    // the direct gap of the concatenation is each obstacle's gap on its slice; the punch's rows
+    // are exact, so it equals the linear rows at any (u, V)
+    let u: Vec<f64> = (0..l.n_dofs()).map(|j| 1e-3 * ((j * 7919 % 101) as f64 - 50.0)).collect();
+    let v = [0.013, -0.021];
+    let (mut direct, mut linear) = (vec![0.0; nl + nr], vec![0.0; nl + nr]);
+    l.discrete_obstacles().gap(l.mesh(), l.dofs(), &u, &v, &mut direct);
+    rows.gap(&u, &v, &mut linear);
+    for (a, b) in direct.iter().zip(&linear) {
+        assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    }
+}
+
+#[test]
+fn each_punch_carries_its_own_force() {
+    let (l, solver) = scene(&two_punches()).into_problem().unwrap();
+    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
+    let s = Summary::new(&l, &sol, None);
+    let json = serde_json::to_value(&s).unwrap();
+    assert_eq!(json["obstacles"].as_array().unwrap().len(), 2);
+    for (i, (name, f)) in [("left", F_LEFT), ("right", F_RIGHT)].into_iter().enumerate() {
+        let o = &json["obstacles"][i];
+        assert_eq!(o["name"], name);
+        assert_eq!(o["type"], "rigid_punch");
+        let force = o["force"].as_f64().unwrap();
+        assert!((force - f).abs() <= 1e-8 * f, "{name}: Σλ = {force}, F = {f}");
+        assert!(o["contact_nodes"].as_u64().unwrap() > 0, "{name} touches");
+        // its U is the extra of its name, and the same number in `contact`
+        let u = json["extras"][format!("{name}.U")].as_f64().unwrap();
+        assert_eq!(o["U"].as_f64(), Some(u));
+        assert_eq!(json["contact"][format!("{name}.U")].as_f64(), Some(u));
+        assert_eq!(json["contact"][format!("{name}.force")].as_f64(), Some(force));
+        assert_eq!(u, sol.extras[i]);
+    }
+    assert_eq!(json["extras"].as_object().unwrap().len(), 2);
+    // the stronger push moves its punch further
+    assert!(json["extras"]["right.U"].as_f64() > json["extras"]["left.U"].as_f64());
+    // the single-obstacle keys: no U or force of "the" punch, totals over both
+    assert!(json["U"].is_null() && json["force"].is_null());
+    let nodes: u64 = (0..2).map(|i| json["obstacles"][i]["contact_nodes"].as_u64().unwrap()).sum();
+    assert_eq!(json["contact_nodes"].as_u64(), Some(nodes));
+    let radius = (0..2).map(|i| json["obstacles"][i]["contact_radius"].as_f64().unwrap()).fold(0.0, f64::max);
+    assert_eq!(json["contact_radius"].as_f64(), Some(radius));
+}
+
+#[test]
+fn a_single_table_keeps_the_summary_keys_of_its_report() {
+    let text = format!("{}\n[obstacle]\n{}", base(), punch(None, 0.3, 0.0));
+    let (l, solver) = scene(&text).into_problem().unwrap();
+    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    let s = Summary::new(&l, &sol, None);
+    // the obstacle's own report, asked directly
+    let k = l.obstacle().expect("one obstacle");
+    let r = k.report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda);
+    assert_eq!(s.U, r.get("U"));
+    assert_eq!(s.force, r.get("force"));
+    assert!(s.U.is_some() && s.force.is_some());
+    assert_eq!(s.contact_nodes, r.contact_nodes);
+    assert_eq!(s.contact_radius, r.contact_radius);
+    assert_eq!(s.contact.len(), r.quantities.len());
+    for (q, v) in &r.quantities {
+        assert_eq!(s.contact.get(q), Some(v), "{q}");
+    }
+    let json = serde_json::to_value(&s).unwrap();
+    assert_eq!(json["extras"], serde_json::json!({ "U": sol.extras[0] }));
+    let o = &json["obstacles"][0];
+    assert!(o["name"].is_null());
+    assert_eq!(o["type"], "rigid_punch");
+    assert_eq!(o["U"].as_f64(), r.get("U"));
+    assert_eq!(o["force"].as_f64(), r.get("force"));
+    assert_eq!(o["contact_nodes"].as_u64(), Some(r.contact_nodes as u64));
+    assert_eq!(json["obstacles"].as_array().unwrap().len(), 1);
+}
+
+#[test]
+fn scenes_are_written_back_in_the_shape_they_were_read() {
+    // an array of two, a named single table, an unnamed single table, none
+    let cases = [
+        (two_punches(), vec!["left.U", "right.U"], true),
+        (format!("{}\n[obstacle]\n{}", base(), punch(Some("p"), 0.3, 0.0)), vec!["p.U"], false),
+        (format!("{}\n[obstacle]\n{}", base(), punch(None, 0.3, 0.0)), vec!["U"], false),
+    ];
+    for (text, names, array) in cases {
+        let s = scene(&text);
+        let written = toml::to_string(&s).unwrap();
+        let again = scene(&written);
+        assert_eq!(again.obstacle.is_array(), array, "{written}");
+        assert_eq!(again.obstacle.extra_names(), names, "{written}");
+        assert_eq!(toml::to_string(&again).unwrap(), written);
+    }
+    let none = scene(&base());
+    assert!(none.obstacle.is_empty());
+    assert!(scene(&toml::to_string(&none).unwrap()).obstacle.is_empty());
+    // a one-element array stays an array: its paths are obstacle[0].…
+    let one = format!("{}\n[[obstacle]]\n{}", base(), punch(None, 0.3, 0.0));
+    let e = error(&one.replace("F = 0.3", "F = -0.3"));
+    assert!(e.contains("obstacle[0].F = -0.3"), "{e}");
+}
+
+#[test]
+fn bad_names_name_the_field_and_the_value() {
+    let dup = two_punches().replace("name = \"right\"", "name = \"left\"");
+    let e = error(&dup);
+    assert!(e.contains("obstacle[1].name") && e.contains("\"left\"") && e.contains("unique"), "{e}");
+    let missing = two_punches().replace("name = \"right\"\n", "");
+    let e = error(&missing);
+    assert!(e.contains("obstacle[1].name") && e.contains("(none)") && e.contains("name"), "{e}");
+    let empty = two_punches().replace("name = \"left\"", "name = \"\"");
+    let e = error(&empty);
+    assert!(e.contains("obstacle[0].name = \"\""), "{e}");
+    let number = two_punches().replace("name = \"left\"", "name = 3");
+    let e = error(&number);
+    assert!(e.contains("obstacle[0]") && e.contains("name = 3"), "{e}");
+    // the plugin still rejects unknown fields, and parameters are checked under obstacle[i]
+    let e = error(&two_punches().replace("name = \"right\"", "name = \"right\"\nradius = 2.0"));
+    assert!(e.contains("obstacle[1]") && e.contains("radius"), "{e}");
+    let e = error(&two_punches().replace(&format!("F = {F_RIGHT:?}"), "F = 0.0"));
+    assert!(e.contains("obstacle[1].F = 0"), "{e}");
+}
+
+#[test]
+fn saddle_run_writes_nothing_for_bad_names() {
+    for text in
+        [two_punches().replace("name = \"right\"", "name = \"left\""), two_punches().replace("name = \"right\"\n", "")]
+    {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.toml");
+        std::fs::write(&path, text).unwrap();
+        let out = dir.path().join("out");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_saddle"))
+            .args(["run", path.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("obstacle[1].name"), "{err}");
+        assert!(!out.exists(), "nothing is written for an invalid scene");
+    }
+}
+
+#[test]
+fn saddle_run_prints_each_obstacle_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, two_punches()).unwrap();
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["run", path.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    for line in ["obstacle left", "obstacle right", "left.U", "right.force"] {
+        assert!(stdout.contains(line), "{line} missing:\n{stdout}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(summary["extras"]["left.U"].is_f64() && summary["extras"]["right.U"].is_f64(), "{summary}");
+}
