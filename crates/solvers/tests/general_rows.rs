@@ -101,7 +101,7 @@ fn scene(q: [[f64; 3]; 3]) -> P1P0Lagrangian {
         &[clamped],
         Elasticity::new(100.0, 0.3).unwrap(),
         Some(Box::new(p)),
-        Some(Box::new(RotatedPunch { q, r: 5.0, f: 0.3 })),
+        saddle_core::Obstacles::one(Box::new(RotatedPunch { q, r: 5.0, f: 0.3 })),
     )
     .unwrap()
 }
