@@ -10,10 +10,17 @@
 //!
 //! G has the components of n_i on the free dofs of node i (a row acts on up to three dofs;
 //! components on fixed dofs are dropped, the fixed displacement being 0), `H_i = −n_i·d` when V
-//! is unknown, `c_i = |x_i − c| − R` (minus `V n_i·d` when V is prescribed). The load is F·V, so
-//! at a solution `Σλ_i n_i·d = F`, the resultant of the contact forces along d. Since
-//! `|y| ≥ n·y`, a point feasible for the rows is feasible for the exact gap: the rows are an
-//! inner approximation of the exact K, valid for displacements small against R.
+//! is unknown, `c_i = |x_i − c| − R`. The load is F·V, so at a solution `Σλ_i n_i·d = F`, the
+//! resultant of the contact forces along d. Since `|y| ≥ n·y`, a point feasible for the rows is
+//! feasible for the exact gap: the rows are an inner approximation of the exact K, valid for
+//! displacements small against R.
+//!
+//! With V prescribed there is no extra unknown, and the reference configuration of the unknowns
+//! is u = 0 with the sphere already at c̃ = c + V d: the rows are the linearisation there,
+//! `n_i = (x_i − c̃)/|x_i − c̃|`, `c_i = |x_i − c̃| − R`, so that `gap()` (which contains the
+//! prescribed V) linearises to them at u = 0, as the conformance kit requires. To first order
+//! in V this is `|x_i − c| − R − V n_i·d` with the normals of the undisplaced sphere (theory §8);
+//! the two differ by O(V²/|x_i − c|).
 //!
 //! Unlike the punches, the zone need not be flat or horizontal: any boundary node of the zone
 //! with a free dof carries a row ([`Selection::AnyFreeDof`]).
@@ -29,6 +36,10 @@ use serde::{Deserialize, Serialize};
 /// Relative round-off (of R) below which a zone node at distance < R from the centre still
 /// counts as touching the sphere rather than inside it.
 const INSIDE_TOL: f64 = 1e-10;
+
+/// Relative distance (of R) from the linearisation centre below which a zone node has no
+/// contact normal.
+const CENTRE_ON_NODE: f64 = 1e-12;
 
 /// Relative tolerance on a facet's normal towards the centre when deciding whether the facet
 /// faces the sphere (for the rim warning).
@@ -106,6 +117,21 @@ impl RigidSphere {
         let x = mesh.nodes[n];
         let r = [x[0] - self.center[0], x[1] - self.center[1], x[2] - self.center[2]];
         (r, norm(r))
+    }
+
+    /// The centre c̃ about which the rows are linearised: c, or c + V d with V prescribed.
+    fn linearisation_centre(&self) -> [f64; 3] {
+        let d = self.d();
+        let v = self.V.unwrap_or(0.0);
+        std::array::from_fn(|k| self.center[k] + v * d[k])
+    }
+
+    /// (n_i, |x_i − c̃|) for mesh node `n`: the row's normal and distance from c̃.
+    fn normal(&self, mesh: &TetMesh, n: usize, centre: [f64; 3]) -> ([f64; 3], f64) {
+        let x = mesh.nodes[n];
+        let y = [x[0] - centre[0], x[1] - centre[1], x[2] - centre[2]];
+        let dist = norm(y);
+        (y.map(|v| v / dist), dist)
     }
 
     /// A zone node strictly inside the sphere (the deepest one) is an error on `{path}.center`.
@@ -211,19 +237,35 @@ impl AdmissibleDisplacements for RigidSphere {
     }
 
     /// g_i = n_i·(x_i + u_i − c − V d) − R ≥ 0 (theory §8): G = n_i on the free dofs of node i,
-    /// H_i = −n_i·d (V unknown), c_i = |x_i − c| − R (− V n_i·d when V is prescribed). Errors:
-    /// the parameters, the zone (no node with a free dof), and a zone node inside the sphere
-    /// (`{path}.center`).
+    /// H_i = −n_i·d (V unknown), c_i = |x_i − c| − R; with V prescribed, n_i and c_i are taken
+    /// about c + V d (see the module docs). Errors: the parameters, the zone (no node with a
+    /// free dof), a zone node inside the sphere at V = 0 (`{path}.center`), and a prescribed V
+    /// that puts the sphere's centre on a zone node (`{path}.V`).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
         self.validate(path)?;
         let zone = candidate_nodes_with(&self.zone, mesh, dofs, path, Selection::AnyFreeDof)?;
         self.check_outside(mesh, &zone.nodes, path)?;
         let d = self.d();
+        let centre = self.linearisation_centre();
         let mut rows = ConstraintRows::new(usize::from(self.V.is_none()));
         let mut entries = [(0, 0.0); 3];
         for &n in &zone.nodes {
-            let (r, dist) = self.radial(mesh, n);
-            let normal = r.map(|x| x / dist);
+            let (normal, dist) = self.normal(mesh, n, centre);
+            if !(dist > CENTRE_ON_NODE * self.R) {
+                let x = mesh.nodes[n];
+                return Err(SceneError::Parameter(ParameterError::new(
+                    join(path, "V"),
+                    self.V.unwrap_or(0.0),
+                    format!(
+                        "moves the sphere's centre onto node {n} at ({}, {}, {}) of {}: the contact normal there is \
+                         undefined",
+                        x[0],
+                        x[1],
+                        x[2],
+                        join(path, "zone")
+                    ),
+                )));
+            }
             let mut k = 0;
             for (c, &nc) in normal.iter().enumerate() {
                 if let Some(j) = dofs.free(n, c) {
@@ -231,10 +273,9 @@ impl AdmissibleDisplacements for RigidSphere {
                     k += 1;
                 }
             }
-            let nd = dot(normal, d);
             match self.V {
-                None => rows.push(&entries[..k], &[-nd], dist - self.R, n),
-                Some(v) => rows.push(&entries[..k], &[], dist - self.R - v * nd, n),
+                None => rows.push(&entries[..k], &[-dot(normal, d)], dist - self.R, n),
+                Some(_) => rows.push(&entries[..k], &[], dist - self.R, n),
             }
         }
         rows.warnings = zone.warnings;
@@ -252,7 +293,8 @@ impl AdmissibleDisplacements for RigidSphere {
         }
     }
 
-    /// `V` (the extra or the prescribed value), `force` = Σλ_i n_i·d (= F at a solution), the
+    /// `V` (the extra or the prescribed value), `force` = Σλ_i n_i·d with the rows' normals (= F
+    /// at a solution), the
     /// contact set, its radius about the sphere's own centre — the largest distance of a
     /// contact node from the axis {c + t d} — and a warning when the contact set reaches the rim
     /// of the zone. The rim is measured on the boundary facets facing the sphere (outward normal
@@ -261,15 +303,9 @@ impl AdmissibleDisplacements for RigidSphere {
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport {
         debug_assert_eq!(lambda.len(), rows.n_rows());
         let d = self.d();
+        let centre = self.linearisation_centre();
         let contact = contact_set(lambda);
-        let force: f64 = lambda
-            .iter()
-            .zip(&rows.node)
-            .map(|(&l, &n)| {
-                let (r, dist) = self.radial(mesh, n);
-                l * dot(r, d) / dist
-            })
-            .sum();
+        let force: f64 = lambda.iter().zip(&rows.node).map(|(&l, &n)| l * dot(self.normal(mesh, n, centre).0, d)).sum();
         let contact_radius = contact
             .iter()
             .map(|&i| {
@@ -278,7 +314,7 @@ impl AdmissibleDisplacements for RigidSphere {
                 norm([r[0] - along * d[0], r[1] - along * d[1], r[2] - along * d[2]])
             })
             .fold(0.0, f64::max);
-        let c = self.center;
+        let c = centre;
         let rim = rim_rows_facing(mesh, rows, &contact, |normal, x| {
             let to_c = [c[0] - x[0], c[1] - x[1], c[2] - x[2]];
             dot(normal, to_c) > FACING_TOL * norm(normal) * norm(to_c)
