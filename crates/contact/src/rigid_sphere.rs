@@ -251,7 +251,7 @@ impl AdmissibleDisplacements for RigidSphere {
         let mut entries = [(0, 0.0); 3];
         for &n in &zone.nodes {
             let (normal, dist) = self.normal(mesh, n, centre);
-            if !(dist > CENTRE_ON_NODE * self.R) {
+            if dist <= CENTRE_ON_NODE * self.R {
                 let x = mesh.nodes[n];
                 return Err(SceneError::Parameter(ParameterError::new(
                     join(path, "V"),

@@ -372,6 +372,8 @@ enum Flaw {
     DropsX1,
     /// The report gives Σλ as the force.
     ForceIsSumLambda,
+    /// The report gives Σλ_i² as the force (not linear in λ).
+    ForceQuadratic,
 }
 
 /// The rigid sphere with a deliberate flaw.
@@ -409,7 +411,7 @@ impl AdmissibleDisplacements for BrokenSphere {
                     }
                 }
             }
-            Flaw::ForceIsSumLambda => {}
+            Flaw::ForceIsSumLambda | Flaw::ForceQuadratic => {}
         }
         Ok(rows)
     }
@@ -418,8 +420,10 @@ impl AdmissibleDisplacements for BrokenSphere {
     }
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport {
         let mut r = self.sphere.report(mesh, rows, extras, lambda);
-        if self.flaw == Flaw::ForceIsSumLambda {
-            r.quantities[1].1 = lambda.iter().sum();
+        match self.flaw {
+            Flaw::ForceIsSumLambda => r.quantities[1].1 = lambda.iter().sum(),
+            Flaw::ForceQuadratic => r.quantities[1].1 = lambda.iter().map(|l| l * l).sum(),
+            _ => {}
         }
         r
     }
@@ -446,6 +450,11 @@ fn broken_copies_fail_the_kit() {
     let e = check_all(&k, &m, &d, 1, 0.01).expect_err("force = Σλ passed the kit");
     assert_eq!(e.check, "force", "{e}");
     assert!(e.message.contains("−(Hᵀλ)₀ = 3.0000000") || e.message.contains("−(Hᵀλ)₀ = 2.9999999"), "{e}");
+    // V prescribed: no extra to balance, but the force must still be linear in λ
+    let k = BrokenSphere { sphere: moved(0.01), flaw: Flaw::ForceQuadratic };
+    let e = check_all(&k, &m, &d, 1, 0.01).expect_err("a quadratic force passed the kit");
+    assert_eq!(e.check, "force", "{e}");
+    assert!(e.message.contains("not linear in the multipliers"), "{e}");
 }
 
 #[test]
