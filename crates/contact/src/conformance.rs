@@ -24,8 +24,11 @@
 //!   constant constraint is either void or infeasible).
 //! * `gap_derivative`, `gap_value` (a): the rows are the linearisation of
 //!   [`AdmissibleDisplacements::gap`] at the reference configuration (u, V) = (0, 0). Central
-//!   finite differences of `gap()` along random directions in u, then in V, equal G·du and
-//!   H·dV; the offsets equal gap(0, 0); and at random (u, V) of the given scale the rows and
+//!   finite differences of `gap()` equal G·du and H·dV for every row: along each free
+//!   displacement component (du = e_x, e_y, e_z of the node's free dofs) of every node that
+//!   has rows (a random sample of [`COMPONENT_NODES`] of them on larger zones), along each extra
+//!   unknown separately (dV = e_k), and along random directions in u, then in V. The offsets
+//!   equal gap(0, 0); and at random (u, V) of the given scale the rows and
 //!   `gap()` agree to round-off (an affine gap, the polyhedral K_h of theory §3) or at least to
 //!   second order: the difference must drop by 8 or more when (u, V) is quartered (a curved
 //!   gap; a first-order disagreement drops by 4 only).
@@ -35,7 +38,11 @@
 //!   λ̃ ≥ 0 on that set, found by the dense QP of `saddle_core::linalg::dense_qp` (with a
 //!   regularised least-squares fallback when its least-norm start is not ≥ 0). Without extras
 //!   any λ ≥ 0 will do. No such λ is a `load` failure: the discrete problem has no solution.
-//!   For this λ and random extras, a reported quantity `force` must equal Σλ (`force`); the
+//!   For this λ and random extras, a reported quantity `force` must equal the resultant on the
+//!   first extra unknown, −(Hᵀλ)₀ (`force`): Σλ for the punches (H column −1), Σλ_i n_i·d for
+//!   the rigid sphere (theory §8), = f₀ = F for balanced λ. Without extras (a prescribed
+//!   displacement) the kit cannot know the direction of motion and only checks that `force` is
+//!   linear in λ (additive and homogeneous); the plugin's own tests must check its value. The
 //!   report must count [`saddle_core::contact_set`]`(λ)` as its contact nodes, have a finite
 //!   contact radius ≥ 0 and finite quantities, report every extra unknown it names by its
 //!   value, and for λ = 0 have no contact node, radius 0 and force 0 (`report`).
@@ -83,6 +90,24 @@ pub const CHECKS: [&str; 13] = [
 
 /// Random samples per check.
 const SAMPLES: usize = 6;
+
+/// Most row nodes whose displacement components are each differentiated in `gap_derivative`
+/// (a random sample of them when there are more): bounds the cost of the check on big zones.
+pub const COMPONENT_NODES: usize = 24;
+
+/// Where a central difference of gap() and the rows disagree most.
+struct Mismatch {
+    /// The row.
+    row: usize,
+    /// The central difference of gap() there.
+    fd: f64,
+    /// G du + H dV there.
+    lin: f64,
+    /// |fd − lin|.
+    err: f64,
+    /// The tolerance it exceeds.
+    tol: f64,
+}
 
 fn fail(check: &'static str, message: String) -> Result<(), KitFailure> {
     Err(KitFailure { check, message })
@@ -267,9 +292,87 @@ impl<'a> Ctx<'a> {
         format!("row {i} (node {n} at ({}, {}, {}))", x[0], x[1], x[2])
     }
 
-    /// Central differences of gap() at (0, 0) along random directions against G du and H dV.
+    /// Central differences of gap() at (0, 0) (step `h`) along (du, dv) against G du + H dv, for
+    /// every row; `None` when they agree.
+    fn fd_mismatch(&self, du: &[f64], dv: &[f64], h: f64) -> Option<Mismatch> {
+        let scaled = |x: &[f64], t: f64| x.iter().map(|v| t * v).collect::<Vec<_>>();
+        let plus = self.kgap(&scaled(du, h), &scaled(dv, h));
+        let minus = self.kgap(&scaled(du, -h), &scaled(dv, -h));
+        let fd: Vec<f64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
+        let lin = self.linear(du, dv);
+        let (err, i) = max_abs(fd.iter().zip(&lin).map(|(a, b)| a - b));
+        let mag = max_abs(lin.iter().copied()).0.max(max_abs(fd.iter().copied()).0);
+        let gmag = max_abs(plus.iter().chain(&minus).copied()).0;
+        let tol = 1e-6 * mag + 1e2 * f64::EPSILON * gmag / h;
+        (!le(err, tol)).then(|| Mismatch { row: i, fd: fd[i], lin: lin[i], err, tol })
+    }
+
+    /// At most [`COMPONENT_NODES`] distinct row nodes, all of them when there are few, else a
+    /// random sample.
+    fn sample_nodes(&mut self) -> Vec<usize> {
+        let mut nodes = self.rows.node.clone();
+        nodes.sort_unstable();
+        nodes.dedup();
+        if nodes.len() > COMPONENT_NODES {
+            // partial Fisher–Yates
+            for i in 0..COMPONENT_NODES {
+                let j = self.rng.random_range(i..nodes.len());
+                nodes.swap(i, j);
+            }
+            nodes.truncate(COMPONENT_NODES);
+            nodes.sort_unstable();
+        }
+        nodes
+    }
+
+    /// Central differences of gap() at (0, 0) against G du and H dV: along each free
+    /// displacement component of (a sample of) the row nodes, along each extra unknown, then
+    /// along random directions.
     fn derivatives(&mut self) -> Result<(), KitFailure> {
         let h = 1e-3 * self.scale;
+        let names = self.k.extra_names();
+        let zero_v = vec![0.0; self.n_extras()];
+        let mut du = vec![0.0; self.n_free()];
+        for n in self.sample_nodes() {
+            for (c, axis) in ["x₁", "x₂", "x₃"].iter().enumerate() {
+                let Some(j) = self.dofs.free(n, c) else { continue };
+                du[j] = 1.0;
+                if let Some(m) = self.fd_mismatch(&du, &zero_v, h) {
+                    return fail(
+                        "gap_derivative",
+                        format!(
+                            "∂g/∂u along {axis} of node {n} (free dof {j}, du = e_{j}), {}: the central difference of gap() \
+                             (step {h:e}) is {:.6e}, the rows' G·du is {:.6e}: difference {:.3e} > tolerance {:.1e}",
+                            self.where_(m.row),
+                            m.fd,
+                            m.lin,
+                            m.err,
+                            m.tol
+                        ),
+                    );
+                }
+                du[j] = 0.0;
+            }
+        }
+        let zero_u = vec![0.0; self.n_free()];
+        for (k, name) in names.iter().enumerate() {
+            let mut dv = zero_v.clone();
+            dv[k] = 1.0;
+            if let Some(m) = self.fd_mismatch(&zero_u, &dv, h) {
+                return fail(
+                    "gap_derivative",
+                    format!(
+                        "∂g/∂V along the extra `{name}` (dV = e_{k}), {}: the central difference of gap() (step {h:e}) is \
+                         {:.6e}, the rows' H·dV is {:.6e}: difference {:.3e} > tolerance {:.1e}",
+                        self.where_(m.row),
+                        m.fd,
+                        m.lin,
+                        m.err,
+                        m.tol
+                    ),
+                );
+            }
+        }
         for s in 0..SAMPLES {
             for in_u in [true, false] {
                 if !in_u && self.n_extras() == 0 {
@@ -280,25 +383,18 @@ impl<'a> Ctx<'a> {
                 } else {
                     (vec![0.0; self.n_free()], self.random(self.n_extras(), 1.0))
                 };
-                let scaled = |x: &[f64], t: f64| x.iter().map(|v| t * v).collect::<Vec<_>>();
-                let plus = self.kgap(&scaled(&du, h), &scaled(&dv, h));
-                let minus = self.kgap(&scaled(&du, -h), &scaled(&dv, -h));
-                let fd: Vec<f64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
-                let lin = self.linear(&du, &dv);
-                let (err, i) = max_abs(fd.iter().zip(&lin).map(|(a, b)| a - b));
-                let mag = max_abs(lin.iter().copied()).0.max(max_abs(fd.iter().copied()).0);
-                let gmag = max_abs(plus.iter().chain(&minus).copied()).0;
-                let tol = 1e-6 * mag + 1e2 * f64::EPSILON * gmag / h;
-                if !le(err, tol) {
+                if let Some(m) = self.fd_mismatch(&du, &dv, h) {
                     let (what, term) = if in_u { ("∂g/∂u", "G·du") } else { ("∂g/∂V", "H·dV") };
                     return fail(
                         "gap_derivative",
                         format!(
                             "{what} along random direction {s}, {}: the central difference of gap() (step {h:e}) is {:.6e}, \
-                             the rows' {term} is {:.6e}: difference {err:.3e} > tolerance {tol:.1e}",
-                            self.where_(i),
-                            fd[i],
-                            lin[i]
+                             the rows' {term} is {:.6e}: difference {:.3e} > tolerance {:.1e}",
+                            self.where_(m.row),
+                            m.fd,
+                            m.lin,
+                            m.err,
+                            m.tol
                         ),
                     );
                 }
@@ -373,17 +469,8 @@ impl<'a> Ctx<'a> {
         let lambda = self.balanced(&f)?;
         let extras = self.random(self.n_extras(), self.scale);
         let report = self.k.report(self.mesh, &self.rows, &extras, &lambda);
-        let sum: f64 = lambda.iter().sum();
-        if let Some(force) = report.get("force")
-            && !le((force - sum).abs(), 1e-12 * sum.abs() + f64::MIN_POSITIVE)
-        {
-            return fail(
-                "force",
-                format!(
-                    "for multipliers λ ≥ 0 balancing the load f = {f:?} (Hᵀλ = −f), the report gives force = {force:.12e}, \
-                     but Σλ = {sum:.12e}"
-                ),
-            );
+        if let Some(force) = report.get("force") {
+            self.force(&f, &names, &lambda, &extras, force)?;
         }
         let expected = contact_set(&lambda).len();
         if report.contact_nodes != expected {
@@ -417,6 +504,52 @@ impl<'a> Ctx<'a> {
                 format!(
                     "for λ = 0 the report gives {} contact nodes, contact radius {} and force {force}; expected 0, 0 and 0",
                     report.contact_nodes, report.contact_radius
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// The reported `force` for the balanced λ: with extras, the resultant on the first one,
+    /// −(Hᵀλ)₀ (Σλ for the punches, whose H column is −1); without extras, linear in λ.
+    fn force(
+        &mut self,
+        f: &[f64],
+        names: &[String],
+        lambda: &[f64],
+        extras: &[f64],
+        force: f64,
+    ) -> Result<(), KitFailure> {
+        let sum: f64 = lambda.iter().sum();
+        if self.n_extras() > 0 {
+            let (resultant, size) = lambda.iter().enumerate().fold((0.0, 0.0), |(r, s), (i, &l)| {
+                let t = -l * self.rows.extra_row(i)[0];
+                (r + t, s + t.abs())
+            });
+            if !le((force - resultant).abs(), 1e-12 * size + f64::MIN_POSITIVE) {
+                return fail(
+                    "force",
+                    format!(
+                        "for multipliers λ ≥ 0 balancing the load f = {f:?} (Hᵀλ = −f), the report gives force = \
+                         {force:.12e}, but the resultant on the extra `{}` is −(Hᵀλ)₀ = {resultant:.12e} (Σλ = {sum:.12e})",
+                        names[0]
+                    ),
+                );
+            }
+            return Ok(());
+        }
+        let other: Vec<f64> = (0..lambda.len()).map(|_| self.rng.random_range(0.0..1.0)).collect();
+        let of = |l: &[f64]| self.k.report(self.mesh, &self.rows, extras, l).get("force").unwrap_or(f64::NAN);
+        let f_other = of(&other);
+        let f_sum = of(&lambda.iter().zip(&other).map(|(a, b)| a + b).collect::<Vec<_>>());
+        let f_double = of(&lambda.iter().map(|a| 2.0 * a).collect::<Vec<_>>());
+        let tol = 1e-10 * (force.abs() + f_other.abs()) + f64::MIN_POSITIVE;
+        if !le((f_sum - force - f_other).abs(), tol) || !le((f_double - 2.0 * force).abs(), tol) {
+            return fail(
+                "force",
+                format!(
+                    "the reported force is not linear in the multipliers: force(λ) = {force:.12e}, force(λ') = \
+                     {f_other:.12e}, force(λ + λ') = {f_sum:.12e}, force(2λ) = {f_double:.12e} (Σλ = {sum:.12e})"
                 ),
             );
         }

@@ -14,10 +14,16 @@
 //!
 //! * [`RigidPunch`] (`type = "rigid_punch"`, force F) and [`RigidPunchDisplacement`]
 //!   (`type = "rigid_punch_displacement"`, prescribed U) in [`punch`];
+//! * [`TiltingPunch`] (`type = "tilting_punch"`, force F acting at a point `at`; extras U,
+//!   slope_x1, slope_x2: the punch also tilts about the gap's centre, theory §8) in
+//!   [`tilting_punch`];
+//! * [`RigidSphere`] (`type = "rigid_sphere"`, a ball of centre c and radius R moving along a
+//!   direction d, pushed by F or moved by a prescribed V; rows along the sphere's normals, each
+//!   acting on up to three dofs, theory §8) in [`rigid_sphere`];
 //! * gap shapes φ, themselves plugins chosen by `type` ([`GapShape`]: [`Paraboloid`],
 //!   [`EllipticParaboloid`], [`Flat`]) in [`gap`];
 //! * contact-zone helpers for node-based obstacles ([`zone::candidate_nodes`],
-//!   [`zone::rim_rows`]) in [`zone`];
+//!   [`zone::candidate_nodes_with`], [`zone::rim_rows`], [`zone::rim_rows_facing`]) in [`zone`];
 //! * the [`conformance`] kit every K plugin must pass ([`conformance::check_all`]).
 //!
 //! The scene table of the default scene (theory §6):
@@ -39,8 +45,9 @@
 //! `impl AdmissibleDisplacements` tagged `#[typetag::serde(name = "...")]` — the name is the
 //! `type` of the scene table — and a test that runs the [`conformance`] kit on a small mesh. The
 //! rows of `discretise` must be the linearisation of `gap()`, the load must match the extra
-//! unknowns, the report's `force` must be Σλ: the kit checks all of it. A rigid wall at a
-//! prescribed distance `d` below the zone, g_i = u₃(x_i) + d ≥ 0:
+//! unknowns, the report's `force` must be the resultant −(Hᵀλ)₀ on the first extra (Σλ for a
+//! punch): the kit checks all of it. A rigid wall at a prescribed distance `d` below the zone,
+//! g_i = u₃(x_i) + d ≥ 0:
 //!
 //! ```
 //! use saddle_contact::{conformance, zone};
@@ -111,9 +118,13 @@ pub mod conformance;
 pub mod gap;
 pub mod projection;
 pub mod punch;
+pub mod rigid_sphere;
+pub mod tilting_punch;
 pub mod zone;
 
 pub use conformance::{KitFailure, check_all};
 pub use gap::{EllipticParaboloid, Flat, GapShape, Paraboloid};
 pub use punch::{RigidPunch, RigidPunchDisplacement};
-pub use zone::{CandidateNodes, candidate_nodes};
+pub use rigid_sphere::RigidSphere;
+pub use tilting_punch::TiltingPunch;
+pub use zone::{CandidateNodes, Selection, candidate_nodes, candidate_nodes_with};

@@ -1,6 +1,8 @@
 //! The candidate contact zone Γ₀ on a mesh (theory §1, §3): which boundary nodes carry a contact
 //! row, and where the contact set meets the rim of the zone. Shared by every node-based
-//! obstacle (the punches of this crate, and plugins: see the crate docs).
+//! obstacle (the punches of this crate, the rigid sphere, and plugins: see the crate docs). The
+//! punches select nodes with a free u₃ on a flat face ([`Selection::Vertical`]); an obstacle with
+//! a general normal selects nodes with any free dof ([`Selection::AnyFreeDof`]).
 
 use saddle_core::error::join;
 use saddle_core::{ConstraintRows, DofMap, Region, SceneError, TetMesh};
@@ -8,14 +10,49 @@ use saddle_core::{ConstraintRows, DofMap, Region, SceneError, TetMesh};
 /// The contact nodes selected by a zone, with what the user should know about the selection.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CandidateNodes {
-    /// Boundary nodes of the zone whose u₃ is free, sorted: one contact row each (theory §3).
+    /// Boundary nodes of the zone the [`Selection`] keeps (u₃ free for the punches), sorted: one
+    /// contact row each (theory §3).
     pub nodes: Vec<usize>,
-    /// Nodes dropped because a Dirichlet condition fixes their u₃, a non-planar zone, ...
+    /// Nodes dropped because a Dirichlet condition fixes their u₃ (or all their dofs), a
+    /// non-planar zone, ...
     pub warnings: Vec<String>,
 }
 
-/// The contact nodes x_i ∈ Γ₀ of `zone` (theory §3). `path` is the obstacle's table; errors and
-/// warnings name `{path}.zone`.
+/// Which boundary nodes of a zone can carry a contact row: what the obstacle's rows act on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Selection {
+    /// The vertical gap `u₃ + φ − w` of the punches (theory §1, §3): a row acts on u₃ only, so
+    /// nodes with u₃ fixed are dropped, and a zone not lying in one horizontal plane is warned
+    /// about (the gap measures vertical distance from a flat contact face).
+    #[default]
+    Vertical,
+    /// A gap along a normal that varies from node to node (the rigid sphere, theory §8): a row
+    /// acts on the free dofs among u₁, u₂, u₃ of its node, so only nodes with all three fixed
+    /// are dropped, and the zone may be curved or span several faces (no planarity warning).
+    AnyFreeDof,
+}
+
+impl Selection {
+    /// Whether node `n` keeps a row.
+    fn keeps(self, dofs: &DofMap, n: usize) -> bool {
+        match self {
+            Selection::Vertical => dofs.free(n, 2).is_some(),
+            Selection::AnyFreeDof => (0..3).any(|c| dofs.free(n, c).is_some()),
+        }
+    }
+
+    /// What the dropped nodes have fixed.
+    fn fixed_what(self) -> &'static str {
+        match self {
+            Selection::Vertical => "u₃",
+            Selection::AnyFreeDof => "all of u₁, u₂, u₃",
+        }
+    }
+}
+
+/// The contact nodes x_i ∈ Γ₀ of `zone` for the punches' vertical gap (theory §3):
+/// [`candidate_nodes_with`] and [`Selection::Vertical`]. `path` is the obstacle's table; errors
+/// and warnings name `{path}.zone`.
 ///
 /// Errors ([`SceneError::Region`]): a zone naming a facet group the mesh lacks (the message
 /// lists the mesh's groups), a zone selecting no boundary node, and a zone whose every node has
@@ -24,6 +61,19 @@ pub struct CandidateNodes {
 /// share one x₃ level gets a warning: the gap u₃ + φ − U measures vertical distance from a flat
 /// contact face (theory §1: Γ₁ lies in a plane).
 pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<CandidateNodes, SceneError> {
+    candidate_nodes_with(zone, mesh, dofs, path, Selection::Vertical)
+}
+
+/// The contact nodes of `zone` under `selection` (see [`Selection`]; [`candidate_nodes`] for
+/// the errors). Nodes the selection cannot use (u₃ fixed, or all three dofs fixed) are dropped
+/// with a warning; every node dropped is an error.
+pub fn candidate_nodes_with(
+    zone: &Region,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    path: &str,
+    selection: Selection,
+) -> Result<CandidateNodes, SceneError> {
     let field = join(path, "zone");
     let missing = zone.missing_groups(mesh);
     if !missing.is_empty() {
@@ -39,18 +89,19 @@ pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str)
             message: "selects no boundary node: there is no candidate contact node".into(),
         });
     }
-    let (nodes, fixed): (Vec<usize>, Vec<usize>) = selected.iter().partition(|&&n| dofs.free(n, 2).is_some());
+    let (nodes, fixed): (Vec<usize>, Vec<usize>) = selected.iter().partition(|&&n| selection.keeps(dofs, n));
     let mut warnings = Vec::new();
     if !fixed.is_empty() {
         let x = mesh.nodes[fixed[0]];
         let what = format!(
-            "{} of its {} nodes (e.g. node {} at ({}, {}, {})) have u₃ fixed by a Dirichlet condition",
+            "{} of its {} nodes (e.g. node {} at ({}, {}, {})) have {} fixed by a Dirichlet condition",
             fixed.len(),
             selected.len(),
             fixed[0],
             x[0],
             x[1],
-            x[2]
+            x[2],
+            selection.fixed_what()
         );
         if nodes.is_empty() {
             return Err(SceneError::Region {
@@ -64,24 +115,43 @@ pub fn candidate_nodes(zone: &Region, mesh: &TetMesh, dofs: &DofMap, path: &str)
             nodes.len()
         ));
     }
-    let (lo, hi) = nodes
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &n| (lo.min(mesh.nodes[n][2]), hi.max(mesh.nodes[n][2])));
-    if hi - lo > 1e-9 * mesh.diameter() {
-        warnings.push(format!(
-            "{field}: the contact nodes span x₃ ∈ [{lo}, {hi}]; the gap u₃ + φ − U assumes a flat contact face \
-             (theory §1: Γ₁ lies in a plane), so the zone should select one horizontal face"
-        ));
+    if selection == Selection::Vertical {
+        let (lo, hi) = nodes.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &n| {
+            (lo.min(mesh.nodes[n][2]), hi.max(mesh.nodes[n][2]))
+        });
+        if hi - lo > 1e-9 * mesh.diameter() {
+            warnings.push(format!(
+                "{field}: the contact nodes span x₃ ∈ [{lo}, {hi}]; the gap u₃ + φ − U assumes a flat contact face \
+                 (theory §1: Γ₁ lies in a plane), so the zone should select one horizontal face"
+            ));
+        }
     }
     Ok(CandidateNodes { nodes, warnings })
 }
+
+/// Relative tolerance on a facet's normal component when deciding whether it faces the obstacle.
+const FACING_TOL: f64 = 1e-8;
 
 /// The rows of `contact` (row indices) whose node lies on the rim of the candidate zone: it
 /// shares a boundary facet facing the punch (outward normal with n₃ < 0) with a boundary node
 /// that carries no row. Contact there means the contact set was clipped by the zone (or by the
 /// clamped boundary next to it) and the zone should be enlarged. Facets not facing the punch
 /// (the sides of the body) do not count, so a zone covering a whole face has no rim.
+/// [`rim_rows_facing`] with "facing" = n₃ < 0.
 pub fn rim_rows(mesh: &TetMesh, rows: &ConstraintRows, contact: &[usize]) -> Vec<usize> {
+    rim_rows_facing(mesh, rows, contact, |normal, _| normal[2] < -FACING_TOL * norm(normal))
+}
+
+/// [`rim_rows`] for an obstacle that is not below the body: `faces(normal, centroid)` says
+/// whether a boundary facet, with outward normal `normal` (length twice the facet's area) and
+/// centroid `centroid`, faces the obstacle. The rigid sphere (theory §8) uses
+/// `normal·(c − centroid) > 0`: the facet looks towards the sphere's centre c.
+pub fn rim_rows_facing(
+    mesh: &TetMesh,
+    rows: &ConstraintRows,
+    contact: &[usize],
+    faces: impl Fn([f64; 3], [f64; 3]) -> bool,
+) -> Vec<usize> {
     let mut in_zone = vec![false; mesh.n_nodes()];
     for &n in &rows.node {
         in_zone[n] = true;
@@ -89,10 +159,8 @@ pub fn rim_rows(mesh: &TetMesh, rows: &ConstraintRows, contact: &[usize]) -> Vec
     let mut on_rim = vec![false; mesh.n_nodes()];
     for f in &mesh.boundary {
         let [a, b, c] = f.map(|i| mesh.nodes[i]);
-        let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
-        let n3 = u[0] * v[1] - u[1] * v[0];
-        let area2 = tri_area2(a, b, c);
-        if n3 < -1e-8 * area2 && f.iter().any(|&n| !in_zone[n]) {
+        let centroid = std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0);
+        if f.iter().any(|&n| !in_zone[n]) && faces(tri_normal(a, b, c), centroid) {
             for &n in f {
                 on_rim[n] = true;
             }
@@ -101,7 +169,17 @@ pub fn rim_rows(mesh: &TetMesh, rows: &ConstraintRows, contact: &[usize]) -> Vec
     contact.iter().copied().filter(|&i| on_rim[rows.node[i]]).collect()
 }
 
-/// |(b − a) × (c − a)|: twice the area of a triangle.
+/// (b − a) × (c − a): the outward normal of an outward-oriented facet, of length twice its area.
+pub fn tri_normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
 /// Each row's share of the contact face: a third of every boundary facet facing the punch
 /// (outward normal n₃ < 0) at each of its row nodes — the nodal area that turns a contact force
 /// λ_i into a pressure.
@@ -115,7 +193,7 @@ pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
         let [a, b, c] = f.map(|i| mesh.nodes[i]);
         let n3 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
         let area2 = tri_area2(a, b, c);
-        if n3 < -1e-8 * area2 {
+        if n3 < -FACING_TOL * area2 {
             for &n in f {
                 if row_of[n] != usize::MAX {
                     area[row_of[n]] += area2 / 6.0;
@@ -126,11 +204,9 @@ pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
     area
 }
 
+/// |(b − a) × (c − a)|: twice the area of a triangle.
 fn tri_area2(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-    (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+    norm(tri_normal(a, b, c))
 }
 
 /// The warning for contact rows on the rim (see [`rim_rows`]); `None` when there are none.
