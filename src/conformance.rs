@@ -1,6 +1,8 @@
 //! The solver conformance kit: runs any [`Solver`] on small scenes — homogeneous compression
 //! (closed form, theory §7), an elastic Hertz contact, and the default scene of theory §6 with
-//! plasticity and contact, with weak hardening and with an off-centre elliptic punch — and
+//! plasticity and contact, with weak hardening, with an off-centre elliptic punch, with a rigid
+//! sphere pushed 15° off the axis and with two punches (general rows and several obstacles,
+//! theory §8) — and
 //! checks, for each:
 //!
 //! * the run converged, and the KKT residual recomputed from the solution by L (independently
@@ -26,11 +28,11 @@
 
 use crate::output::single_quantity;
 use crate::scene::Scene;
-use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid, RigidPunch};
+use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid, RigidPunch, RigidSphere};
 use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{
-    AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, Obstacles, P1P0Lagrangian, Region,
-    SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
+    AdmissibleStresses, BoxMesh, Component, Dirichlet, Elasticity, Lagrangian, NamedObstacle, Obstacles,
+    P1P0Lagrangian, Region, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace, contact_set,
 };
 use saddle_yield::VonMises;
 use std::path::PathBuf;
@@ -255,6 +257,32 @@ pub fn hertz(cells: [usize; 3], ratio: f64) -> Scene {
     }
 }
 
+/// The small default scene (theory §6) with the punch replaced by a rigid sphere of the same
+/// radius R = 5, touching the face at the origin (centre (0, 0, −5)) and pushed by F = 0.3 along
+/// a direction `tilt` degrees off the x₃-axis (in the x₁x₃-plane): rows on three dofs each
+/// (theory §8).
+pub fn rigid_sphere(tilt: f64) -> Scene {
+    let t = tilt.to_radians();
+    let d = [t.sin(), 0.0, t.cos()];
+    let zone = Region::All(vec![group("zmin"), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
+    let sphere = RigidSphere::pushed([0.0, 0.0, -5.0], 5.0, d, 0.3, zone);
+    Scene { obstacle: Obstacles::one(Box::new(sphere)), ..Johnson::default().scene() }
+}
+
+/// The small default scene (theory §6) with two punches named `left` and `right`, forces 0.1
+/// and 0.25, each a paraboloid R = 5 on its own disc of radius 0.3 about (∓0.35, 0): K = K₁ ∩ K₂
+/// (theory §8).
+pub fn two_punches() -> Scene {
+    let punch = |name: &str, f: f64, x: f64| {
+        let zone = Region::All(vec![group("zmin"), Region::Disc { center: [x, 0.0], radius: 0.3 }]);
+        let gap = Paraboloid { R: 5.0, center: [x, 0.0] };
+        NamedObstacle::new(name, Box::new(RigidPunch::new(f, zone, Box::new(gap))))
+    };
+    let obstacles =
+        Obstacles::new(vec![punch("left", 0.1, -0.35), punch("right", 0.25, 0.35)]).expect("two named obstacles");
+    Scene { obstacle: obstacles, ..Johnson::default().scene() }
+}
+
 /// Validates `scene` (as reading a file does) and assembles L, or the scene error — among them
 /// the rigid-body motion a scene's Dirichlet conditions leave free ([`Scene::into_problem`]).
 pub fn assemble(scene: Scene) -> Result<P1P0Lagrangian, SceneError> {
@@ -294,6 +322,8 @@ pub fn scenes() -> Vec<KitScene> {
             problem: Johnson { h: 0.5, ..Johnson::default() }.problem(),
             exact_u: None,
         },
+        KitScene { name: "rigid sphere, 15° off the axis", problem: kit_problem(rigid_sphere(15.0)), exact_u: None },
+        KitScene { name: "two punches (F = 0.1, 0.25)", problem: kit_problem(two_punches()), exact_u: None },
         KitScene {
             name: "Johnson, off-centre elliptic punch",
             problem: Johnson { gap: Box::new(elliptic), ..Johnson::default() }.problem(),

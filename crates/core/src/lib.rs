@@ -32,7 +32,7 @@ pub use error::{MeshError, ParameterError, SceneError};
 pub use fem::Discretisation;
 pub use fem::loads::Load;
 pub use fem::p1p0::P1P0Lagrangian;
-pub use mesh::box_mesh::{BoxMesh, Grading};
+pub use mesh::box_mesh::{BoxMesh, Grading, Subdivision};
 pub use mesh::dofs::{Component, Dirichlet, DofMap};
 #[cfg(feature = "gmsh")]
 pub use mesh::gmsh::{GmshImport, GmshMesh, PhysicalGroup};

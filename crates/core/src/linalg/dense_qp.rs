@@ -64,17 +64,26 @@ impl DenseQp {
     pub fn new(s: DMatrix<f64>, e_mat: DMatrix<f64>, e_rhs: DVector<f64>) -> Result<Self, QpError> {
         let n = s.nrows();
         assert_eq!(e_mat.ncols(), n);
-        // least-norm point of E x = e; it must be ≥ 0 (true for the punch: uniform μ)
+        // a feasible start: the least-norm point of E x = e when it is ≥ 0 (the punch: uniform
+        // μ), else a point of E x = e, x ≥ 0 by non-negative least squares (the tilting punch
+        // loaded off-centre: the least-norm μ is affine in x_i and negative on the far side)
         let x = if e_mat.nrows() == 0 {
             DVector::zeros(n)
         } else {
             let eet = &e_mat * e_mat.transpose();
             let y = eet.cholesky().ok_or(QpError::Infeasible)?.solve(&e_rhs);
-            e_mat.transpose() * y
+            let x = e_mat.transpose() * y;
+            if x.iter().any(|v| *v < -1e-14 * x.amax().max(1e-300)) {
+                let x = nnls(&e_mat, &e_rhs);
+                let residual = (&e_mat * &x - &e_rhs).amax();
+                if residual > FEASIBILITY_TOL * (e_rhs.amax() + e_mat.amax() * x.amax()) {
+                    return Err(QpError::Infeasible);
+                }
+                x
+            } else {
+                x
+            }
         };
-        if x.iter().any(|v| *v < -1e-14 * x.amax().max(1e-300)) {
-            return Err(QpError::Infeasible);
-        }
         let x = x.map(|v| v.max(0.0));
         let free = x.iter().map(|v| *v > 0.0).collect();
         Ok(Self { s, e_mat, e_rhs, x, free, cached: None, last_steps: 0, factorisations: 0 })
@@ -177,6 +186,55 @@ impl DenseQp {
     }
 }
 
+/// Relative residual of E x = e below which the non-negative least-squares start counts as
+/// feasible: a few hundred ulps of the equations' size (they are sums over the rows).
+const FEASIBILITY_TOL: f64 = 1e-12;
+
+/// A point of `min ‖A x − b‖ subject to x ≥ 0` by the active-set method of Lawson and Hanson
+/// (Solving Least Squares Problems, 1974, ch. 23): variables enter by the largest gradient
+/// component and leave when the unconstrained least-squares step would make them negative.
+/// For the few rows of the equalities here the passive set stays small (at most a vertex).
+fn nnls(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+    let n = a.ncols();
+    let mut x = DVector::<f64>::zeros(n);
+    let mut passive = vec![false; n];
+    let tol = 1e-14 * a.amax() * b.amax().max(f64::MIN_POSITIVE) * (n as f64);
+    let lstsq = |passive: &[bool]| -> Option<DVector<f64>> {
+        let idx: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
+        let ap = DMatrix::from_fn(a.nrows(), idx.len(), |r, k| a[(r, idx[k])]);
+        let z = ap.svd(true, true).solve(b, 1e-14).ok()?;
+        let mut full = DVector::zeros(n);
+        for (k, &j) in idx.iter().enumerate() {
+            full[j] = z[k];
+        }
+        Some(full)
+    };
+    for _ in 0..3 * n + 10 {
+        let w = a.transpose() * (b - a * &x);
+        let Some(j) = (0..n).filter(|&j| !passive[j] && w[j] > tol).max_by(|&p, &q| w[p].total_cmp(&w[q])) else {
+            break;
+        };
+        passive[j] = true;
+        for _ in 0..n {
+            let Some(z) = lstsq(&passive) else { return x };
+            let negative: Vec<usize> = (0..n).filter(|&k| passive[k] && z[k] <= 0.0).collect();
+            if negative.is_empty() {
+                x = z;
+                break;
+            }
+            let alpha = negative.iter().map(|&k| x[k] / (x[k] - z[k])).fold(f64::INFINITY, f64::min);
+            x += (z - &x) * alpha;
+            for k in 0..n {
+                if passive[k] && x[k] <= 1e-15 * x.amax() {
+                    passive[k] = false;
+                    x[k] = 0.0;
+                }
+            }
+        }
+    }
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,5 +298,28 @@ mod tests {
         let f = qp.factorisations;
         qp.solve(&(q * 1.0000001)).unwrap();
         assert_eq!(qp.factorisations, f);
+    }
+
+    #[test]
+    fn a_feasible_start_is_found_when_the_least_norm_point_is_negative() {
+        // Σx = 1 and x₂ + 2x₃ = 1.9: the least-norm point has x₁ < 0, feasible points exist
+        let e = DMatrix::from_row_slice(2, 3, &[1.0, 1.0, 1.0, 0.0, 1.0, 2.0]);
+        let rhs = DVector::from_column_slice(&[1.0, 1.9]);
+        let least_norm = e.transpose() * (&e * e.transpose()).cholesky().unwrap().solve(&rhs);
+        assert!(least_norm[0] < 0.0, "{least_norm}");
+        let s = DMatrix::identity(3, 3);
+        let mut qp = DenseQp::new(s.clone(), e.clone(), rhs.clone()).unwrap();
+        let q = DVector::from_column_slice(&[0.3, -0.2, 0.1]);
+        let sol = qp.solve(&q).unwrap();
+        let (x, y) = (sol.x.clone(), sol.y.clone());
+        // KKT of the QP, checked here: feasible, w = Sx + q + Eᵀy ≥ 0, w_i x_i = 0
+        assert!((&e * &x - &rhs).amax() < 1e-13 && x.iter().all(|v| *v >= 0.0), "{x}");
+        let w = &s * &x + &q + e.transpose() * &y;
+        for i in 0..3 {
+            assert!(w[i] >= -1e-13 && (w[i] * x[i]).abs() < 1e-13, "i = {i}: w = {w}, x = {x}");
+        }
+        // no point at all: x₂ + 2x₃ = 2.5 > 2 max(x) with Σx = 1
+        let rhs = DVector::from_column_slice(&[1.0, 2.5]);
+        assert_eq!(DenseQp::new(s, e, rhs).unwrap_err(), QpError::Infeasible);
     }
 }

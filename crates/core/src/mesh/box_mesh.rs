@@ -1,5 +1,7 @@
 //! The structured box mesher: a box split into `cells` hexahedra, each cut into 6 tetrahedra
-//! along its main diagonal (Kuhn's subdivision, conforming), optionally graded toward a point.
+//! along its main diagonal (Kuhn's subdivision, conforming), optionally graded toward a point;
+//! or with the subdivision mirrored about that point (`subdivision = "mirrored"`), so that a grid
+//! symmetric about it gives a mesh with its reflection symmetries.
 //! Its facet groups are the six faces `xmin`, `xmax`, `ymin`, `ymax`, `zmin`, `zmax`.
 
 use crate::error::{MeshError, ParameterError, check, join};
@@ -24,6 +26,25 @@ pub struct BoxMesh {
     /// boundaries of regions such as Γ₁, so that they are resolved alike on every mesh).
     #[serde(default)]
     pub align: [Vec<f64>; 3],
+    /// How each hexahedron is cut into tetrahedra (default `"kuhn"`).
+    #[serde(default)]
+    pub subdivision: Subdivision,
+}
+
+/// `subdivision = "kuhn" | "mirrored"`: the 6 tetrahedra of each hexahedron.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Subdivision {
+    /// Kuhn's subdivision along the main diagonal of every cell (the same in every cell). The
+    /// mesh is not invariant under reflections: a symmetric problem has a slightly asymmetric
+    /// discrete solution (a punch pressed at its centre carries a small moment).
+    #[default]
+    Kuhn,
+    /// Kuhn's subdivision reflected, along each axis, in the cells below the grading point (the
+    /// box's centre without grading): conforming, and invariant under the reflections about
+    /// that point that map the grid onto itself, so symmetric problems have symmetric discrete
+    /// solutions.
+    Mirrored,
 }
 
 /// Geometric grading: along each axis the cells grow geometrically away from the coordinate of
@@ -40,12 +61,18 @@ pub struct Grading {
 impl BoxMesh {
     /// An ungraded box.
     pub fn new(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> Self {
-        Self { min, max, cells, grading: None, align: Default::default() }
+        Self { min, max, cells, grading: None, align: Default::default(), subdivision: Subdivision::Kuhn }
     }
 
     /// The same box graded toward `toward` with size ratio `ratio`.
     pub fn graded(mut self, toward: [f64; 3], ratio: f64) -> Self {
         self.grading = Some(Grading { toward, ratio });
+        self
+    }
+
+    /// The same box cut by `subdivision`.
+    pub fn subdivided(mut self, subdivision: Subdivision) -> Self {
+        self.subdivision = subdivision;
         self
     }
 
@@ -91,14 +118,30 @@ impl BoxMesh {
         // Kuhn: one tetrahedron per permutation of the axes, along the path 000 → 111.
         const PERMS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
         let mut tets = Vec::with_capacity(6 * nx * ny * nz);
+        // the mirror point: cells below it along an axis run Kuhn's path downward along that axis
+        let centre: [f64; 3] = match &self.grading {
+            Some(g) => std::array::from_fn(|a| g.toward[a].clamp(self.min[a], self.max[a])),
+            None => std::array::from_fn(|a| 0.5 * (self.min[a] + self.max[a])),
+        };
+        let flipped = |axis: usize, cell: usize| {
+            self.subdivision == Subdivision::Mirrored && 0.5 * (xs[axis][cell] + xs[axis][cell + 1]) < centre[axis]
+        };
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
+                    let flip = [flipped(0, i), flipped(1, j), flipped(2, k)];
                     for p in PERMS {
                         let mut c = [i, j, k];
+                        for a in 0..3 {
+                            c[a] += flip[a] as usize;
+                        }
                         let mut t = [id(c[0], c[1], c[2]), 0, 0, 0];
                         for (s, axis) in p.iter().enumerate() {
-                            c[*axis] += 1;
+                            if flip[*axis] {
+                                c[*axis] -= 1;
+                            } else {
+                                c[*axis] += 1;
+                            }
                             t[s + 1] = id(c[0], c[1], c[2]);
                         }
                         if signed_volume(&nodes, &t) < 0.0 {
@@ -266,5 +309,45 @@ mod tests {
         let m = b.mesh().unwrap();
         let vol: f64 = (0..m.n_elements()).map(|e| m.volume(e)).sum();
         assert!((vol - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_mirrored_subdivision_is_conforming_and_symmetric() {
+        let b = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [6, 6, 3]).graded([0.0; 3], 3.0);
+        let kuhn = b.mesh().unwrap();
+        let mirrored = b.clone().subdivided(Subdivision::Mirrored).mesh().unwrap();
+        // conforming: as many boundary facets as Kuhn's (a mismatched interior face would add
+        // two), the same volume
+        assert_eq!(mirrored.boundary.len(), kuhn.boundary.len());
+        let volume = |m: &TetMesh| m.tets.iter().map(|t| signed_volume(&m.nodes, t)).sum::<f64>();
+        assert!((volume(&mirrored) - 4.0).abs() < 1e-12 && (volume(&kuhn) - 4.0).abs() < 1e-12);
+        // symmetric: each reflection x₁ → −x₁, x₂ → −x₂ maps the set of tetrahedra onto itself
+        let key = |m: &TetMesh, t: &[usize; 4], s: [f64; 2]| {
+            let mut v: Vec<[i64; 3]> = t
+                .iter()
+                .map(|&n| {
+                    let x = m.nodes[n];
+                    [
+                        (s[0] * x[0] * 1e9).round() as i64,
+                        (s[1] * x[1] * 1e9).round() as i64,
+                        (x[2] * 1e9).round() as i64,
+                    ]
+                })
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        for s in [[-1.0, 1.0], [1.0, -1.0]] {
+            let mut a: Vec<_> = mirrored.tets.iter().map(|t| key(&mirrored, t, [1.0, 1.0])).collect();
+            let mut r: Vec<_> = mirrored.tets.iter().map(|t| key(&mirrored, t, s)).collect();
+            a.sort_unstable();
+            r.sort_unstable();
+            assert!(a == r, "mirrored mesh not symmetric under {s:?}");
+            let mut a: Vec<_> = kuhn.tets.iter().map(|t| key(&kuhn, t, [1.0, 1.0])).collect();
+            let mut r: Vec<_> = kuhn.tets.iter().map(|t| key(&kuhn, t, s)).collect();
+            a.sort_unstable();
+            r.sort_unstable();
+            assert!(a != r, "Kuhn's mesh is not symmetric (the reason for the mirrored one)");
+        }
     }
 }
