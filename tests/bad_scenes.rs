@@ -49,6 +49,27 @@ fn base_scenes() -> Vec<(String, toml::Table)> {
         ),
     );
     scenes.push(("displacement punch".into(), t));
+    let zone = "zone = { all = [ { group = \"zmin\" }, { disc = { center = [0.0, 0.0], radius = 0.5 } } ] }";
+    let mut t = small_johnson();
+    set(
+        &mut t,
+        "obstacle",
+        table(&format!(
+            "v = {{ type = \"tilting_punch\", F = 0.3, at = [0.05, 0.0], {zone}, gap = {{ type = \"paraboloid\", \
+             R = 5.0, center = [0.0, 0.0] }} }}"
+        )),
+    );
+    scenes.push(("tilting punch".into(), t));
+    let mut t = small_johnson();
+    set(
+        &mut t,
+        "obstacle",
+        table(&format!(
+            "v = {{ type = \"rigid_sphere\", center = [0.0, 0.0, -5.0], R = 5.0, direction = [0.2, 0.0, 1.0], \
+             F = 0.3, {zone} }}"
+        )),
+    );
+    scenes.push(("rigid sphere".into(), t));
     let mut t = small_johnson();
     t.insert(
         "load".into(),
@@ -191,6 +212,10 @@ fn out_of_range_values_are_rejected_by_path() {
         ("penalty", "solver.tol", 2.0.into()),
         ("elliptic", "obstacle.gap.R1", (-4.0).into()),
         ("elliptic", "obstacle.gap.R2", 0.0.into()),
+        ("tilting", "obstacle.F", (-0.3).into()),
+        ("tilting", "obstacle.at[0]", 0.9.into()),
+        ("sphere", "obstacle.R", 0.0.into()),
+        ("sphere", "obstacle.F", 0.0.into()),
     ];
     let mut failures = vec![];
     for (base, path, value) in &cases {

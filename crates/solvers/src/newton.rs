@@ -99,6 +99,11 @@ impl Default for Newton {
 /// achieves this fraction of the decrease predicted by the slope. 1e-4 is the textbook value
 /// (Nocedal & Wright): it rejects only steps that barely decrease the merit function.
 pub const ARMIJO: f64 = 1e-4;
+/// Steps of the elastic phase (full steps with the elastic tangent while the contact set
+/// settles) before it ends anyway and the line search takes over. The punch settles in 2–4;
+/// with several obstacles at the same nodes (theory §8) undamped active-set steps can cycle,
+/// and 10 steps without settling means they do.
+pub const ELASTIC_PHASE_MAX_STEPS: usize = 10;
 
 /// Halvings of the step before the line search gives up and takes the last one: 2⁻⁴⁰ ≈ 1e-12
 /// is below any step that changes J measurably.
@@ -381,10 +386,13 @@ impl<'a> Run<'a> {
         rows.gap(&s.u, &s.v, &mut w.gap);
         let mut changed = 0;
         // cold start: every candidate row active (the punch imprints its shape), tensile rows
-        // are released at the next iteration
+        // are released at the next iteration — but of rows that share dofs (two obstacles at
+        // one node, theory §8.1) only the closest: activating all of them would pin the node
+        // to every obstacle at once
         let all = self.cold && s.it == 0;
-        for i in 0..rows.n_rows() {
-            let a = all || s.lambda[i] - self.row_stiffness[i] * w.gap[i] > 0.0;
+        let closest = if all { self.system.basis().closest_in_blocks(&w.gap) } else { vec![false; rows.n_rows()] };
+        for (i, &first) in closest.iter().enumerate() {
+            let a = if all { first } else { s.lambda[i] - self.row_stiffness[i] * w.gap[i] > 0.0 };
             changed += (a != s.active[i]) as usize;
             s.active[i] = a;
         }
@@ -400,7 +408,7 @@ impl<'a> Run<'a> {
             }
         }
         // the elastic phase ends once its active set has settled: the last step solved it
-        if s.elastic_phase && s.it > 0 && changed == 0 {
+        if s.elastic_phase && s.it > 0 && (changed == 0 || s.it >= ELASTIC_PHASE_MAX_STEPS) {
             s.elastic_phase = false;
             self.count.elastic_phase_steps = s.it;
         }

@@ -295,6 +295,23 @@ impl RowBasis {
         (pattern, Recipe { copy, terms })
     }
 
+    /// For each row: true unless it shares a block with a row of smaller `gap` (ties: the
+    /// first). Rows on dofs of their own are always true.
+    pub fn closest_in_blocks(&self, gap: &[f64]) -> Vec<bool> {
+        let mut best = vec![usize::MAX; self.blocks.len()];
+        for (i, &s) in self.dof.iter().enumerate() {
+            let b = self.block_of[s];
+            if b != usize::MAX && (best[b] == usize::MAX || gap[i] < gap[best[b]]) {
+                best[b] = i;
+            }
+        }
+        self.dof
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| self.block_of[s] == usize::MAX || best[self.block_of[s]] == i)
+            .collect()
+    }
+
     /// True when T = I (every row on a dof of its own): nothing is transformed.
     pub fn is_identity(&self) -> bool {
         self.transformed.is_none()
