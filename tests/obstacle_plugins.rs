@@ -286,12 +286,7 @@ fn two_obstacles_on_the_same_nodes_every_solver() {
     let nodes: std::collections::BTreeSet<usize> = rows.node.iter().copied().collect();
     assert_eq!(nodes.len() * 2, rows.n_rows(), "every zone node carries a row of each obstacle");
     let mut first: Option<(Solution, Vec<usize>)> = None;
-    // Newton's AMG backend is left out here: near the sphere's first contact point its normal
-    // and the floor's are nearly parallel (2.6e-3 rad apart), the split of a node's force
-    // between them is ill-conditioned (×400), and the inexact CG reactions then drive the
-    // active set in circles (README: noticed, not solved); the direct backend is exact
-    let every: Vec<Box<dyn Solver>> =
-        solvers().into_iter().filter(|s| !toml::to_string(s).unwrap().contains("\"amg\"")).collect();
+    let every = solvers();
     for s in every {
         let sol = solve(&l, s.as_ref());
         let reports = l.contact_reports(&sol.extras, &sol.lambda);

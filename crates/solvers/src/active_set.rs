@@ -346,6 +346,8 @@ impl ActiveSetSystem {
                 let fixed: Vec<(usize, f64)> =
                     (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
                 let pre = FixedDofs { amg, basis, fixed: &fixed, scratch };
+                // the reactions come through T⁻ᵀ, which amplifies CG's residual by up to cond(T)
+                let cg_tol = (cg_tol / basis.condition()).max(crate::newton::CG_TOL_MIN.min(cg_tol));
                 previous.resize(n * (nc - 1), 0.0);
                 for c in 0..nc {
                     let b = &x[c * n..(c + 1) * n];

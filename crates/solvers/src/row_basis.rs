@@ -74,6 +74,8 @@ pub struct RowBasis {
     block_of: Vec<usize>,
     /// The pattern of TᵀKT and the recipe of its values (`None`: T = I).
     transformed: Option<(SymmetricPattern, Recipe)>,
+    /// The largest condition number of a block's T (1 when T = I).
+    condition: f64,
 }
 
 impl RowBasis {
@@ -148,7 +150,15 @@ impl RowBasis {
             }
             blocks.push(block);
         }
-        let mut basis = Self { n, dof, coef, blocks, block_of, transformed: None };
+        let condition = blocks
+            .iter()
+            .map(|b| {
+                let d = b.dofs.len();
+                let sv = nalgebra::DMatrix::from_row_slice(d, d, &b.t).singular_values();
+                sv.max() / sv.min()
+            })
+            .fold(1.0, f64::max);
+        let mut basis = Self { n, dof, coef, blocks, block_of, transformed: None, condition };
         if !basis.blocks.is_empty() {
             basis.transformed = Some(basis.recipe(p));
         }
@@ -310,6 +320,13 @@ impl RowBasis {
             .enumerate()
             .map(|(i, &s)| self.block_of[s] == usize::MAX || best[self.block_of[s]] == i)
             .collect()
+    }
+
+    /// The largest condition number of T's blocks: 1 for rows on dofs of their own, about
+    /// 1/θ for two rows at a node whose normals are θ apart. Forces computed through T⁻ᵀ (the
+    /// contact reactions) carry the residual of an inexact solve amplified by up to this.
+    pub fn condition(&self) -> f64 {
+        self.condition
     }
 
     /// True when T = I (every row on a dof of its own): nothing is transformed.
@@ -496,5 +513,22 @@ mod tests {
         rows.push(&[], &[-1.0], 0.0, 4);
         let e = RowBasis::new(&rows, 6, &p, "newton").unwrap_err().to_string();
         assert!(e.contains("row 0 (node 4) acts on no displacement dof"), "{e}");
+    }
+
+    #[test]
+    fn the_condition_is_one_for_single_rows_and_about_one_over_the_angle_for_near_parallel_ones() {
+        let p = full(6);
+        let mut rows = ConstraintRows::new(0);
+        rows.push(&[(0, 0.6), (2, 0.8)], &[], 0.0, 0);
+        assert!((RowBasis::new(&rows, 6, &p, "newton").unwrap().condition() - 1.0).abs() < 1e-12);
+        let theta: f64 = 1e-3;
+        let mut rows2 = ConstraintRows::new(0);
+        rows2.push(&[(2, 1.0)], &[], 0.0, 0);
+        rows2.push(&[(0, theta.sin()), (2, theta.cos())], &[], 0.0, 0);
+        // two unit rows θ apart: T⁻¹ has singular values √(1 ± cos θ) ≈ √2 and θ/√2 on their
+        // plane, so cond(T) = cot(θ/2) ≈ 2/θ
+        let c = RowBasis::new(&rows2, 6, &p, "newton").unwrap().condition();
+        let expected = 1.0 / (theta / 2.0).tan();
+        assert!((c - expected).abs() < 1e-6 * expected, "{c} vs {expected}");
     }
 }
