@@ -184,6 +184,13 @@ fn print_summary(s: &Summary) {
         ("KKT residual".into(), format!("{:.2e} (tolerance {:.0e})", s.kkt_residual, s.tolerance)),
         ("iterations".into(), s.iterations.to_string()),
         ("wall time".into(), format!("{:.2} s", s.wall_s)),
+        ("end to end".into(), {
+            let phases: Vec<String> = ["read", "setup", "solve", "summary", "write"]
+                .iter()
+                .filter_map(|k| s.end_to_end.get(*k).map(|t| format!("{k} {t:.2}")))
+                .collect();
+            format!("{:.2} s ({})", s.end_to_end_s, phases.join(", "))
+        }),
         ("dofs / elements".into(), format!("{} / {}", s.dofs, s.elements)),
     ]);
     for (k, v) in rows {

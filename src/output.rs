@@ -73,6 +73,12 @@ pub struct Summary {
     pub mesh_quality: MeshQuality,
     /// Wall time per solver phase.
     pub phases: BTreeMap<String, f64>,
+    /// Wall time of a `saddle run` end to end, per phase: `read` (scene file and mesh),
+    /// `setup` (L assembled), `solve`, `summary` (residuals recomputed), `write`
+    /// (solution.vtu). Empty when the summary is made outside a run.
+    pub end_to_end: BTreeMap<String, f64>,
+    /// Their sum: what the user waited for (summary.json itself excluded).
+    pub end_to_end_s: f64,
     /// Solver-specific counters.
     pub counters: BTreeMap<String, f64>,
     /// Relative KKT residual per iteration.
@@ -195,6 +201,8 @@ impl Summary {
             obstacles: reports.iter().map(ObstacleSummary::new).collect(),
             mesh_quality,
             phases: sol.report.phases.iter().cloned().collect(),
+            end_to_end: BTreeMap::new(),
+            end_to_end_s: 0.0,
             counters: sol.report.counters.clone(),
             residual_history: sol.report.residual_history.clone(),
             warnings,

@@ -3,7 +3,7 @@
 
 use crate::output::{Summary, write_vtu};
 use crate::scene::Scene;
-use saddle_core::{Discretisation, Monitor, P1P0Lagrangian, SceneError, Solution, SolveError, Solver};
+use saddle_core::{Discretisation, Monitor, P1P0Lagrangian, PhaseTimer, SceneError, Solution, SolveError, Solver};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -47,16 +47,24 @@ pub struct Loaded {
     pub solver: Box<dyn Solver>,
     /// Scene title.
     pub title: Option<String>,
+    /// Wall time of the phases so far: `read` (the scene file, and the mesh built or read) and
+    /// `setup` (L assembled).
+    pub timer: PhaseTimer,
 }
 
 /// Reads a scene, applies a `--solver` override, and assembles L.
 pub fn load(scene: &Path, solver_override: Option<&str>) -> Result<Loaded, RunError> {
-    let scene = Scene::from_file(scene)?;
+    let mut timer = PhaseTimer::default();
+    let (scene, mesh) = timer.time("read", || -> Result<_, RunError> {
+        let scene = Scene::from_file(scene)?;
+        let mesh = scene.build_mesh()?;
+        Ok((scene, mesh))
+    })?;
     let title = scene.title.clone();
     let override_solver = solver_override.map(solver_by_type).transpose()?;
-    let (problem, solver) = scene.into_problem()?;
+    let (problem, solver) = timer.time("setup", || scene.assemble(mesh))?;
     let solver = override_solver.or(solver).unwrap_or_else(default_solver);
-    Ok(Loaded { problem, solver, title })
+    Ok(Loaded { problem, solver, title, timer })
 }
 
 /// The result of a run.
@@ -69,28 +77,42 @@ pub struct Outcome {
     pub out_dir: PathBuf,
 }
 
-/// Solves a loaded problem and writes `out_dir/summary.json` and `out_dir/solution.vtu`.
+/// Solves a loaded problem and writes `out_dir/summary.json` and `out_dir/solution.vtu`. The
+/// summary's `end_to_end` holds the wall time of every phase the user waits for: `read` and
+/// `setup` (from [`load`]), `solve`, `summary` (the KKT residuals and energies recomputed from
+/// the solution) and `write` (solution.vtu; summary.json is written last, after the clock).
 pub fn solve_and_write(loaded: &Loaded, out_dir: &Path, monitor: &mut dyn Monitor) -> Result<Outcome, RunError> {
-    let solution = loaded.solver.solve(&loaded.problem, monitor)?;
-    let summary = Summary::new(&loaded.problem, &solution, loaded.title.clone());
-    write_outputs(out_dir, &loaded.problem, &solution, &summary)?;
+    let mut timer = loaded.timer.clone();
+    let solution = timer.time("solve", || loaded.solver.solve(&loaded.problem, monitor))?;
+    let mut summary = timer.time("summary", || Summary::new(&loaded.problem, &solution, loaded.title.clone()));
+    let (vtu_tmp, vtu) = timer.time("write", || write_vtu_file(out_dir, &loaded.problem, &solution))?;
+    summary.end_to_end = timer.into_phases().into_iter().collect();
+    summary.end_to_end_s = summary.end_to_end.values().sum();
+    write_summary(out_dir, &summary, &vtu_tmp, &vtu)?;
     Ok(Outcome { solution, summary, out_dir: out_dir.to_path_buf() })
 }
 
-/// Writes both files through temporary names, so that a failure leaves no half-written file.
-fn write_outputs(out_dir: &Path, l: &dyn Discretisation, sol: &Solution, summary: &Summary) -> Result<(), RunError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| RunError::Io { path, source }
-    };
-    std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
+fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
+    let path = path.to_path_buf();
+    move |source| RunError::Io { path, source }
+}
+
+/// Writes solution.vtu under a temporary name in `out_dir` (created): (temporary, final) path.
+fn write_vtu_file(out_dir: &Path, l: &dyn Discretisation, sol: &Solution) -> Result<(PathBuf, PathBuf), RunError> {
+    std::fs::create_dir_all(out_dir).map_err(io_error(out_dir))?;
     let vtu = out_dir.join("solution.vtu");
-    let json = out_dir.join("summary.json");
     let vtu_tmp = out_dir.join(".solution.vtu.partial");
+    write_vtu(&vtu_tmp, l, sol).map_err(io_error(&vtu))?;
+    Ok((vtu_tmp, vtu))
+}
+
+/// Writes summary.json under a temporary name, then moves both files into place, so that a
+/// failure leaves no half-written file.
+fn write_summary(out_dir: &Path, summary: &Summary, vtu_tmp: &Path, vtu: &Path) -> Result<(), RunError> {
+    let json = out_dir.join("summary.json");
     let json_tmp = out_dir.join(".summary.json.partial");
-    write_vtu(&vtu_tmp, l, sol).map_err(io(&vtu))?;
-    summary.write(&json_tmp).map_err(io(&json))?;
-    std::fs::rename(&vtu_tmp, &vtu).map_err(io(&vtu))?;
-    std::fs::rename(&json_tmp, &json).map_err(io(&json))?;
+    summary.write(&json_tmp).map_err(io_error(&json))?;
+    std::fs::rename(vtu_tmp, vtu).map_err(io_error(vtu))?;
+    std::fs::rename(&json_tmp, &json).map_err(io_error(&json))?;
     Ok(())
 }

@@ -53,7 +53,7 @@
 
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleStresses, Dirichlet, Elasticity, Load, MeshSource, Obstacles, P1P0Lagrangian, SceneError, Solver,
+    AdmissibleStresses, Dirichlet, Elasticity, Load, MeshSource, Obstacles, P1P0Lagrangian, SceneError, Solver, TetMesh,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -166,7 +166,19 @@ impl Scene {
     /// Builds the mesh and assembles L; returns it with the scene's solver (if any). A scene
     /// whose Dirichlet conditions leave a rigid-body motion free is an error here.
     pub fn into_problem(self) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
-        let mesh = self.mesh.build(&self.base_dir)?;
+        let mesh = self.build_mesh()?;
+        self.assemble(mesh)
+    }
+
+    /// The mesh: built by a mesher or read from its file (the `read` phase of a run).
+    pub fn build_mesh(&self) -> Result<TetMesh, SceneError> {
+        Ok(self.mesh.build(&self.base_dir)?)
+    }
+
+    /// L assembled on `mesh` (the `setup` phase of a run: dofs, pattern, the obstacles' rows,
+    /// loads), with the scene's solver. A scene whose Dirichlet conditions leave a rigid-body
+    /// motion free is an error here.
+    pub fn assemble(self, mesh: TetMesh) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
         let l = P1P0Lagrangian::new(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle)?
             .with_loads(&self.load)?;
         l.dofs().check_rigid_motions(l.mesh())?;

@@ -40,6 +40,13 @@ fn run_writes_summary_and_vtu() {
     assert!((summary["force"].as_f64().unwrap() - 2.0).abs() < 1e-9);
     assert!(summary["kkt_residual"].as_f64().unwrap() <= 1e-10);
     assert_eq!(summary["plastic_elements"], summary["elements"]);
+    // end-to-end phases: the solver's own clock runs inside `solve`, and they add up
+    let e2e = summary["end_to_end"].as_object().expect("end_to_end");
+    let phase = |k: &str| e2e.get(k).and_then(|v| v.as_f64()).unwrap_or_else(|| panic!("end_to_end lacks {k}"));
+    assert!(phase("solve") >= summary["wall_s"].as_f64().unwrap());
+    let sum: f64 = ["read", "setup", "solve", "summary", "write"].iter().map(|k| phase(k)).sum();
+    assert!((sum - summary["end_to_end_s"].as_f64().unwrap()).abs() <= 1e-9 * sum.max(1.0));
+    assert!(stdout.contains("end to end"), "{stdout}");
     let vtu = std::fs::read(out.join("solution.vtu")).unwrap();
     let head = String::from_utf8_lossy(&vtu[..vtu.len().min(3000)]);
     for name in ["displacement", "contact_force", "stress", "von_mises", "xi", "plastic", "NumberOfCells=\"162\""] {

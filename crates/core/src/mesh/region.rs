@@ -100,7 +100,7 @@ impl Region {
             Region::All(rs) => rs.iter().all(|r| r.contains_facet(mesh, f, facet_groups)),
             Region::Any(rs) => rs.iter().any(|r| r.contains_facet(mesh, f, facet_groups)),
             Region::Not(r) => !r.contains_facet(mesh, f, facet_groups),
-            geometric => geometric.contains_point(&mesh.facet_centroid(f), mesh.diameter()).unwrap_or(false),
+            geometric => geometric.contains_point(&mesh.facet_centroid(f), facet_groups.diameter).unwrap_or(false),
         }
     }
 
@@ -114,7 +114,7 @@ impl Region {
             Region::Not(r) => facet_groups.on_boundary[n] && !r.contains_node(mesh, n, facet_groups),
             geometric => {
                 facet_groups.on_boundary[n]
-                    && geometric.contains_point(&mesh.nodes[n], mesh.diameter()).unwrap_or(false)
+                    && geometric.contains_point(&mesh.nodes[n], facet_groups.diameter).unwrap_or(false)
             }
         }
     }
@@ -132,8 +132,12 @@ impl Region {
     }
 }
 
-/// Membership tables of facets and nodes in the mesh's facet groups.
+/// Membership tables of facets and nodes in the mesh's facet groups, and the mesh's diameter
+/// (the scale of the geometric tests), computed once per selection: a test per node or facet
+/// that recomputed it would make selecting a region quadratic in the mesh size.
 pub struct FacetGroups {
+    /// The mesh's diameter.
+    diameter: f64,
     names: Vec<String>,
     facet_mask: Vec<Vec<bool>>,
     node_mask: Vec<Vec<bool>>,
@@ -165,7 +169,7 @@ impl FacetGroups {
             facet_mask.push(fm);
             node_mask.push(nm);
         }
-        Self { names, facet_mask, node_mask, on_boundary }
+        Self { diameter: mesh.diameter(), names, facet_mask, node_mask, on_boundary }
     }
 
     fn index(&self, g: &str) -> Option<usize> {
