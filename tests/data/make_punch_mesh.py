@@ -126,6 +126,26 @@ def report():
 
 
 def main():
+    # optional: `--scale S OUT.msh` writes one ASCII file with every mesh size multiplied by S
+    # (benchmark meshes of the same family: S = 0.5 gives about 20k dofs), instead of the two
+    # committed test files
+    args = sys.argv[1:]
+    if args[:1] == ["--scale"]:
+        global SIZE_CONTACT, SIZE_FAR
+        scale, out = float(args[1]), args[2]
+        SIZE_CONTACT *= scale
+        SIZE_FAR *= scale
+        gmsh.initialize(sys.argv[:1])
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("punch")
+        build()
+        report()
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.option.setNumber("Mesh.SaveAll", 0)
+        gmsh.option.setNumber("Mesh.Binary", 0)
+        gmsh.write(out)
+        gmsh.finalize()
+        return
     gmsh.initialize(sys.argv[:1])
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.model.add("punch")

@@ -38,25 +38,53 @@ pub enum LinearSolver {
     Direct,
     /// CG with smoothed-aggregation AMG of the elastic stiffness: memory ~ N, inexact.
     Amg,
-    /// Direct up to a number of free dofs (Newton's `auto_amg_dofs`, default
-    /// [`AUTO_AMG_DOFS`]), AMG above (the default).
+    /// By estimated cost ([`direct_is_cheaper`]): the symbolic analysis of the tangent's
+    /// pattern (cheap) gives the factor's fill and flops, and the direct backend is taken when
+    /// its estimated cost is below the multigrid's; above Newton's `auto_amg_dofs` (default
+    /// [`AUTO_AMG_DOFS`]) free dofs AMG without analysing (the default).
     #[default]
     Auto,
 }
 
-/// The default of Newton's `auto_amg_dofs`: above this many free dofs `auto` picks AMG. It is
-/// the crossover measured with `saddle bench` on the default scene family (2 cores): there the
-/// direct and the AMG Newton cost the same wall time; below it the factorisation is cheaper
-/// than the CG iterations, above it the factorisation's N^1.5 memory and time take over.
-pub const AUTO_AMG_DOFS: usize = 20_000;
+/// The default of Newton's `auto_amg_dofs`: above this many free dofs `auto` picks AMG without
+/// a symbolic analysis. Measured on the default scene family (2 cores), the multigrid Newton
+/// is already 1.9× faster than the direct one at 18.5k dofs and 3× at 45k, and the fill of a
+/// 3D factor only grows from there; the analysis that the cost rule needs (≈ 0.1 s at 45k
+/// dofs) is skipped where its answer is known.
+pub const AUTO_AMG_DOFS: usize = 200_000;
+
+/// The cost rule of `auto`: factorisations a direct Newton solve performs (measured 4–5 on the
+/// default scene family, 5 on an unstructured mesh: the elastic start's and one per step).
+pub const DIRECT_FACTORISATIONS: f64 = 5.0;
+
+/// The cost rule of `auto`: a triangular solve pair's multiply–add against a factorisation's.
+/// Solves run at memory speed, factorisations at matrix–matrix speed; measured ≈ 10 (3.5e-10
+/// s per row and nonzero of L for the Delassus columns of the elastic start, 3.4e-11 s per
+/// factorisation multiply–add, on 10k–30k-dof meshes, structured and unstructured).
+pub const SOLVE_WEIGHT: f64 = 10.0;
+
+/// The cost rule of `auto`: a multigrid Newton solve, in factorisation multiply–adds per
+/// nonzero of the stiffness. Measured 3.4–5.8 µs per nonzero for whole AMG Newton solves on
+/// 10k–45k-dof meshes (structured and unstructured) at 3.4e-11 s per multiply–add: ≈ 1.2e5.
+pub const AMG_COST_PER_NONZERO: f64 = 1.2e5;
+
+/// The cost rule of `auto` (Newton): the direct backend's estimated cost,
+/// `DIRECT_FACTORISATIONS · F + SOLVE_WEIGHT · rows · nnz(L)` (F the multiply–adds of one
+/// factorisation, rows × nnz(L) the Delassus columns of the exact elastic start), against the
+/// multigrid's, `AMG_COST_PER_NONZERO · nnz(K)`. Returns (direct is cheaper, direct estimate,
+/// multigrid estimate), in multiply–adds.
+pub fn direct_is_cheaper(chol: &SparseCholesky, contact_rows: usize, stiffness_nonzeros: usize) -> (bool, f64, f64) {
+    let direct = DIRECT_FACTORISATIONS * chol.factor_flops() + SOLVE_WEIGHT * (contact_rows * chol.nnz_l()) as f64;
+    let amg = AMG_COST_PER_NONZERO * stiffness_nonzeros as f64;
+    (direct <= amg, direct, amg)
+}
 
 impl LinearSolver {
-    /// Direct or AMG for a problem with `n` free dofs, `auto` switching to AMG above
-    /// `auto_amg_dofs`.
+    /// Direct or AMG as far as the size decides: `auto` is AMG above `auto_amg_dofs` free dofs,
+    /// and stays `Auto` below (the cost rule decides after the symbolic analysis).
     pub fn resolve(self, n: usize, auto_amg_dofs: usize) -> LinearSolver {
         match self {
             LinearSolver::Auto if n > auto_amg_dofs => LinearSolver::Amg,
-            LinearSolver::Auto => LinearSolver::Direct,
             other => other,
         }
     }

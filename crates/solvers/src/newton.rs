@@ -31,7 +31,7 @@
 //! Once the active set and the plastic set settle, convergence is quadratic.
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
-use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step};
+use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::residual;
@@ -59,11 +59,11 @@ pub struct Newton {
     /// Backtracking line search on J (off: full Newton steps).
     pub line_search: bool,
     /// How the linearised systems are solved: `direct` (Cholesky per iteration), `amg` (CG
-    /// with the elastic multigrid, inexact Newton) or `auto` (direct up to `auto_amg_dofs`
-    /// free dofs, AMG above).
+    /// with the elastic multigrid, inexact Newton) or `auto` (by estimated cost from the
+    /// symbolic analysis, [`direct_is_cheaper`]; AMG above `auto_amg_dofs` free dofs).
     pub linear: LinearSolver,
-    /// `linear = "auto"` picks AMG above this many free dofs (default [`AUTO_AMG_DOFS`], the
-    /// crossover measured with `saddle bench`).
+    /// `linear = "auto"` picks AMG without analysing above this many free dofs (default
+    /// [`AUTO_AMG_DOFS`]); below, the cost rule decides.
     pub auto_amg_dofs: usize,
     /// The forcing term of inexact Newton with AMG (theory §4.2): each CG solve stops at the
     /// relative residual `cg_forcing · min(r, 1)`, r the current KKT residual (floored at
@@ -239,6 +239,8 @@ struct State {
 /// What a Newton run counts for its report.
 #[derive(Default)]
 struct Counts {
+    /// The cost rule of `linear = "auto"`: the direct and the multigrid estimates.
+    cost_estimates: Option<(f64, f64)>,
     /// Halvings of the line search.
     backtracks: usize,
     /// Rows that entered or left A.
@@ -305,13 +307,29 @@ impl<'a> Run<'a> {
         let nr = l.constraints().n_rows();
         let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs);
         monitor.phase("analysis");
-        let mut system = if linear == LinearSolver::Amg {
-            timer
-                .time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))?
-        } else {
-            timer.time("analysis", || ActiveSetSystem::new(l, name))?
+        let multigrid = |timer: &mut PhaseTimer| {
+            timer.time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))
         };
         let mut count = Counts::default();
+        let mut system = match linear {
+            LinearSolver::Amg => multigrid(timer)?,
+            LinearSolver::Direct => timer.time("analysis", || ActiveSetSystem::new(l, name))?,
+            LinearSolver::Auto => {
+                // the cost rule: the symbolic analysis gives the factor's fill and flops
+                let mut direct = timer.time("analysis", || ActiveSetSystem::new(l, name))?;
+                let chol = direct.direct().expect("the direct backend");
+                let (cheaper, d, a) = direct_is_cheaper(chol, nr, l.pattern().nnz());
+                count.cost_estimates = Some((d, a));
+                // without nodal dofs (no rigid-body modes) there is no multigrid: stay direct
+                if cheaper || l.rigid_body_modes().is_none() {
+                    direct
+                } else {
+                    let mut amg = multigrid(timer)?;
+                    amg.symbolic_analyses += direct.symbolic_analyses;
+                    amg
+                }
+            }
+        };
         // (with the iterative backend the Delassus columns would cost a CG solve per row: the
         // elastic contact set is then found by the elastic phase)
         let mut elastic_start = None;
@@ -520,11 +538,23 @@ impl<'a> Run<'a> {
             put("pcg_iterations", iterative.iterations);
             put("pcg_unconverged", iterative.unconverged);
         }
+        let factor = sys.direct().map(|chol| (chol.nnz_l(), chol.factor_flops()));
+        if let Some((nnz, _)) = factor {
+            put("factor_nonzeros", nnz);
+        }
         put("line_search_backtracks", c.backtracks);
         put("active_set_changes", c.active_changes);
         put("return_mappings", c.return_mappings);
         put("elastic_phase_steps", c.elastic_phase_steps);
         put("contact_rows_active", self.state.active.iter().filter(|a| **a).count());
+        put("stiffness_nonzeros", self.l.pattern().nnz());
+        if let Some((_, flops)) = factor {
+            counters.insert("factor_flops".into(), flops);
+        }
+        if let Some((direct, amg)) = c.cost_estimates {
+            counters.insert("auto_direct_cost".into(), direct);
+            counters.insert("auto_amg_cost".into(), amg);
+        }
         let State { u, v, lambda, stress, it, .. } = self.state;
         let report = SolveReport {
             solver: self.name.into(),

@@ -34,7 +34,8 @@ pub struct DenseQp {
     cached: Option<FreeBlock>,
     /// Active-set steps of the last solve.
     pub last_steps: usize,
-    /// Cholesky factorisations of free blocks so far.
+    /// Cholesky factorisations of free blocks so far (not counting O(n²) updates by one
+    /// variable).
     pub factorisations: usize,
 }
 
@@ -159,6 +160,28 @@ impl DenseQp {
         Err(QpError::NoTermination(budget))
     }
 
+    /// The Cholesky factor of S_FF for the free set `free` (indices `idx`) from the cached
+    /// block, when they differ by one variable: nalgebra's column removal or insertion, O(n²).
+    /// `None` (factorise afresh) otherwise, or when the update loses positive definiteness.
+    fn updated(
+        block: FreeBlock,
+        free: &[bool],
+        idx: &[usize],
+        s: &DMatrix<f64>,
+    ) -> Option<Cholesky<f64, nalgebra::Dyn>> {
+        let mut changed = (0..free.len()).filter(|&i| free[i] != block.free[i]);
+        let (i, None) = (changed.next()?, changed.next()) else { return None };
+        let chol = if block.free[i] {
+            let k = block.free[..i].iter().filter(|f| **f).count();
+            block.chol.remove_column(k)
+        } else {
+            let k = free[..i].iter().filter(|f| **f).count();
+            let col = DVector::from_iterator(idx.len(), idx.iter().map(|&r| s[(r, i)]));
+            block.chol.insert_column(k, col)
+        };
+        chol.l_dirty().diagonal().iter().all(|d| d.is_finite() && *d > 0.0).then_some(chol)
+    }
+
     /// Minimiser on the free set with the bound variables at 0: x_F and the equality
     /// multipliers y, from the (cached) Cholesky factor of S_FF and the small Schur system.
     fn solve_free(&mut self, q: &DVector<f64>) -> Result<(DVector<f64>, DVector<f64>), QpError> {
@@ -166,15 +189,22 @@ impl DenseQp {
         let m = self.e_mat.nrows();
         let fresh = !matches!(&self.cached, Some(b) if b.free == self.free);
         if fresh {
-            let sff = self.s.select_rows(&idx).select_columns(&idx);
-            let chol = sff.cholesky().ok_or(QpError::Singular)?;
+            // one variable more or less than the cached block: an O(n²) update of its factor
+            // (the active-set steps move one variable at a time); else a new factorisation
+            let updated = self.cached.take().and_then(|b| Self::updated(b, &self.free, &idx, &self.s));
+            let chol = match updated {
+                Some(chol) => chol,
+                None => {
+                    self.factorisations += 1;
+                    self.s.select_rows(&idx).select_columns(&idx).cholesky().ok_or(QpError::Singular)?
+                }
+            };
             let ef = self.e_mat.select_columns(&idx);
             // Schur complement E_F S_FF⁻¹ E_Fᵀ of the equality block
             let z = chol.solve(&ef.transpose());
             let schur =
                 (&ef * z).cholesky().or_else(|| if m == 0 { DMatrix::<f64>::zeros(0, 0).cholesky() } else { None });
             let schur = schur.ok_or(QpError::Infeasible)?;
-            self.factorisations += 1;
             self.cached = Some(FreeBlock { free: self.free.clone(), chol, ef, schur });
         }
         let FreeBlock { chol, ef, schur, .. } = self.cached.as_ref().unwrap();
