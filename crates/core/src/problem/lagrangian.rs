@@ -224,7 +224,7 @@ pub trait Lagrangian: Sync {
     /// f = Σ_T w_T B_Tᵀ σ_T: the internal forces of a stress field (Bᵀ of theory §3).
     fn divergence(&self, sigma: &[Sym], f: &mut [f64]);
     /// The strain operator B as explicit entries `(point, component, dof, value)`:
-    /// ε_T[c] = Σ value · u[dof] (Mandel components), for solvers that need B as a matrix
+    /// `ε_T[c] = Σ value · u[dof]` (Mandel components), for solvers that need B as a matrix
     /// (conic formulations).
     fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)>;
     /// Sparsity pattern of assembled matrices (lower triangle).
