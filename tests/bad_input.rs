@@ -5,32 +5,10 @@ mod common;
 use common::*;
 use std::process::Command;
 
-/// Runs `saddle run` on scene text; returns (exit code, stderr, whether the out dir exists).
-fn run(text: &str) -> (i32, String, bool) {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("scene.toml");
-    std::fs::write(&scene, text).unwrap();
-    let out = dir.path().join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
-        .args(["run", scene.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    (o.status.code().unwrap(), String::from_utf8_lossy(&o.stderr).into_owned(), out.exists())
-}
-
 fn edited(path: &str, value: toml::Value) -> String {
     let mut t = small_johnson();
     set(&mut t, path, value);
     toml::to_string(&t).unwrap()
-}
-
-fn assert_rejected(text: &str, expected: &[&str]) {
-    let (code, err, wrote) = run(text);
-    assert_eq!(code, 1, "{err}");
-    assert!(!wrote, "nothing is written for an invalid scene");
-    for e in expected {
-        assert!(err.contains(e), "error message {err:?} lacks {e:?}");
-    }
 }
 
 #[test]

@@ -233,18 +233,10 @@ fn out_of_range_values_are_rejected_by_path() {
 
 #[test]
 fn missing_mesh_file_names_the_path_and_nothing_is_written() {
-    let dir = tempfile::tempdir().unwrap();
     let mut t = example("gmsh_punch.toml");
     set(&mut t, "mesh.file", "no/such/mesh.msh".into());
-    let scene = dir.path().join("scene.toml");
-    std::fs::write(&scene, toml::to_string(&t).unwrap()).unwrap();
-    let out = dir.path().join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_saddle"))
-        .args(["run", scene.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let (code, err, wrote) = run_scene(&toml::to_string(&t).unwrap());
+    assert_eq!(code, 1, "{err}");
     assert!(err.contains("no/such/mesh.msh"), "{err}");
-    assert!(!out.exists(), "nothing is written for an invalid scene");
+    assert!(!wrote, "nothing is written for an invalid scene");
 }

@@ -217,18 +217,10 @@ fn saddle_run_writes_nothing_for_bad_names() {
     for text in
         [two_punches().replace("name = \"right\"", "name = \"left\""), two_punches().replace("name = \"right\"\n", "")]
     {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("scene.toml");
-        std::fs::write(&path, text).unwrap();
-        let out = dir.path().join("out");
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_saddle"))
-            .args(["run", path.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{err}");
+        let (code, err, wrote) = run_scene(&text);
+        assert_eq!(code, 1, "{err}");
         assert!(err.contains("obstacle[1].name"), "{err}");
-        assert!(!out.exists(), "nothing is written for an invalid scene");
+        assert!(!wrote, "nothing is written for an invalid scene");
     }
 }
 

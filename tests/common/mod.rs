@@ -45,3 +45,28 @@ pub fn small_johnson() -> toml::Table {
 pub fn solver(text: &str) -> Box<dyn Solver> {
     toml::from_str(text).unwrap()
 }
+
+/// Runs `saddle run --quiet` on scene text written to a temporary folder; returns (exit code,
+/// stderr, whether the output folder was created).
+pub fn run_scene(text: &str) -> (i32, String, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["run", scene.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    (o.status.code().unwrap(), String::from_utf8_lossy(&o.stderr).into_owned(), out.exists())
+}
+
+/// `saddle run` on scene text fails with exit code 1, writes nothing, and its error holds every
+/// piece of `expected` (the field and the value).
+pub fn assert_rejected(text: &str, expected: &[&str]) {
+    let (code, err, wrote) = run_scene(text);
+    assert_eq!(code, 1, "{err}");
+    assert!(!wrote, "nothing is written for an invalid scene");
+    for e in expected {
+        assert!(err.contains(e), "error message {err:?} lacks {e:?}");
+    }
+}
