@@ -236,7 +236,8 @@ impl ActiveSetSystem {
             message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
         })?;
         let c = l.elasticity().stiffness_matrix();
-        let k = Csr::from_symmetric_lower(lower(l.pattern()), &l.stiffness(Material::Uniform(&c)));
+        let k_values = l.stiffness(Material::Uniform(&c));
+        let k = Csr::from_symmetric_lower(lower(l.pattern()), &k_values);
         let amg = SmoothedAggregation::new(&k, &near_null, amg).map_err(|e| SolveError::Unsupported {
             solver: solver.into(),
             message: format!("multigrid set-up: {e}"),
@@ -247,7 +248,7 @@ impl ActiveSetSystem {
             k
         } else {
             let mut kt = vec![0.0; basis.pattern(l.pattern()).nnz()];
-            basis.stiffness(&l.stiffness(Material::Uniform(&c)), &mut kt);
+            basis.stiffness(&k_values, &mut kt);
             Csr::from_symmetric_lower(lower(basis.pattern(l.pattern())), &kt)
         };
         let iterative = IterativeSolve {

@@ -373,8 +373,7 @@ impl<'a> Run<'a> {
         };
         let c_elastic = l.elasticity().stiffness_matrix();
         // PDAS compares forces with gaps through each row's elastic stiffness (force/length)
-        let row_stiffness: Vec<f64> =
-            { system.basis().row_stiffness(l.pattern(), &l.stiffness(Material::Uniform(&c_elastic))) };
+        let row_stiffness = system.basis().row_stiffness(l.pattern(), &l.stiffness(Material::Uniform(&c_elastic)));
         Ok(Self { settings, l, name, system, c_elastic, row_stiffness, cold, state, count, work, history: Vec::new() })
     }
 

@@ -227,7 +227,7 @@ pub struct PenaltySystem {
     chol: SparseCholesky,
     /// K' = K_t + μK_el on L's pattern.
     kprime: Vec<f64>,
-    /// TᵀK'T in the rows' coordinates, and Tᵀr.
+    /// TᵀK'T in the rows' coordinates, and Tᵀr (empty when T = I).
     kprime_t: Vec<f64>,
     r_t: Vec<f64>,
     /// K' + D_A, factorised.
@@ -309,6 +309,7 @@ impl PenaltySystem {
         let pattern = slaves.pattern(l.pattern());
         let chol = linear::analyse(pattern, "penalty Hessian", "penalty", &mut symbolic_analyses)?;
         let nnz = pattern.nnz();
+        let transformed = !slaves.is_identity();
         Ok(Self {
             mu,
             slaves,
@@ -317,8 +318,8 @@ impl PenaltySystem {
             c_el,
             chol,
             hess: vec![0.0; nnz],
-            kprime_t: vec![0.0; nnz],
-            r_t: vec![0.0; n],
+            kprime_t: if transformed { vec![0.0; nnz] } else { Vec::new() },
+            r_t: if transformed { vec![0.0; n] } else { Vec::new() },
             kprime,
             cols: vec![0.0; n * (1 + ne)],
             kcols: vec![0.0; n * (1 + ne)],
@@ -359,6 +360,11 @@ impl PenaltySystem {
         d: &mut Direction<'_>,
         descent: bool,
     ) -> Result<(usize, bool), SolveError> {
+        if !self.slaves.is_identity() {
+            // K' and r in the rows' coordinates, once for all the sweeps
+            self.slaves.stiffness(&self.kprime, &mut self.kprime_t);
+            self.slaves.force_to_coordinates(at.r, &mut self.r_t);
+        }
         for sweep in 1..=MODEL_SWEEPS {
             self.step(l, model, at, d)?;
             let mut settled = true;
@@ -394,9 +400,9 @@ impl PenaltySystem {
         let rows = l.constraints();
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let nc = 1 + ne;
-        // K' and r in the rows' coordinates (T = I for rows on dofs of their own)
-        self.slaves.stiffness(&self.kprime, &mut self.kprime_t);
-        self.slaves.force_to_coordinates(at.r, &mut self.r_t);
+        // K' and r in the rows' coordinates (transformed once per Newton step, [`Self::model_step`])
+        let (kprime, r): (&[f64], &[f64]) =
+            if self.slaves.is_identity() { (&self.kprime, at.r) } else { (&self.kprime_t, &self.r_t) };
         // z and P on the active slave dofs; K' times them, plus r in column 0
         self.cols.iter_mut().for_each(|x| *x = 0.0);
         for i in (0..nr).filter(|&i| active[i]) {
@@ -407,14 +413,14 @@ impl PenaltySystem {
             }
         }
         for c in 0..nc {
-            p.matvec(&self.kprime_t, &self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
+            p.matvec(kprime, &self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
         }
-        for (x, ri) in self.kcols[..n].iter_mut().zip(&self.r_t) {
+        for (x, ri) in self.kcols[..n].iter_mut().zip(r) {
             *x += ri;
         }
         // A = K' + D_A on the fixed pattern
         let cp = p.col_ptr();
-        self.hess.copy_from_slice(&self.kprime_t);
+        self.hess.copy_from_slice(kprime);
         for i in (0..nr).filter(|&i| active[i]) {
             self.hess[cp[self.slaves.dof[i]]] += self.k[i] * self.slaves.coef[i].powi(2);
         }
