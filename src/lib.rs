@@ -28,6 +28,8 @@ pub use saddle_yield as yield_surfaces;
 pub mod bench;
 pub mod conformance;
 pub mod output;
+#[cfg(feature = "gmsh")]
+pub mod peer;
 pub mod report;
 pub mod run;
 pub mod scene;

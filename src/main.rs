@@ -74,6 +74,14 @@ enum Command {
         /// Above this many DOFs the Cholesky baseline and the factorising solvers are skipped.
         #[arg(long, default_value_t = 250_000)]
         direct_max_dofs: usize,
+        /// Mesh mode: run the scene end to end (as `saddle run`, its own solver) on each of
+        /// these Gmsh files instead of scaling a box mesh; writes DIR/meshes.{csv,md}.
+        #[arg(long, value_delimiter = ',')]
+        meshes: Vec<PathBuf>,
+        /// With --meshes: a peer code's JSON per mesh (examples/peers/dolfinx/punch.py --json), in
+        /// the same order, for the side-by-side table.
+        #[arg(long, value_delimiter = ',', requires = "meshes")]
+        peer: Vec<PathBuf>,
     },
 }
 
@@ -273,12 +281,31 @@ fn bench(
     Ok(ExitCode::SUCCESS)
 }
 
+#[cfg(feature = "gmsh")]
+fn bench_meshes(scene: PathBuf, out: PathBuf, meshes: Vec<PathBuf>, peers: Vec<PathBuf>) -> Result<ExitCode, String> {
+    eprintln!("{}: end to end on {} meshes into {}", scene.display(), meshes.len(), out.display());
+    let started = Instant::now();
+    let table = saddle::peer::generate(&scene, &meshes, &peers, &out, &mut |line| {
+        eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
+    })
+    .map_err(|e| e.to_string())?;
+    println!("{table}");
+    println!("  wrote {}/meshes.csv, meshes.md", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(not(feature = "gmsh"))]
+fn bench_meshes(_: PathBuf, _: PathBuf, _: Vec<PathBuf>, _: Vec<PathBuf>) -> Result<ExitCode, String> {
+    Err("--meshes reads Gmsh files: build with the `gmsh` feature".into())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet).map_err(|e| e.to_string()),
         Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
-        Command::Bench { scene, out, sizes, solvers, direct_max_dofs } => {
+        Command::Bench { scene, out, meshes, peer, .. } if !meshes.is_empty() => bench_meshes(scene, out, meshes, peer),
+        Command::Bench { scene, out, sizes, solvers, direct_max_dofs, .. } => {
             bench(scene, out, sizes, solvers, direct_max_dofs)
         }
     };

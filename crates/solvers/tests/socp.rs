@@ -114,7 +114,7 @@ fn small_default_scene_agrees_with_newton() {
     // the report: interior point numbers, then polishing
     let c = &r.counters;
     assert!(c["ipm_iterations"] >= 5.0 && c["ipm_status"] == 1.0, "{c:?}");
-    assert!(c["ipm_duality_gap"] >= 0.0 && c["ipm_relative_gap"] <= 1e-7);
+    assert!(c["ipm_duality_gap"] >= 0.0 && c["ipm_relative_gap"] <= 10.0 * Socp::default().ipm_tol, "{c:?}");
     assert!(c["ipm_kkt_residual"] > 1e-9, "the interior point alone is not that accurate: {c:?}");
     assert!(c["polish_iterations"] >= 1.0);
     assert_eq!(r.iterations, (c["ipm_iterations"] + c["polish_iterations"]) as usize);
@@ -131,7 +131,7 @@ fn ipm_displacements_from_the_equality_duals_have_the_right_sign() {
     // u = −z_eq, V = −z_load: the interior point solution alone, before polishing, against Newton
     let l = small_johnson();
     let reference = newton(&l);
-    let sol = Socp { polish: false, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let sol = Socp { polish: false, ipm_tol: 1e-8, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
     print_report("IPM only", &sol);
     let (u0, u1) = (reference.extras[0], sol.extras[0]);
     eprintln!(
@@ -152,7 +152,7 @@ fn ipm_displacements_from_the_equality_duals_have_the_right_sign() {
     assert_eq!(r.counters["polish_iterations"], 0.0);
     assert_eq!(r.iterations, r.counters["ipm_iterations"] as usize);
     // a loose tolerance is met by the interior point alone
-    let loose = Socp { polish: false, tol: 1e-3, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let loose = Socp { polish: false, tol: 1e-3, ipm_tol: 1e-8, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
     assert!(loose.report.converged);
 }
 
@@ -208,7 +208,7 @@ fn perfect_plasticity_fixes_the_hardening_variable() {
     assert!(sol.stress.sigma.iter().all(|s| deviator(s).norm() <= 1.0 + 1e-8));
     assert!(sol.stress.n_plastic() > 0);
     // the stresses are unique even at h = 0 (theory §1): the interior point ones agree
-    let ipm = Socp { polish: false, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let ipm = Socp { polish: false, ipm_tol: 1e-8, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
     assert!(energy_error(&l, &ipm.stress, &sol.stress) <= 1e-4);
     assert!(sol.report.converged, "{:?}: KKT {:e}", sol.report.stop_reason, sol.report.kkt.max());
 }

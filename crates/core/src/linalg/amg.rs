@@ -68,6 +68,7 @@
 
 use super::cholesky::SparseCholesky;
 use super::csr::{Csr, LowerCsc};
+use super::csr32::Csr32;
 use super::error::AmgError;
 use super::pcg::Preconditioner;
 use crate::error::{ParameterError, check};
@@ -222,17 +223,19 @@ impl Blocks {
 }
 
 /// One level of the hierarchy with its transfer to the next coarser one.
+/// One level of the hierarchy. The operators of the cycle are stored in single precision
+/// ([`Csr32`]: a V-cycle is bound by memory traffic); the set-up works in double precision.
 #[derive(Debug)]
 struct Level {
-    a: Csr,
+    a: Csr32,
     inv_diag: Vec<f64>,
     /// Estimate of ρ(D⁻¹A).
     lambda_max: f64,
     p_tent: Csr,
     /// P = (I − ω D⁻¹A) P_tent.
-    p: Csr,
+    p: Csr32,
     /// Pᵀ.
-    r: Csr,
+    r: Csr32,
 }
 
 /// Scratch of one level's cycle: Chebyshev direction, residual, coarse right-hand side and
@@ -323,16 +326,15 @@ impl SmoothedAggregation {
 
     /// Unknowns on the finest level.
     pub fn n(&self) -> usize {
-        self.levels.first().map_or(self.coarse_a.nrows, |l| l.a.nrows)
+        self.levels.first().map_or(self.coarse_a.nrows, |l| l.a.nrows())
     }
 
     /// Sizes of all levels, finest first (the last one is factorised).
     pub fn level_info(&self) -> Vec<LevelInfo> {
         self.levels
             .iter()
-            .map(|l| &l.a)
-            .chain(std::iter::once(&self.coarse_a))
-            .map(|a| LevelInfo { n: a.nrows, nnz: a.nnz() })
+            .map(|l| LevelInfo { n: l.a.nrows(), nnz: l.a.nnz() })
+            .chain(std::iter::once(LevelInfo { n: self.coarse_a.nrows, nnz: self.coarse_a.nnz() }))
             .collect()
     }
 
@@ -373,7 +375,7 @@ impl Preconditioner for SmoothedAggregation {
 
 impl LevelWork {
     fn new(l: &Level) -> Self {
-        let (n, nc) = (l.a.nrows, l.p.ncols);
+        let (n, nc) = (l.a.nrows(), l.p.ncols());
         Self { d: vec![0.0; n], t: vec![0.0; n], bc: vec![0.0; nc], xc: vec![0.0; nc] }
     }
 }
@@ -387,6 +389,7 @@ impl Level {
         let p = smooth_prolongator(&a, &inv_diag, 4.0 / (3.0 * lambda_max), &p_tent);
         let r = p.transpose();
         let a_c = r.matmul(&a.matmul(&p));
+        let (a, p, r) = (Csr32::from(&a), Csr32::from(&p), Csr32::from(&r));
         Ok((Self { a, inv_diag, lambda_max, p_tent, p, r }, a_c))
     }
 }
@@ -690,7 +693,7 @@ fn chebyshev(lv: &Level, b: &[f64], x: &mut [f64], d: &mut [f64], zero_start: bo
 }
 
 /// d = c₁ d + c₂ D⁻¹(b − A x).
-fn direction_step(a: &Csr, inv_d: &[f64], b: &[f64], x: &[f64], d: &mut [f64], c1: f64, c2: f64) {
+fn direction_step(a: &Csr32, inv_d: &[f64], b: &[f64], x: &[f64], d: &mut [f64], c1: f64, c2: f64) {
     d.par_chunks_mut(CHUNK).enumerate().for_each(|(c, d)| {
         let r0 = c * CHUNK;
         for (k, d) in d.iter_mut().enumerate() {

@@ -44,6 +44,25 @@ impl<'a> LowerCsc<'a> {
     }
 }
 
+/// Σ_k val_k x[idx_k] in double precision, in four independent partial sums: one chain of
+/// additions would wait on each addition's latency (the products of the iterative path ran at
+/// a quarter of the machine's speed).
+#[inline]
+pub fn sparse_dot<T: Copy + Into<f64>>(idx: &[u32], val: &[T], x: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let (ic, vc) = (idx.chunks_exact(4), val.chunks_exact(4));
+    let (it, vt) = (ic.remainder(), vc.remainder());
+    for (i, v) in ic.zip(vc) {
+        for k in 0..4 {
+            s[k] += v[k].into() * x[i[k] as usize];
+        }
+    }
+    for (&j, &a) in it.iter().zip(vt) {
+        s[0] += a.into() * x[j as usize];
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
+}
+
 /// Rows per parallel task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: usize = 2048;
 
@@ -123,12 +142,7 @@ impl Csr {
         y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
             let r0 = c * CHUNK;
             for (k, yi) in ys.iter_mut().enumerate() {
-                let r = r0 + k;
-                let mut s = 0.0;
-                for q in self.ptr[r]..self.ptr[r + 1] {
-                    s += self.val[q] * x[self.idx[q] as usize];
-                }
-                *yi = s;
+                *yi = self.row_dot(r0 + k, x);
             }
         });
     }
@@ -138,12 +152,7 @@ impl Csr {
         y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
             let r0 = c * CHUNK;
             for (k, yi) in ys.iter_mut().enumerate() {
-                let r = r0 + k;
-                let mut s = b[r];
-                for q in self.ptr[r]..self.ptr[r + 1] {
-                    s -= self.val[q] * x[self.idx[q] as usize];
-                }
-                *yi = s;
+                *yi = b[r0 + k] - self.row_dot(r0 + k, x);
             }
         });
     }
@@ -159,11 +168,11 @@ impl Csr {
         });
     }
 
-    /// (A x)_r: the dot product of row `r` with `x`.
+    /// (A x)_r: the dot product of row `r` with `x` ([`sparse_dot`]).
     #[inline]
     pub fn row_dot(&self, r: usize, x: &[f64]) -> f64 {
         let (lo, hi) = (self.ptr[r], self.ptr[r + 1]);
-        self.idx[lo..hi].iter().zip(&self.val[lo..hi]).map(|(&j, &a)| a * x[j as usize]).sum()
+        sparse_dot(&self.idx[lo..hi], &self.val[lo..hi], x)
     }
 
     /// The diagonal (zero where a row stores no diagonal entry).

@@ -7,6 +7,7 @@
 pub mod amg;
 pub mod cholesky;
 pub mod csr;
+pub mod csr32;
 pub mod dense_qp;
 pub mod error;
 pub mod pcg;
@@ -14,6 +15,7 @@ pub mod pcg;
 pub use amg::{AmgParams, LevelInfo, NearNullSpace, SmoothedAggregation};
 pub use cholesky::SparseCholesky;
 pub use csr::{Csr, LowerCsc};
+pub use csr32::Csr32;
 pub use dense_qp::{DenseQp, QpError, QpSolution};
 pub use error::{AmgError, LinalgError, PcgError};
 pub use pcg::{Identity, Jacobi, Pcg, PcgReport, Preconditioner};

@@ -1,0 +1,93 @@
+//! `saddle bench --meshes` (issue 14): a scene end to end on given Gmsh meshes, side by side
+//! with a peer code's JSON. The committed Gmsh mesh, in ASCII and in binary, must give the force
+//! that `saddle run` gives on the scene itself; the end-to-end clock must cover the phases that
+//! `summary.json` records; a wrong number of peer files is refused before any run.
+
+mod common;
+
+use common::repo;
+use std::process::Command;
+
+/// A peer JSON as `examples/peers/dolfinx/punch.py --json` writes it (only the fields read).
+fn peer_json(solve_elastic: f64, solve_plastic: f64) -> String {
+    format!(
+        r#"{{"free_dofs": 1, "timings": {{"total": 9.0}},
+            "elastic": {{"time": {solve_elastic}, "newton_its": 3, "ksp_its": 40}},
+            "plastic": {{"time": {solve_plastic}, "newton_its": 5, "F": 0.3, "n_contact": 7, "n_plastic_cells": 11,
+                        "steps": [{{"ksp_its": 60}}]}}}}"#
+    )
+}
+
+fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines.map(|l| head.iter().map(|h| h.to_string()).zip(l.split(',').map(str::to_string)).collect()).collect()
+}
+
+#[test]
+fn mesh_bench_runs_each_mesh_end_to_end_beside_the_peer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("examples/gmsh_punch.toml");
+    // the reference: `saddle run` on the scene's own mesh
+    let out_run = dir.path().join("run");
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["run", scene.to_str().unwrap(), "--quiet", "--out", out_run.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_run.join("summary.json")).unwrap()).unwrap();
+    let force = summary["force"].as_f64().unwrap();
+
+    let (a, b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    std::fs::write(&a, peer_json(1.0, 2.0)).unwrap();
+    std::fs::write(&b, peer_json(0.5, 0.25)).unwrap();
+    let meshes = [repo("tests/data/punch.msh"), repo("tests/data/punch_binary.msh")];
+    let out = dir.path().join("bench");
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["bench", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--meshes"])
+        .arg(format!("{},{}", meshes[0].display(), meshes[1].display()))
+        .arg("--peer")
+        .arg(format!("{},{}", a.display(), b.display()))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv_rows(&std::fs::read_to_string(out.join("meshes.csv")).unwrap());
+    assert_eq!(rows.len(), 2);
+    let num = |r: &std::collections::HashMap<String, String>, k: &str| r[k].parse::<f64>().unwrap();
+    for (r, peer_solve) in rows.iter().zip([3.0, 0.75]) {
+        // the same mesh (ASCII, binary) gives the force of `saddle run` on the scene
+        assert!((num(r, "force") - force).abs() <= 1e-9 * force, "{} vs {force}", r["force"]);
+        assert_eq!(r["converged"], "true");
+        assert_eq!(num(r, "dofs"), summary["dofs"].as_f64().unwrap());
+        // the outer clock covers every phase of summary.json, and not much more
+        let phases: f64 = ["read_s", "setup_s", "solve_s", "summary_s", "write_s"].iter().map(|k| num(r, k)).sum();
+        let wall = num(r, "wall_s");
+        assert!(wall >= phases && wall <= phases + 0.5, "wall {wall} s against phases {phases} s");
+        // the peer's numbers: elastic + plastic solve, Krylov iterations of both solves
+        assert_eq!(num(r, "peer_solve_s"), peer_solve);
+        assert_eq!(num(r, "peer_krylov_iterations"), 100.0);
+        assert!((num(r, "ratio") - peer_solve / wall).abs() <= 1e-3 * peer_solve / wall + 1e-3);
+        assert!(num(r, "peak_mib") > 0.0);
+        assert!(out.join(r["mesh"].rsplit('/').next().unwrap().trim_end_matches(".msh")).join("solution.vtu").exists());
+    }
+    assert!(std::fs::read_to_string(out.join("meshes.md")).unwrap().contains("| peer solves |"));
+}
+
+#[test]
+fn one_peer_file_per_mesh_is_required() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["bench", repo("examples/gmsh_punch.toml").to_str().unwrap(), "--out"])
+        .arg(dir.path().join("b"))
+        .arg("--meshes")
+        .arg(format!("{0},{0}", repo("tests/data/punch.msh").display()))
+        .arg("--peer")
+        .arg(dir.path().join("missing.json"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--peer: 1 files for 2 meshes"), "{err}");
+    assert!(!dir.path().join("b").join("punch").exists(), "nothing is run");
+}
