@@ -60,10 +60,11 @@ fn mesh_bench_runs_each_mesh_end_to_end_beside_the_peer() {
         assert!((num(r, "force") - force).abs() <= 1e-9 * force, "{} vs {force}", r["force"]);
         assert_eq!(r["converged"], "true");
         assert_eq!(num(r, "dofs"), summary["dofs"].as_f64().unwrap());
-        // the outer clock covers every phase of summary.json, and not much more
+        // the outer clock covers every phase of summary.json, and not much more (the CSV rounds
+        // each time to 0.1 ms)
         let phases: f64 = ["read_s", "setup_s", "solve_s", "summary_s", "write_s"].iter().map(|k| num(r, k)).sum();
         let wall = num(r, "wall_s");
-        assert!(wall >= phases && wall <= phases + 0.5, "wall {wall} s against phases {phases} s");
+        assert!(wall >= phases - 5e-4 && wall <= phases + 0.5, "wall {wall} s against phases {phases} s");
         // the peer's numbers: elastic + plastic solve, Krylov iterations of both solves
         assert_eq!(num(r, "peer_solve_s"), peer_solve);
         assert_eq!(num(r, "peer_krylov_iterations"), 100.0);
