@@ -34,3 +34,4 @@ pub mod report;
 pub mod run;
 pub mod scene;
 pub mod stability;
+pub mod sweep;

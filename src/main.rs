@@ -56,6 +56,29 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// A load sweep: the scene solved at each load factor (every load, and each obstacle's force
+    /// or prescribed displacement, times the factor), each point from zero; writes DIR/sweep.csv,
+    /// sweep.md and sweep.{png,svg} (one reported quantity against another) with the plateau
+    /// indicator d ln y / d ln x of the last interval (a limit load when it nears 0).
+    Sweep {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Load factors, comma-separated, in the order solved.
+        #[arg(long, value_delimiter = ',', required = true)]
+        factors: Vec<f64>,
+        /// Use this solver type with its default parameters instead of the scene's.
+        #[arg(long)]
+        solver: Option<String>,
+        /// The quantity on the plot's x axis: one the obstacle reports, or `factor`.
+        #[arg(long, default_value = "U")]
+        x: String,
+        /// The quantity on the plot's y axis.
+        #[arg(long, default_value = "force")]
+        y: String,
+    },
     /// Cost against problem size: the scene's box mesh scaled to each size; per-phase times,
     /// one elastic linear solve as the baseline, every solver's total and its ratio to that
     /// solve, iterations, peak memory. Writes DIR/bench.{csv,md,png,svg}.
@@ -281,6 +304,26 @@ fn bench(
     Ok(ExitCode::SUCCESS)
 }
 
+fn sweep(
+    scene: PathBuf,
+    out: PathBuf,
+    factors: Vec<f64>,
+    solver: Option<String>,
+    axes: (String, String),
+) -> Result<ExitCode, String> {
+    eprintln!("{}: sweep over load factors {factors:?} into {}", scene.display(), out.display());
+    let started = Instant::now();
+    let opts = saddle::sweep::SweepOptions { factors, solver, axes };
+    let s = saddle::sweep::generate(&scene, &opts, &out, &mut |line| {
+        eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
+    })
+    .map_err(|e| e.to_string())?;
+    println!("{}", saddle::sweep::markdown(&s));
+    println!("  wrote {}/sweep.csv, sweep.md, sweep.png, sweep.svg", out.display());
+    // as `run`: 2 when a point stopped without converging
+    Ok(if s.points.iter().all(|p| p.converged) { ExitCode::SUCCESS } else { ExitCode::from(2) })
+}
+
 #[cfg(feature = "gmsh")]
 fn bench_meshes(scene: PathBuf, out: PathBuf, meshes: Vec<PathBuf>, peers: Vec<PathBuf>) -> Result<ExitCode, String> {
     eprintln!("{}: end to end on {} meshes into {}", scene.display(), meshes.len(), out.display());
@@ -304,6 +347,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet).map_err(|e| e.to_string()),
         Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
+        Command::Sweep { scene, out, factors, solver, x, y } => sweep(scene, out, factors, solver, (x, y)),
         Command::Bench { scene, out, meshes, peer, .. } if !meshes.is_empty() => bench_meshes(scene, out, meshes, peer),
         Command::Bench { scene, out, sizes, solvers, direct_max_dofs, .. } => {
             bench(scene, out, sizes, solvers, direct_max_dofs)

@@ -149,6 +149,22 @@ impl Scene {
         Ok(())
     }
 
+    /// The same scene with every load multiplied by `factor` (finite, ≥ 0): tractions, body
+    /// forces, and each obstacle's prescribed force or displacement. The result is validated;
+    /// errors name `load_factor` or the obstacle that cannot scale (or rejects the scaled value).
+    pub fn with_load_factor(&self, factor: f64) -> Result<Self, SceneError> {
+        if !(factor.is_finite() && factor >= 0.0) {
+            return Err(ParameterError::new("load_factor", factor, "must be finite and >= 0").into());
+        }
+        let scene = Self {
+            load: self.load.iter().map(|l| l.scaled(factor)).collect(),
+            obstacle: self.obstacle.scaled_load(factor)?,
+            ..self.clone()
+        };
+        scene.validate()?;
+        Ok(scene)
+    }
+
     /// The same scene on its structured mesh with `cells` per axis (a refinement study). An
     /// error naming `mesh.cells` when the mesh source has no cell counts (a file, an inline
     /// mesh) or a count is 0.

@@ -519,3 +519,58 @@ pub fn scaling(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> 
     };
     render(&fig, png, svg)
 }
+
+/// A curve y(x) on linear axes (`saddle sweep`: a force–displacement curve): filled markers for
+/// converged points, open ones for the others, written as PNG and SVG.
+pub fn curve(
+    title: &str,
+    descs: (&str, &str),
+    points: &[(f64, f64, bool)],
+    png: &Path,
+    svg: &Path,
+) -> Result<(), super::ReportError> {
+    register_font();
+    let size = (1000, 700);
+    draw_curve(&BitMapBackend::new(png, size).into_drawing_area(), title, descs, points)
+        .map_err(|e| plot_error(png, e))?;
+    draw_curve(&SVGBackend::new(svg, size).into_drawing_area(), title, descs, points)
+        .map_err(|e| plot_error(svg, e))?;
+    Ok(())
+}
+
+fn draw_curve<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    points: &[(f64, f64, bool)],
+) -> Result<(), String> {
+    let s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(s)?;
+    let range = |f: fn(&(f64, f64, bool)) -> f64, pad: f64| {
+        let (lo, hi) = points.iter().map(f).fold((0.0f64, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+        (lo * pad, (hi * pad).max(lo * pad + f64::EPSILON))
+    };
+    let ((x0, x1), (y0, y1)) = (range(|p| p.0, 1.05), range(|p| p.1, 1.1));
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, 24))
+        .margin(16)
+        .x_label_area_size(52)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(s)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style((FONT, 15))
+        .axis_desc_style((FONT, 17))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(225, 225, 225))
+        .draw()
+        .map_err(s)?;
+    let style = ShapeStyle { color: COLORS[0].to_rgba(), filled: true, stroke_width: 2 };
+    chart.draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), style)).map_err(s)?;
+    let marker = |p: &(f64, f64, bool)| Circle::new((p.0, p.1), 5, ShapeStyle { filled: p.2, ..style });
+    chart.draw_series(points.iter().map(marker)).map_err(s)?;
+    root.present().map_err(s)
+}

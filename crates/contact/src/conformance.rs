@@ -51,6 +51,10 @@
 //!   and for `gap()` (g ≥ −tol), is idempotent, and satisfies the variational inequality of
 //!   the projection, (z − Pz)·(w − Pz) ≤ tol for feasible w (the projections of the other
 //!   random points).
+//! * `scaled_load` (e): when the plugin can scale its load
+//!   ([`AdmissibleDisplacements::scaled_load`], for sweeps and load paths), factor 1 gives the
+//!   same load term and rows, and factor 2 doubles the load term and keeps the number of rows
+//!   and extra unknowns.
 //!
 //! Tolerances are relative: g is compared to 1e-9 × (max|c| + scale × the largest row norm).
 
@@ -72,7 +76,7 @@ pub struct KitFailure {
 }
 
 /// The names of the checks, in the order [`check_all`] runs them (see the module docs).
-pub const CHECKS: [&str; 13] = [
+pub const CHECKS: [&str; 14] = [
     "setup",
     "validate",
     "discretise",
@@ -86,6 +90,7 @@ pub const CHECKS: [&str; 13] = [
     "projection_feasible",
     "projection_idempotent",
     "projection_vi",
+    "scaled_load",
 ];
 
 /// Random samples per check.
@@ -129,7 +134,45 @@ pub fn check_all(
     check_rows(k, mesh, dofs, seed, scale)?;
     check_linearisation(k, mesh, dofs, seed, scale)?;
     check_load(k, mesh, dofs, seed, scale)?;
-    check_projection(k, mesh, dofs, seed, scale)
+    check_projection(k, mesh, dofs, seed, scale)?;
+    check_scaled_load(k, mesh, dofs)
+}
+
+/// (e) `scaled_load` (when the plugin has it): factor 1 gives the same obstacle (the same load
+/// term and the same rows), and factor 2 doubles the load term and keeps the number of rows and
+/// of extra unknowns.
+pub fn check_scaled_load(k: &dyn AdmissibleDisplacements, mesh: &TetMesh, dofs: &DofMap) -> Result<(), KitFailure> {
+    let (Some(one), Some(two)) = (k.scaled_load(1.0), k.scaled_load(2.0)) else { return Ok(()) };
+    let rows = |k: &dyn AdmissibleDisplacements| k.discretise(mesh, dofs, "obstacle");
+    let (r, r1, r2) = match (rows(k), rows(one.as_ref()), rows(two.as_ref())) {
+        (Ok(a), Ok(b), Ok(c)) => (a, b, c),
+        (a, b, c) => {
+            let e = [a.err(), b.err(), c.err()].into_iter().flatten().next().map(|e| e.to_string());
+            return fail("scaled_load", format!("the scaled obstacle does not discretise: {e:?}"));
+        }
+    };
+    if one.load() != k.load() || r1 != r {
+        return fail("scaled_load", "scaled_load(1) differs from the obstacle (load term or rows)".into());
+    }
+    let doubled: Vec<f64> = k.load().iter().map(|f| 2.0 * f).collect();
+    if two.load() != doubled {
+        return fail("scaled_load", format!("scaled_load(2).load() = {:?}, not 2 × {:?}", two.load(), k.load()));
+    }
+    // the rows at factor 2 may differ (a prescribed displacement moves a curved obstacle, whose
+    // normals change), but not in number or in extra unknowns
+    if (r2.n_rows(), r2.n_extras) != (r.n_rows(), r.n_extras) {
+        return fail(
+            "scaled_load",
+            format!(
+                "scaled_load(2) has {} rows and {} extras, not {} and {}",
+                r2.n_rows(),
+                r2.n_extras,
+                r.n_rows(),
+                r.n_extras
+            ),
+        );
+    }
+    Ok(())
 }
 
 /// (d) The rows are well formed, finite and none is identically zero in u and V.

@@ -184,6 +184,11 @@ impl RigidPunchDisplacement {
 
 #[typetag::serde(name = "rigid_punch")]
 impl AdmissibleDisplacements for RigidPunch {
+    /// F × factor.
+    fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
+        Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
+    }
+
     /// F finite and > 0 (`{path}.F`), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "F", self.F)?;
@@ -218,6 +223,11 @@ impl AdmissibleDisplacements for RigidPunch {
 
 #[typetag::serde(name = "rigid_punch_displacement")]
 impl AdmissibleDisplacements for RigidPunchDisplacement {
+    /// U × factor.
+    fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
+        Some(Box::new(Self { U: self.U * factor, ..self.clone() }))
+    }
+
     /// U finite (`{path}.U`), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::finite(path, "U", self.U)?;

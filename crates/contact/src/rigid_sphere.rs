@@ -177,6 +177,11 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 #[typetag::serde(name = "rigid_sphere")]
 impl AdmissibleDisplacements for RigidSphere {
+    /// F × factor or V × factor, whichever is given.
+    fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
+        Some(Box::new(Self { F: self.F.map(|f| f * factor), V: self.V.map(|v| v * factor), ..self.clone() }))
+    }
+
     /// `center` finite, R finite and > 0, `direction` finite and nonzero (`{path}.direction`
     /// with the vector), exactly one of F (finite, > 0) and V (finite) — both or neither is an
     /// error on `{path}.F` whose message names `{path}.V` — and the zone.

@@ -180,6 +180,11 @@ fn hull_extent(p: &[[f64; 2]]) -> f64 {
 
 #[typetag::serde(name = "tilting_punch")]
 impl AdmissibleDisplacements for TiltingPunch {
+    /// F × factor, at the same point.
+    fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
+        Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
+    }
+
     /// F finite and > 0 (`{path}.F`), `at` finite (`{path}.at[k]`), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "F", self.F)?;

@@ -40,6 +40,8 @@ enum Flaw {
     WrongU,
     /// Counts one contact node too many.
     ContactCount,
+    /// scaled_load ignores the factor.
+    ScaleIgnored,
 }
 
 /// A rigid punch with one deliberate flaw.
@@ -91,6 +93,11 @@ impl AdmissibleDisplacements for Broken {
         }
     }
 
+    fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
+        let factor = if self.flaw == Flaw::ScaleIgnored { 1.0 } else { factor };
+        Some(Box::new(Broken { punch: RigidPunch { F: self.punch.F * factor, ..self.punch.clone() }, flaw: self.flaw }))
+    }
+
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport {
         let mut r = self.punch.report(mesh, rows, extras, lambda);
         match self.flaw {
@@ -124,6 +131,7 @@ fn every_flaw_is_caught_by_its_check() {
         (Flaw::ForceHalved, "force"),
         (Flaw::WrongU, "report"),
         (Flaw::ContactCount, "report"),
+        (Flaw::ScaleIgnored, "scaled_load"),
     ];
     for (flaw, check) in expected {
         assert!(CHECKS.contains(&check));

@@ -28,6 +28,14 @@ pub enum Load {
 }
 
 impl Load {
+    /// The same load multiplied by `factor`.
+    pub fn scaled(&self, factor: f64) -> Self {
+        match self {
+            Load::Traction { on, t } => Load::Traction { on: on.clone(), t: t.map(|x| x * factor) },
+            Load::BodyForce { b } => Load::BodyForce { b: b.map(|x| x * factor) },
+        }
+    }
+
     /// Checks the numbers; `path` names this load (`load[0]`).
     pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
         match self {

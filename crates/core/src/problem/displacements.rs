@@ -148,6 +148,14 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
 
     /// What to report about a solution (U, force, contact set and radius, warnings).
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport;
+
+    /// The same obstacle with its load multiplied by `factor` (a prescribed force, or a
+    /// prescribed displacement of a displacement-controlled obstacle), for load sweeps and
+    /// load paths; `None` (the default) when the plugin has no load to scale.
+    fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
+        let _ = factor;
+        None
+    }
 }
 
 dyn_clone::clone_trait_object!(AdmissibleDisplacements);

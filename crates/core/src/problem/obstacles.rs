@@ -183,6 +183,28 @@ impl Obstacles {
             .collect()
     }
 
+    /// Every obstacle with its load multiplied by `factor`
+    /// ([`AdmissibleDisplacements::scaled_load`]). An error names the obstacle (`obstacle`,
+    /// `obstacle[i]`) whose plugin has no load to scale.
+    pub fn scaled_load(&self, factor: f64) -> Result<Self, ParameterError> {
+        let list = self
+            .list
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let k = o.k.scaled_load(factor).ok_or_else(|| {
+                    ParameterError::new(
+                        self.path(OBSTACLE_PATH, i),
+                        format!("type = {:?}", o.k.name()),
+                        "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_load is None)",
+                    )
+                })?;
+                Ok(NamedObstacle { name: o.name.clone(), k })
+            })
+            .collect::<Result<_, ParameterError>>()?;
+        Ok(Self { list, array: self.array })
+    }
+
     /// The load term's coefficients f, concatenated.
     pub fn load(&self) -> Vec<f64> {
         self.list.iter().flat_map(|o| o.k.load()).collect()

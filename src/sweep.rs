@@ -1,0 +1,268 @@
+//! `saddle sweep`: a scene solved at a ladder of load factors — every load multiplied by the
+//! factor (tractions, body forces, each obstacle's prescribed force or displacement;
+//! [`Scene::with_load_factor`]) — each point the stationary problem of theory §1 solved from
+//! zero. For a displacement-controlled punch with h = 0 this is the force–displacement curve
+//! whose plateau is the limit load (theory §10). Writes `sweep.csv` (per factor: the solver's
+//! status, iterations, KKT residual, contact and plastic counts, every quantity the obstacles
+//! report), `sweep.md` with the plateau indicator, and (feature `report`) `sweep.png`/`.svg`:
+//! one reported quantity against another (default `force` against `U`).
+//!
+//! ```text
+//! saddle sweep examples/strip_punch.toml --factors 0.25,0.5,1,2,4 --out out/strip
+//! ```
+
+use crate::output::Summary;
+use crate::run::{self, RunError};
+use crate::scene::Scene;
+use saddle_core::{SceneError, Silent};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use thiserror::Error;
+
+/// Why a sweep failed (a point whose solver fails is recorded, not an error).
+#[derive(Debug, Error)]
+pub enum SweepError {
+    /// The scene, or the scene at a factor, is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// `--solver` names no solver.
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// No factors, or a factor that is not finite and ≥ 0.
+    #[error("--factors: {0}")]
+    Factors(String),
+    /// A table or plot could not be written.
+    #[error("cannot write {path}: {message}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+/// What to sweep.
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
+    /// The load factors, in the order solved.
+    pub factors: Vec<f64>,
+    /// A solver type instead of the scene's.
+    pub solver: Option<String>,
+    /// The reported quantities plotted: (x, y), e.g. (`U`, `force`); `factor` is one too.
+    pub axes: (String, String),
+}
+
+/// One point of the sweep.
+#[derive(Clone, Debug)]
+pub struct SweepPoint {
+    /// The load factor.
+    pub factor: f64,
+    /// True when the solver met its tolerance.
+    pub converged: bool,
+    /// Why it stopped (`Converged`, `MaxIterations`, …), or the solver's error.
+    pub status: String,
+    /// Outer iterations (0 after an error).
+    pub iterations: usize,
+    /// The recomputed relative KKT residual (NaN after an error).
+    pub kkt_residual: f64,
+    /// Contact nodes.
+    pub contact_nodes: usize,
+    /// Plastic elements.
+    pub plastic_elements: usize,
+    /// Every quantity the obstacles report (`U`, `force`, …; `name.U` with several).
+    pub quantities: BTreeMap<String, f64>,
+    /// Wall time of the solve and its summary.
+    pub wall_s: f64,
+}
+
+impl SweepPoint {
+    /// The quantity `name`: a reported one, or `factor`.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        if name == "factor" { Some(self.factor) } else { self.quantities.get(name).copied() }
+    }
+}
+
+/// A finished sweep.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    /// The scene's title.
+    pub title: String,
+    /// The points, in the order of the factors.
+    pub points: Vec<SweepPoint>,
+    /// The plotted quantities.
+    pub axes: (String, String),
+}
+
+impl Sweep {
+    /// The converged points' (x, y).
+    pub fn curve(&self) -> Vec<(f64, f64)> {
+        let (x, y) = (&self.axes.0, &self.axes.1);
+        self.points.iter().filter(|p| p.converged).filter_map(|p| Some((p.get(x)?, p.get(y)?))).collect()
+    }
+
+    /// The plateau indicator: d ln y / d ln x over the last interval of converged points (1 for
+    /// a linear response through the origin, → 0 on a plateau); None with fewer than two.
+    pub fn last_log_slope(&self) -> Option<f64> {
+        let c = self.curve();
+        let [.., (x0, y0), (x1, y1)] = c.as_slice() else { return None };
+        Some(((y1 - y0) / y1) / ((x1 - x0) / x1))
+    }
+}
+
+/// Solves the scene at each factor; `progress` gets a line per point.
+pub fn generate(
+    scene_path: &Path,
+    opts: &SweepOptions,
+    out: &Path,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Sweep, SweepError> {
+    if opts.factors.is_empty() {
+        return Err(SweepError::Factors("give at least one factor".into()));
+    }
+    if let Some(f) = opts.factors.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
+        return Err(SweepError::Factors(format!("{f} is not a finite factor >= 0")));
+    }
+    let scene = Scene::from_file(scene_path)?;
+    let solver = match &opts.solver {
+        Some(name) => Some(run::solver_by_type(name)?),
+        None => None,
+    };
+    let title = scene.title.clone().unwrap_or_else(|| scene_path.display().to_string());
+    // every scaled scene is checked before the first solve
+    let scenes = opts.factors.iter().map(|&f| scene.with_load_factor(f)).collect::<Result<Vec<_>, _>>()?;
+    let mesh = scene.build_mesh()?;
+    let mut points = Vec::with_capacity(scenes.len());
+    for (&factor, scaled) in opts.factors.iter().zip(scenes) {
+        let started = Instant::now();
+        let (problem, own) = scaled.assemble(mesh.clone())?;
+        let solver = solver.clone().or(own).unwrap_or_else(run::default_solver);
+        let point = match solver.solve(&problem, &mut Silent) {
+            Ok(sol) => {
+                let s = Summary::new(&problem, &sol, None);
+                SweepPoint {
+                    factor,
+                    converged: s.converged,
+                    status: format!("{:?}", s.stop_reason),
+                    iterations: s.iterations,
+                    kkt_residual: s.kkt_residual,
+                    contact_nodes: s.contact_nodes,
+                    plastic_elements: s.plastic_elements,
+                    quantities: s.contact,
+                    wall_s: started.elapsed().as_secs_f64(),
+                }
+            }
+            Err(e) => SweepPoint {
+                factor,
+                converged: false,
+                status: format!("error: {e}"),
+                iterations: 0,
+                kkt_residual: f64::NAN,
+                contact_nodes: 0,
+                plastic_elements: 0,
+                quantities: BTreeMap::new(),
+                wall_s: started.elapsed().as_secs_f64(),
+            },
+        };
+        let shown: Vec<String> = point.quantities.iter().map(|(k, v)| format!("{k} {v:.6e}")).collect();
+        progress(&format!(
+            "factor {factor}: {} in {} iterations, {} plastic, {}",
+            point.status,
+            point.iterations,
+            point.plastic_elements,
+            shown.join(", ")
+        ));
+        points.push(point);
+    }
+    let sweep = Sweep { title, points, axes: opts.axes.clone() };
+    write(&sweep, out)?;
+    Ok(sweep)
+}
+
+/// Writes `sweep.csv`, `sweep.md` and (feature `report`) the plot.
+fn write(sweep: &Sweep, out: &Path) -> Result<(), SweepError> {
+    let io = |path: PathBuf| move |e: std::io::Error| SweepError::Io { path, message: e.to_string() };
+    std::fs::create_dir_all(out).map_err(io(out.to_path_buf()))?;
+    for (name, text) in [("sweep.csv", csv(sweep)), ("sweep.md", markdown(sweep))] {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(io(path.clone()))?;
+    }
+    #[cfg(feature = "report")]
+    {
+        let (x, y) = &sweep.axes;
+        let points: Vec<(f64, f64, bool)> =
+            sweep.points.iter().filter_map(|p| Some((p.get(x)?, p.get(y)?, p.converged))).collect();
+        if points.len() >= 2 {
+            let title = format!("saddle sweep: {}", sweep.title);
+            crate::report::plot::curve(&title, (x, y), &points, &out.join("sweep.png"), &out.join("sweep.svg"))
+                .map_err(|e| SweepError::Io { path: out.join("sweep.png"), message: e.to_string() })?;
+        }
+    }
+    Ok(())
+}
+
+/// The reported quantity names of all points, sorted.
+fn quantity_names(sweep: &Sweep) -> Vec<String> {
+    let mut names: Vec<String> = sweep.points.iter().flat_map(|p| p.quantities.keys().cloned()).collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// `sweep.csv`: one row per factor; a quantity a point does not report is left empty.
+pub fn csv(sweep: &Sweep) -> String {
+    let names = quantity_names(sweep);
+    let mut s = String::from("factor,converged,status,iterations,kkt_residual,contact_nodes,plastic_elements,wall_s");
+    for n in &names {
+        let _ = write!(s, ",{n}");
+    }
+    s.push('\n');
+    for p in &sweep.points {
+        let status = p.status.replace([',', '\n'], ";");
+        let _ = write!(
+            s,
+            "{},{},{status},{},{:.3e},{},{},{:.3}",
+            p.factor, p.converged, p.iterations, p.kkt_residual, p.contact_nodes, p.plastic_elements, p.wall_s
+        );
+        for n in &names {
+            let _ = write!(s, ",{}", p.quantities.get(n).map_or(String::new(), |v| format!("{v:.12e}")));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// `sweep.md`: the table and the plateau indicator.
+pub fn markdown(sweep: &Sweep) -> String {
+    let (x, y) = &sweep.axes;
+    let mut s = format!("# Load sweep: {}\n\n", sweep.title);
+    let _ = writeln!(s, "| factor | {x} | {y} | status | iterations | KKT | contact | plastic |");
+    s.push_str("|---|---|---|---|---|---|---|---|\n");
+    let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.6e}"));
+    for p in &sweep.points {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {:.1e} | {} | {} |",
+            p.factor,
+            show(p.get(x)),
+            show(p.get(y)),
+            p.status,
+            p.iterations,
+            p.kkt_residual,
+            p.contact_nodes,
+            p.plastic_elements
+        );
+    }
+    match sweep.last_log_slope() {
+        Some(k) => {
+            let _ = writeln!(
+                s,
+                "\nd ln {y} / d ln {x} over the last interval: {k:.3} (1: proportional; below 0.05: a plateau, the \
+                 limit load when the material is perfectly plastic)."
+            );
+        }
+        None => s.push_str("\nFewer than two converged points: no plateau indicator.\n"),
+    }
+    s
+}
