@@ -21,7 +21,8 @@
 //!   ignored (they are listed in [`GmshImport::ignored_groups`]); triangles outside any physical
 //!   surface are ignored.
 //! * **Nodes**: Gmsh's node tags become dense indices in increasing tag order; nodes on no
-//!   tetrahedron are dropped. [`GmshImport::node_tags`] and [`GmshImport::element_tags`] map back.
+//!   tetrahedron are dropped. The tetrahedra are ordered by their first node (for memory
+//!   locality), ties by tag. [`GmshImport::node_tags`] and [`GmshImport::element_tags`] map back.
 //!
 //! The node rules of the scene apply to groups as to any region: a node belongs to every group
 //! one of whose facets it lies on, so the nodes on the rim between two physical surfaces belong
@@ -323,8 +324,14 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
     let node_tags: Vec<u64> = order.iter().map(|&i| file_tags[i]).collect();
     let nodes: Vec<[f64; 3]> = order.iter().map(|&i| coords[i]).collect();
     let index = |n: &u64| dense[position[n]];
+    // tetrahedra in the order of their first node (ties by tag): Gmsh lists them by geometric
+    // entity and in the mesher's order, scattered in memory against the nodes; the assembly
+    // visits the elements around each node in node order (unstructured 19.8k-dof mesh: Newton
+    // 1.24 s → 1.05 s)
+    let mut tets: Vec<(u64, [usize; 4])> = tets.iter().map(|(e, t)| (*e, t.map(|n| index(&n)))).collect();
+    tets.sort_unstable_by_key(|(e, t)| (t.iter().min().copied(), *e));
     let element_tags: Vec<u64> = tets.iter().map(|t| t.0).collect();
-    let tet_nodes: Vec<[usize; 4]> = tets.iter().map(|(_, t)| t.map(|n| index(&n))).collect();
+    let tet_nodes: Vec<[usize; 4]> = tets.iter().map(|(_, t)| *t).collect();
 
     let mut named: Vec<(String, Vec<[usize; 3]>)> = Vec::new();
     let mut facet_tags: HashMap<(String, [usize; 3]), u64> = HashMap::new();
@@ -730,6 +737,18 @@ $EndElements
         assert_eq!(imp.ignored_groups, vec![PhysicalGroup { dim: 3, tag: 2, name: "body".into(), elements: 2 }]);
         assert_eq!(imp.unused_nodes, 0);
         assert_eq!(coords_by_tag(&imp)[&5], [1.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn tetrahedra_are_ordered_by_their_first_node_and_keep_their_tags() {
+        // the file lists tetrahedron 3 (nodes 2 3 4 5) before tetrahedron 2 (nodes 1 2 3 4)
+        let swapped = TINY.replace("2 1 2 3 4\n3 2 3 4 5\n", "3 2 3 4 5\n2 1 2 3 4\n");
+        assert_ne!(swapped, TINY);
+        let imp = read(&swapped).unwrap();
+        assert_eq!(imp.element_tags, vec![2, 3]);
+        let tags = |t: &[usize; 4]| t.map(|n| imp.node_tags[n]);
+        assert_eq!(tags(&imp.mesh.tets[0]), [1, 2, 3, 4]);
+        assert_eq!(tags(&imp.mesh.tets[1]), [2, 3, 4, 5]);
     }
 
     #[test]
