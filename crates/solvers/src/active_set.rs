@@ -66,9 +66,12 @@ pub const DIRECT_FACTORISATIONS: f64 = 5.0;
 pub const SOLVE_WEIGHT: f64 = 10.0;
 
 /// The cost rule of `auto`: a multigrid Newton solve, in factorisation multiply–adds per
-/// nonzero of the stiffness. Measured 3.4–5.8 µs per nonzero for whole AMG Newton solves on
-/// 10k–45k-dof meshes (structured and unstructured) at 3.4e-11 s per multiply–add: ≈ 1.2e5.
-pub const AMG_COST_PER_NONZERO: f64 = 1.2e5;
+/// nonzero of the stiffness. Measured 1.6–2.7 µs per nonzero for whole AMG Newton solves on
+/// 5k–20k-dof meshes (structured and unstructured, with the single-precision cycle of issue
+/// 14; 3.4–5.8 µs before it) at 3.4e-11 s per multiply–add: ≈ 6e4. The direct backend then
+/// wins up to about 5k dofs on the default scene family (a tie there: 0.18 s each), AMG from
+/// 10.6k (0.36 s against 0.54 s).
+pub const AMG_COST_PER_NONZERO: f64 = 6e4;
 
 /// The cost rule of `auto` (Newton): the direct backend's estimated cost,
 /// `DIRECT_FACTORISATIONS · F + SOLVE_WEIGHT · rows · nnz(L)` (F the multiply–adds of one
