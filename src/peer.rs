@@ -185,7 +185,6 @@ pub fn measure(
         let loaded = run::load_with(scene, None, |s| s.mesh = Box::new(GmshMesh::new(file))).map_err(fail)?;
         let outcome = run::solve_and_write(&loaded, &out.join(&stem), &mut Silent).map_err(fail)?;
         let wall_s = started.elapsed().as_secs_f64();
-        drop(loaded);
         let s = outcome.summary;
         let r = MeshRun {
             mesh: mesh.clone(),
@@ -337,7 +336,12 @@ pub fn markdown(runs: &[MeshRun], peers: &[PeerRun]) -> String {
         );
     }
     let loads: Vec<String> = runs.iter().map(|r| format!("{:.2}", r.load_before)).collect();
-    let _ = writeln!(s, "Load average before each saddle run: {}.", loads.join(", "));
+    let _ = write!(s, "Load average before each saddle run: {}.", loads.join(", "));
+    let peer_loads: Vec<String> = peers.iter().filter_map(|p| Some(format!("{:.2}", p.load_end?))).collect();
+    if !peer_loads.is_empty() {
+        let _ = write!(s, " At the end of each peer run: {}.", peer_loads.join(", "));
+    }
+    s.push('\n');
     s
 }
 

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::repo;
+use common::{csv_num as num, csv_rows, repo};
 use std::process::Command;
 
 /// A peer JSON as `examples/peers/dolfinx/punch.py --json` writes it (only the fields read).
@@ -16,12 +16,6 @@ fn peer_json(solve_elastic: f64, solve_plastic: f64) -> String {
             "plastic": {{"time": {solve_plastic}, "newton_its": 5, "F": 0.3, "n_contact": 7, "n_plastic_cells": 11,
                         "steps": [{{"ksp_its": 60}}]}}}}"#
     )
-}
-
-fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    lines.map(|l| head.iter().map(|h| h.to_string()).zip(l.split(',').map(str::to_string)).collect()).collect()
 }
 
 #[test]
@@ -54,7 +48,6 @@ fn mesh_bench_runs_each_mesh_end_to_end_beside_the_peer() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows = csv_rows(&std::fs::read_to_string(out.join("meshes.csv")).unwrap());
     assert_eq!(rows.len(), 2);
-    let num = |r: &std::collections::HashMap<String, String>, k: &str| r[k].parse::<f64>().unwrap();
     for (r, peer_solve) in rows.iter().zip([3.0, 0.75]) {
         // the same mesh (ASCII, binary) gives the force of `saddle run` on the scene
         assert!((num(r, "force") - force).abs() <= 1e-9 * force, "{} vs {force}", r["force"]);

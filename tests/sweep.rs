@@ -5,11 +5,11 @@
 
 mod common;
 
-use common::{example, set, small_johnson};
+use common::{CsvRow, csv_num as num, csv_rows, example, set, small_johnson};
 use std::process::Command;
 
 /// Runs `saddle sweep` on a scene table; returns (exit code, sweep.csv rows as maps, sweep.md).
-fn sweep(t: &toml::Table, factors: &str) -> (i32, Vec<std::collections::HashMap<String, String>>, String) {
+fn sweep(t: &toml::Table, factors: &str) -> (i32, Vec<CsvRow>, String) {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("scene.toml");
     std::fs::write(&scene, toml::to_string(t).unwrap()).unwrap();
@@ -22,16 +22,9 @@ fn sweep(t: &toml::Table, factors: &str) -> (i32, Vec<std::collections::HashMap<
     if code == 1 {
         return (code, vec![], String::from_utf8_lossy(&o.stderr).into_owned());
     }
-    let text = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
-    let mut lines = text.lines();
-    let head: Vec<String> = lines.next().unwrap().split(',').map(str::to_string).collect();
-    let rows = lines.map(|l| head.iter().cloned().zip(l.split(',').map(str::to_string)).collect()).collect();
+    let rows = csv_rows(&std::fs::read_to_string(out.join("sweep.csv")).unwrap());
     assert!(out.join("sweep.png").exists() && out.join("sweep.svg").exists());
     (code, rows, std::fs::read_to_string(out.join("sweep.md")).unwrap())
-}
-
-fn num(r: &std::collections::HashMap<String, String>, k: &str) -> f64 {
-    r[k].parse().unwrap_or_else(|_| panic!("{k} = {:?}", r[k]))
 }
 
 /// The strip punch of examples/strip_punch.toml on a coarse mesh.

@@ -70,3 +70,18 @@ pub fn assert_rejected(text: &str, expected: &[&str]) {
         assert!(err.contains(e), "error message {err:?} lacks {e:?}");
     }
 }
+
+/// One row of a CSV file written by saddle: column name → field.
+pub type CsvRow = std::collections::HashMap<String, String>;
+
+/// The rows of a CSV text with a header line (saddle's CSV fields hold no commas).
+pub fn csv_rows(text: &str) -> Vec<CsvRow> {
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines.map(|l| head.iter().map(|h| h.to_string()).zip(l.split(',').map(str::to_string)).collect()).collect()
+}
+
+/// The number in column `k` of a CSV row.
+pub fn csv_num(r: &CsvRow, k: &str) -> f64 {
+    r[k].parse().unwrap_or_else(|_| panic!("{k} = {:?}", r[k]))
+}

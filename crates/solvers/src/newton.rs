@@ -537,18 +537,15 @@ impl<'a> Run<'a> {
             put("pcg_iterations", iterative.iterations);
             put("pcg_unconverged", iterative.unconverged);
         }
-        let factor = sys.direct().map(|chol| (chol.nnz_l(), chol.factor_flops()));
-        if let Some((nnz, _)) = factor {
-            put("factor_nonzeros", nnz);
-        }
         put("line_search_backtracks", c.backtracks);
         put("active_set_changes", c.active_changes);
         put("return_mappings", c.return_mappings);
         put("elastic_phase_steps", c.elastic_phase_steps);
         put("contact_rows_active", self.state.active.iter().filter(|a| **a).count());
         put("stiffness_nonzeros", self.l.pattern().nnz());
-        if let Some((_, flops)) = factor {
-            counters.insert("factor_flops".into(), flops);
+        if let Some(chol) = sys.direct() {
+            counters.insert("factor_nonzeros".into(), chol.nnz_l() as f64);
+            counters.insert("factor_flops".into(), chol.factor_flops());
         }
         if let Some((direct, amg)) = c.cost_estimates {
             counters.insert("auto_direct_cost".into(), direct);

@@ -222,8 +222,8 @@ impl Blocks {
     }
 }
 
-/// One level of the hierarchy with its transfer to the next coarser one.
-/// One level of the hierarchy. The operators of the cycle are stored in single precision
+/// One level of the hierarchy with its transfer to the next coarser one. The operators of the
+/// cycle are stored in single precision
 /// ([`Csr32`]: a V-cycle is bound by memory traffic); the set-up works in double precision.
 #[derive(Debug)]
 struct Level {

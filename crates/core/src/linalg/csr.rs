@@ -66,6 +66,17 @@ pub fn sparse_dot<T: Copy + Into<f64>>(idx: &[u32], val: &[T], x: &[f64]) -> f64
 /// Rows per parallel task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: usize = 2048;
 
+/// y_r = f(r, y_r) for every row r, in parallel chunks of [`CHUNK`] rows: the loop of the
+/// matrix–vector products of [`Csr`] and [`super::Csr32`].
+pub(super) fn rows_into(y: &mut [f64], f: impl Fn(usize, f64) -> f64 + Sync) {
+    y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
+        let r0 = c * CHUNK;
+        for (k, yi) in ys.iter_mut().enumerate() {
+            *yi = f(r0 + k, *yi);
+        }
+    });
+}
+
 /// Rows per parallel task of the sparse product (rows of coarse matrices are long).
 const PRODUCT_CHUNK: usize = 256;
 
@@ -139,33 +150,18 @@ impl Csr {
     /// y = A x.
     pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!((x.len(), y.len()), (self.ncols, self.nrows));
-        y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
-            let r0 = c * CHUNK;
-            for (k, yi) in ys.iter_mut().enumerate() {
-                *yi = self.row_dot(r0 + k, x);
-            }
-        });
+        rows_into(y, |r, _| self.row_dot(r, x));
     }
 
     /// y = b − A x.
     pub fn residual(&self, b: &[f64], x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
-            let r0 = c * CHUNK;
-            for (k, yi) in ys.iter_mut().enumerate() {
-                *yi = b[r0 + k] - self.row_dot(r0 + k, x);
-            }
-        });
+        rows_into(y, |r, _| b[r] - self.row_dot(r, x));
     }
 
     /// y += α A x.
     pub fn spmv_add(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!((x.len(), y.len()), (self.ncols, self.nrows));
-        y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
-            let r0 = c * CHUNK;
-            for (k, yi) in ys.iter_mut().enumerate() {
-                *yi += alpha * self.row_dot(r0 + k, x);
-            }
-        });
+        rows_into(y, |r, y| y + alpha * self.row_dot(r, x));
     }
 
     /// (A x)_r: the dot product of row `r` with `x` ([`sparse_dot`]).

@@ -6,8 +6,7 @@
 //! leaves it a fixed, symmetric linear operator, so CG keeps its convergence (the outer
 //! iteration's matrix stays the double-precision one).
 
-use super::csr::{Csr, sparse_dot};
-use rayon::prelude::*;
+use super::csr::{Csr, rows_into, sparse_dot};
 
 /// Compressed rows with single-precision values: the rows, columns, row pointers and sorted
 /// column indices of the [`Csr`] it was rounded from, and its values rounded to the nearest
@@ -20,9 +19,6 @@ pub struct Csr32 {
     idx: Vec<u32>,
     val: Vec<f32>,
 }
-
-/// Rows per parallel task (as [`Csr`]'s products).
-const CHUNK: usize = 2048;
 
 impl From<&Csr> for Csr32 {
     fn from(a: &Csr) -> Self {
@@ -62,29 +58,19 @@ impl Csr32 {
     /// y = A x.
     pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!((x.len(), y.len()), (self.ncols, self.nrows));
-        self.rows_into(y, |r, _| self.row_dot(r, x));
+        rows_into(y, |r, _| self.row_dot(r, x));
     }
 
     /// y += α A x.
     pub fn spmv_add(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!((x.len(), y.len()), (self.ncols, self.nrows));
-        self.rows_into(y, |r, y| y + alpha * self.row_dot(r, x));
+        rows_into(y, |r, y| y + alpha * self.row_dot(r, x));
     }
 
     /// y = b − A x.
     pub fn residual(&self, b: &[f64], x: &[f64], y: &mut [f64]) {
         debug_assert_eq!((x.len(), b.len(), y.len()), (self.ncols, self.nrows, self.nrows));
-        self.rows_into(y, |r, _| b[r] - self.row_dot(r, x));
-    }
-
-    /// y_r = f(r, y_r) for every row, in parallel chunks.
-    fn rows_into(&self, y: &mut [f64], f: impl Fn(usize, f64) -> f64 + Sync) {
-        y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
-            let r0 = c * CHUNK;
-            for (k, yi) in ys.iter_mut().enumerate() {
-                *yi = f(r0 + k, *yi);
-            }
-        });
+        rows_into(y, |r, _| b[r] - self.row_dot(r, x));
     }
 }
 
