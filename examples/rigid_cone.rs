@@ -21,8 +21,8 @@
 use saddle_contact::{conformance, zone};
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::{
-    AdmissibleDisplacements, BoxMesh, ConstraintRows, ContactReport, Dirichlet, DofMap, Elasticity, Lagrangian,
-    P1P0Lagrangian, Region, SceneError, Silent, Solver, TetMesh, contact_set,
+    AdmissibleDisplacements, BoxMesh, ConstraintRows, ContactReport, Dirichlet, Discretisation, DofMap, Elasticity,
+    Lagrangian, P1P0Lagrangian, Region, SceneError, Silent, Solver, TetMesh, contact_set,
 };
 use saddle_solvers::{Newton, Penalty, Uzawa};
 use saddle_yield::VonMises;

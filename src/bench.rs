@@ -17,7 +17,7 @@
 use crate::report::{ReportError, SceneSource};
 use saddle_core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
 use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
-use saddle_core::{Lagrangian, Load, Material, Obstacles, P1P0Lagrangian, Silent, Solver, Workspace};
+use saddle_core::{Discretisation, Lagrangian, Load, Material, Obstacles, P1P0Lagrangian, Silent, Solver, Workspace};
 use saddle_solvers::{LinearSolver, Newton};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -321,7 +321,7 @@ fn bench_error(e: impl std::fmt::Display) -> ReportError {
 }
 
 /// The scene at `cells` without yield surface and obstacle, loaded by a body force instead.
-fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<P1P0Lagrangian, ReportError> {
+fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<Box<dyn Discretisation>, ReportError> {
     let mut scene = source.scene(Some(cells))?;
     scene.yield_surface = None;
     scene.obstacle = Obstacles::none();
@@ -331,13 +331,13 @@ fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<P1P0Lagran
 }
 
 /// The lower triangle of L's matrices as the linear algebra takes it.
-fn lower(l: &P1P0Lagrangian) -> LowerCsc<'_> {
+fn lower(l: &dyn Discretisation) -> LowerCsc<'_> {
     let p = l.pattern();
     LowerCsc::new(p.n(), p.col_ptr(), p.row_idx())
 }
 
 /// Runs solver `name` (defaults) on `l`, measuring time and peak memory.
-fn run_solver(l: &P1P0Lagrangian, name: &str, variant: &'static str) -> Result<SolverRun, ReportError> {
+fn run_solver(l: &dyn Discretisation, name: &str, variant: &'static str) -> Result<SolverRun, ReportError> {
     let solver = solver_spec(name).map_err(bench_error)?.0;
     reset_peak_memory();
     let t = Instant::now();

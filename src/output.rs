@@ -40,8 +40,11 @@ pub struct Summary {
     /// Largest distance of a contact node from its obstacle's centre (the largest over the
     /// obstacles).
     pub contact_radius: f64,
-    /// Number of plastic elements.
+    /// Number of plastic elements (an element is plastic when one of its stress points is).
     pub plastic_elements: usize,
+    /// Number of plastic stress points (equal to `plastic_elements` for `p1`, one point per
+    /// element).
+    pub plastic_points: usize,
     /// Largest von Mises stress sqrt(3/2)|dev σ|.
     pub max_von_mises: f64,
     /// Primal energy J(u, U).
@@ -58,7 +61,11 @@ pub struct Summary {
     pub dofs: usize,
     /// Tetrahedra.
     pub elements: usize,
-    /// Nodes.
+    /// Stress points (the elements for `p1`, four per element for `p2`).
+    pub stress_points: usize,
+    /// The finite element (`p1`, `p2`).
+    pub discretisation: String,
+    /// Nodes (vertices, and the edge nodes of a second-order mesh).
     pub nodes: usize,
     /// Rows of K_h (candidate contact nodes).
     pub contact_rows: usize,
@@ -185,7 +192,8 @@ impl Summary {
             force: single.and_then(|c| c.get("force")),
             contact_nodes: reports.iter().map(|r| r.report.contact_nodes).sum(),
             contact_radius: reports.iter().map(|r| r.report.contact_radius).fold(0.0, f64::max),
-            plastic_elements: sol.stress.n_plastic(),
+            plastic_elements: plastic_elements(l, sol),
+            plastic_points: sol.stress.n_plastic(),
             max_von_mises: sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max),
             J: j,
             dual_energy: l.dual_energy(&sol.stress, &sol.lambda),
@@ -193,7 +201,9 @@ impl Summary {
             kkt,
             tolerance: sol.report.tolerance,
             dofs: l.n_dofs(),
-            elements: l.n_points(),
+            elements: l.mesh().n_elements(),
+            stress_points: l.n_points(),
+            discretisation: l.name().to_string(),
             nodes: l.mesh().n_nodes(),
             contact_rows: l.constraints().n_rows(),
             contact,
@@ -216,12 +226,24 @@ impl Summary {
     }
 }
 
-/// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data.
-/// Point data: `displacement`, `contact_force` (Gᵀλ at the nodes). Cell data: `stress`
-/// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises`, the hardening variables under the names the yield surface gives them (`xi` for von Mises),
-/// `plastic` (0/1).
+/// The elements with at least one plastic stress point.
+pub fn plastic_elements(l: &dyn Discretisation, sol: &Solution) -> usize {
+    sol.stress.plastic.chunks(l.points_per_element()).filter(|p| p.iter().any(|x| *x)).count()
+}
+
+/// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data, with
+/// linear tetrahedra (VTK type 10) for `p1` and quadratic ones (type 24, the edge nodes in
+/// VTK's order) on a second-order mesh. Point data: `displacement`, `contact_force` (Gᵀλ at the
+/// nodes). Cell data, the mean over the element's stress points when it has several: `stress`
+/// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises` (of the mean stress), the
+/// hardening variables under the names the yield surface gives them (`xi` for von Mises),
+/// `plastic` (0/1: one of the element's points is plastic).
 pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io::Result<()> {
     let mesh = l.mesh();
+    let k = l.points_per_element();
+    let mean_stress: Vec<saddle_core::Sym> =
+        sol.stress.sigma.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
+    let plastic: Vec<u8> = sol.stress.plastic.chunks(k).map(|p| p.iter().any(|x| *x) as u8).collect();
     let disp = l.nodal_vectors(&sol.u);
     let mut gu = vec![0.0; l.n_dofs()];
     let mut gv = vec![0.0; l.n_extras()];
@@ -231,24 +253,29 @@ pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io
     let f64s = |it: &mut dyn Iterator<Item = f64>| it.flat_map(f64::to_le_bytes).collect::<Vec<u8>>();
     arrays.push(("point", "displacement", 3, f64s(&mut disp.iter().flatten().copied())));
     arrays.push(("point", "contact_force", 3, f64s(&mut force.iter().flatten().copied())));
-    arrays.push(("cell", "stress", 6, f64s(&mut sol.stress.sigma.iter().flat_map(to_vtk))));
-    arrays.push(("cell", "von_mises", 1, f64s(&mut sol.stress.sigma.iter().map(von_mises))));
+    arrays.push(("cell", "stress", 6, f64s(&mut mean_stress.iter().flat_map(to_vtk))));
+    arrays.push(("cell", "von_mises", 1, f64s(&mut mean_stress.iter().map(von_mises))));
     // the hardening variables, one cell field per name the yield surface gives them
     if let Some(p) = l.plasticity() {
         let mut first = 0;
         for (name, comps) in p.hardening_fields() {
-            let field = (0..sol.stress.len()).flat_map(|i| sol.stress.q(i)[first..first + comps].to_vec());
+            let field = (0..mesh.n_elements()).flat_map(|e| {
+                (first..first + comps).map(move |c| (0..k).map(|q| sol.stress.q(e * k + q)[c]).sum::<f64>() / k as f64)
+            });
             arrays.push(("cell", name, comps, f64s(&mut field.into_iter())));
             first += comps;
         }
     }
-    arrays.push(("cell", "plastic", 1, sol.stress.plastic.iter().map(|p| *p as u8).collect()));
+    arrays.push(("cell", "plastic", 1, plastic));
     arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));
-    let conn: Vec<u8> = mesh.tets.iter().flatten().flat_map(|&n| (n as i64).to_le_bytes()).collect();
-    let offs: Vec<u8> = (1..=mesh.n_elements()).flat_map(|e| (4 * e as i64).to_le_bytes()).collect();
+    // VTK_TETRA (10) or VTK_QUADRATIC_TETRA (24): vertices, then the edge nodes in VTK's order
+    let (per_cell, cell_type) = if mesh.is_second_order() { (10, 24u8) } else { (4, 10u8) };
+    let conn: Vec<u8> =
+        (0..mesh.n_elements()).flat_map(|e| mesh.element_nodes(e)).flat_map(|n| (n as i64).to_le_bytes()).collect();
+    let offs: Vec<u8> = (1..=mesh.n_elements()).flat_map(|e| ((per_cell * e) as i64).to_le_bytes()).collect();
     arrays.push(("cells", "connectivity", 1, conn));
     arrays.push(("cells", "offsets", 1, offs));
-    arrays.push(("cells", "types", 1, vec![10u8; mesh.n_elements()])); // VTK_TETRA
+    arrays.push(("cells", "types", 1, vec![cell_type; mesh.n_elements()]));
 
     let vtk_type = |name: &str| match name {
         "plastic" | "types" => "UInt8",

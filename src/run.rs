@@ -3,7 +3,7 @@
 
 use crate::output::{Summary, write_vtu};
 use crate::scene::Scene;
-use saddle_core::{Discretisation, Monitor, P1P0Lagrangian, PhaseTimer, SceneError, Solution, SolveError, Solver};
+use saddle_core::{Discretisation, Monitor, PhaseTimer, SceneError, Solution, SolveError, Solver};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -42,7 +42,7 @@ pub fn solver_by_type(name: &str) -> Result<Box<dyn Solver>, RunError> {
 /// A loaded problem: L, the solver to use, and the scene's title.
 pub struct Loaded {
     /// L.
-    pub problem: P1P0Lagrangian,
+    pub problem: Box<dyn Discretisation>,
     /// The solver (the scene's, the override, or the default).
     pub solver: Box<dyn Solver>,
     /// Scene title.

@@ -3,6 +3,8 @@
 //!
 //! ```toml
 //! title = "Johnson 1977: elasto-plastic punch"
+//! [discretisation]             # optional: "p1" (default) or "p2" (quadratic, B̄; theory §10)
+//! type = "p1"
 //! [mesh]                       # MeshSource: "box", "inline", "gmsh" (feature `gmsh`)
 //! type = "box"
 //! min = [-1.0, -1.0, 0.0]
@@ -53,10 +55,15 @@
 
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleStresses, Dirichlet, Elasticity, Load, MeshSource, Obstacles, P1P0Lagrangian, SceneError, Solver, TetMesh,
+    AdmissibleStresses, Dirichlet, Discretisation, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P1,
+    SceneError, Solver, TetMesh,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// What a scene assembles into: L (of the scene's finite element) and the scene's solver, if
+/// it names one.
+pub type Assembled = (Box<dyn Discretisation>, Option<Box<dyn Solver>>);
 
 /// A problem as written in a scene file: a typed value, validated once when it is read.
 /// Variants (a refined mesh, another solver) are made by changing the value — it is `Clone`,
@@ -69,6 +76,9 @@ pub struct Scene {
     pub title: Option<String>,
     /// Where the mesh comes from.
     pub mesh: Box<dyn MeshSource>,
+    /// The finite element (`[discretisation] type = "p1"` or `"p2"`); absent: `p1`.
+    #[serde(default)]
+    pub discretisation: Option<Box<dyn FiniteElement>>,
     /// Elasticity.
     pub material: Elasticity,
     /// P; absent for an elastic body (which then pays nothing for plasticity).
@@ -132,6 +142,9 @@ impl Scene {
     /// Checks every parameter; errors name the field path and value.
     pub fn validate(&self) -> Result<(), SceneError> {
         self.mesh.validate("mesh")?;
+        if let Some(d) = &self.discretisation {
+            d.validate("discretisation")?;
+        }
         self.material.validate("material")?;
         if let Some(p) = &self.yield_surface {
             p.validate("yield")?;
@@ -181,7 +194,7 @@ impl Scene {
 
     /// Builds the mesh and assembles L; returns it with the scene's solver (if any). A scene
     /// whose Dirichlet conditions leave a rigid-body motion free is an error here.
-    pub fn into_problem(self) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
+    pub fn into_problem(self) -> Result<Assembled, SceneError> {
         let mesh = self.build_mesh()?;
         self.assemble(mesh)
     }
@@ -194,11 +207,21 @@ impl Scene {
     /// L assembled on `mesh` (the `setup` phase of a run: dofs, pattern, the obstacles' rows,
     /// loads), with the scene's solver. A scene whose Dirichlet conditions leave a rigid-body
     /// motion free is an error here.
-    pub fn assemble(self, mesh: TetMesh) -> Result<(P1P0Lagrangian, Option<Box<dyn Solver>>), SceneError> {
-        let l = P1P0Lagrangian::new(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle)?
-            .with_loads(&self.load)?;
+    pub fn assemble(self, mesh: TetMesh) -> Result<Assembled, SceneError> {
+        let element = self.discretisation.unwrap_or_else(|| Box::new(P1::default()));
+        let l = element.build(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle, &self.load)?;
         l.dofs().check_rigid_motions(l.mesh())?;
         Ok((l, self.solver))
+    }
+
+    /// The `type` of the scene's finite element (`p1` when the scene names none).
+    pub fn element_name(&self) -> &'static str {
+        self.discretisation.as_ref().map_or("p1", |d| d.name())
+    }
+
+    /// The same scene with another finite element.
+    pub fn with_element(&self, element: Box<dyn FiniteElement>) -> Self {
+        Self { discretisation: Some(element), ..self.clone() }
     }
 }
 

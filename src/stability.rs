@@ -18,7 +18,7 @@ use crate::run::solver_by_type;
 use crate::scene::Scene;
 use saddle_contact::{Flat, Paraboloid};
 use saddle_core::{
-    Lagrangian, P1P0Lagrangian, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace,
+    Discretisation, Lagrangian, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace,
 };
 use saddle_solvers::{Penalty, Uzawa};
 use std::sync::Arc;
@@ -201,7 +201,7 @@ impl Row {
 }
 
 /// Validates and assembles the scene; its typed error if it is rejected.
-pub fn problem(scene: &Scene) -> Result<P1P0Lagrangian, SceneError> {
+pub fn problem(scene: &Scene) -> Result<Box<dyn Discretisation>, SceneError> {
     assemble(scene.clone())
 }
 

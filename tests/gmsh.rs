@@ -1,15 +1,18 @@
 //! Gmsh MSH 4.1 meshes (`type = "gmsh"`): the committed mesh of the default scene made by the
 //! real Gmsh (tests/data/make_punch_mesh.py), its physical groups, the node rules on the rims
-//! between groups, the contact problem solved on it, malformed files and `saddle run`.
+//! between groups, the contact problem solved on it, malformed files and `saddle run`; and
+//! second-order meshes (10-node tetrahedra, 6-node triangles) made by the real Gmsh
+//! (tests/data/make_p2_meshes.py): a box at order 1 and 2, and a curved cylinder.
 #![cfg(feature = "gmsh")]
 
 mod common;
 use common::*;
-use saddle::core::mesh::gmsh::{GmshImport, read_msh};
-use saddle::core::{Lagrangian, Region, Silent, Solver, TetMesh};
+use saddle::core::mesh::gmsh::{GmshImport, GmshMesh, read_msh};
+use saddle::core::mesh::{TET_EDGES, TRI_EDGES};
+use saddle::core::{Lagrangian, MeshSource, Region, Silent, Solver, TetMesh};
 use saddle::scene::Scene;
 use saddle::solvers::Newton;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 use std::process::Command;
 use std::sync::OnceLock;
@@ -412,4 +415,223 @@ fn saddle_run_on_the_gmsh_scene() {
     let vtu = std::fs::read(out.join("solution.vtu")).unwrap();
     let head = String::from_utf8_lossy(&vtu[..vtu.len().min(3000)]);
     assert!(head.contains(&format!("NumberOfCells=\"{}\"", punch().mesh.n_elements())), "{head}");
+}
+
+/// The node coordinates of an ASCII MSH 4.1 file by tag, read here from the `$Nodes` section
+/// (independent of the reader, which moves edge nodes to their midpoints): per block
+/// `dim tag parametric n`, the n tags, then the n coordinate lines.
+fn file_coordinates(path: &Path) -> HashMap<u64, [f64; 3]> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let section = text.split("$Nodes\n").nth(1).unwrap().split("$EndNodes").next().unwrap();
+    let mut lines = section.lines();
+    let header: Vec<usize> = lines.next().unwrap().split_whitespace().map(|t| t.parse().unwrap()).collect();
+    let mut coords = HashMap::new();
+    for _ in 0..header[0] {
+        let block: Vec<usize> = lines.next().unwrap().split_whitespace().map(|t| t.parse().unwrap()).collect();
+        assert_eq!(block[2], 0, "parametric node block");
+        let tags: Vec<u64> = (0..block[3]).map(|_| lines.next().unwrap().trim().parse().unwrap()).collect();
+        for tag in tags {
+            let x: Vec<f64> = lines.next().unwrap().split_whitespace().map(|t| t.parse().unwrap()).collect();
+            assert!(coords.insert(tag, [x[0], x[1], x[2]]).is_none());
+        }
+    }
+    assert_eq!(coords.len(), header[1]);
+    coords
+}
+
+fn dist(p: [f64; 3], q: [f64; 3]) -> f64 {
+    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+}
+
+fn midpoint(p: [f64; 3], q: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| 0.5 * (p[k] + q[k]))
+}
+
+fn total_volume(m: &TetMesh) -> f64 {
+    (0..m.n_elements()).map(|e| m.volume(e)).sum()
+}
+
+#[test]
+fn second_order_box_has_the_vertices_and_tets_of_the_first_order_one() {
+    let p1 = read_msh(&repo("tests/data/box_p1.msh"), 1.0).unwrap();
+    let p2 = read_msh(&repo("tests/data/box_p2.msh"), 1.0).unwrap();
+    let (m1, m2) = (&p1.mesh, &p2.mesh);
+    assert!(!m1.is_second_order() && p1.warnings.is_empty());
+    let so = m2.second_order.as_ref().expect("box_p2.msh is a second-order mesh");
+    println!(
+        "box_p1.msh: {} nodes, {} tetrahedra; box_p2.msh: {} nodes ({} vertices), {} tetrahedra, {} boundary facets",
+        m1.n_nodes(),
+        m1.n_elements(),
+        m2.n_nodes(),
+        so.n_vertices,
+        m2.n_elements(),
+        m2.boundary.len()
+    );
+    assert!((100..=1000).contains(&m2.n_elements()), "a small mesh: {} tetrahedra", m2.n_elements());
+    assert!(p2.warnings.is_empty(), "{:?}", p2.warnings);
+    assert_eq!((p1.unused_nodes, p2.unused_nodes), (0, 0));
+    // (a) the same tetrahedra and vertices
+    assert_eq!(m2.n_elements(), m1.n_elements());
+    assert_eq!(so.n_vertices, m1.n_nodes());
+    assert_eq!(m2.first_order().n_nodes(), m1.n_nodes());
+    let (v1, v2) = (total_volume(m1), total_volume(m2));
+    assert!((v1 - 2.0).abs() < 1e-12 && (v2 - v1).abs() < 1e-12, "volumes {v1} and {v2}");
+    // Gmsh renumbers the nodes when it raises the order but keeps the element tags: element by
+    // element, the same vertex positions in the same local order
+    let vertices = |imp: &GmshImport| -> BTreeMap<u64, [[f64; 3]; 4]> {
+        imp.element_tags.iter().zip(&imp.mesh.tets).map(|(&e, t)| (e, t.map(|n| imp.mesh.nodes[n]))).collect()
+    };
+    assert_eq!(vertices(&p2), vertices(&p1));
+    // the vertices come first in the numbering: the first-order mesh keeps their indices
+    assert!(m2.tets.iter().flatten().all(|&n| n < so.n_vertices));
+    assert_eq!(m2.first_order().nodes[..], m2.nodes[..so.n_vertices]);
+    // the same facet groups
+    assert_eq!(m2.group_names(), vec!["bottom", "sides", "top"]);
+    assert_eq!(m2.group_names(), m1.group_names());
+    for (g, facets) in &m1.groups {
+        assert_eq!(m2.groups[g].len(), facets.len(), "group {g}");
+        let a1: f64 = facets.iter().map(|&f| area(m1, f)).sum();
+        let a2: f64 = m2.groups[g].iter().map(|&f| area(m2, f)).sum();
+        assert!((a1 - a2).abs() < 1e-12, "group {g}: areas {a1} and {a2}");
+    }
+    // and `type = "gmsh"` builds the second-order mesh
+    let built = GmshMesh::new("box_p2.msh").build(&repo("tests/data")).unwrap();
+    assert_eq!(built.second_order, m2.second_order);
+}
+
+#[test]
+fn second_order_box_edge_nodes_sit_on_their_edges() {
+    let path = repo("tests/data/box_p2.msh");
+    let imp = read_msh(&path, 1.0).unwrap();
+    let m = &imp.mesh;
+    let so = m.second_order.as_ref().unwrap();
+    // (b) in the file's own coordinates (before the reader moves anything), every edge node of
+    // every tetrahedron is the midpoint of the two vertices of its edge TET_EDGES[k]: the map
+    // from Gmsh's local order
+    let file = file_coordinates(&path);
+    let x = |n: usize| file[&imp.node_tags[n]];
+    let mut worst: f64 = 0.0;
+    for (t, edges) in m.tets.iter().zip(&so.tet_edges) {
+        for (k, &[i, j]) in TET_EDGES.iter().enumerate() {
+            let (a, b) = (x(t[i]), x(t[j]));
+            worst = worst.max(dist(x(edges[k]), midpoint(a, b)) / dist(a, b));
+        }
+    }
+    println!("largest distance of an edge node from its midpoint, relative to the edge: {worst:e}");
+    assert!(worst <= 1e-12, "{worst:e}");
+    // and in the mesh
+    for (t, edges) in m.tets.iter().zip(&so.tet_edges) {
+        for (k, &[i, j]) in TET_EDGES.iter().enumerate() {
+            let (a, b) = (m.nodes[t[i]], m.nodes[t[j]]);
+            assert!(dist(m.nodes[edges[k]], midpoint(a, b)) <= 1e-12 * dist(a, b));
+        }
+    }
+
+    // (c) the facet edge nodes of each group on the group's plane, each the midpoint of its
+    // edge TRI_EDGES[k] of the facet
+    let on_plane = |g: &str, p: [f64; 3]| match g {
+        "bottom" => p[2].abs() < 1e-12,
+        "top" => (p[2] - 1.0).abs() < 1e-12,
+        "sides" => p[0].abs() < 1e-12 || (p[0] - 2.0).abs() < 1e-12 || p[1].abs() < 1e-12 || (p[1] - 1.0).abs() < 1e-12,
+        _ => unreachable!(),
+    };
+    for (g, facets) in &m.groups {
+        for &f in facets {
+            let corners = m.boundary[f];
+            let edges = so.facet_edges[f];
+            // the plane of the facet: the coordinate its three vertices share
+            let axis = (0..3).find(|&c| corners.iter().all(|&n| (x(n)[c] - x(corners[0])[c]).abs() < 1e-12));
+            let axis = axis.unwrap_or_else(|| panic!("facet {f} of {g} is not axis-aligned"));
+            for (k, &[i, j]) in TRI_EDGES.iter().enumerate() {
+                let e = edges[k];
+                assert!(on_plane(g, x(e)) && on_plane(g, m.nodes[e]), "group {g}: edge node at {:?}", x(e));
+                assert!((x(e)[axis] - x(corners[0])[axis]).abs() < 1e-12, "group {g}: off the facet's plane");
+                let (a, b) = (x(corners[i]), x(corners[j]));
+                assert!(dist(x(e), midpoint(a, b)) <= 1e-12 * dist(a, b), "group {g}: facet edge {k}");
+            }
+        }
+    }
+
+    // (d) one edge node per edge: as many distinct edge nodes as distinct edges, each edge with
+    // one node, every node not a vertex an edge node
+    let mut node_of_edge: HashMap<(usize, usize), usize> = HashMap::new();
+    for (t, edges) in m.tets.iter().zip(&so.tet_edges) {
+        for (k, &[i, j]) in TET_EDGES.iter().enumerate() {
+            let key = (t[i].min(t[j]), t[i].max(t[j]));
+            assert_eq!(*node_of_edge.entry(key).or_insert(edges[k]), edges[k], "edge {key:?}");
+        }
+    }
+    let edge_nodes: BTreeSet<usize> = so.tet_edges.iter().flatten().copied().collect();
+    println!("{} edges, {} edge nodes, {} nodes", node_of_edge.len(), edge_nodes.len(), m.n_nodes());
+    assert_eq!(edge_nodes.len(), node_of_edge.len());
+    assert_eq!(edge_nodes, (so.n_vertices..m.n_nodes()).collect());
+}
+
+#[test]
+fn curved_second_order_mesh_is_straightened_with_a_warning() {
+    let path = repo("tests/data/cylinder_p2.msh");
+    let imp = read_msh(&path, 1.0).unwrap();
+    let m = &imp.mesh;
+    let so = m.second_order.as_ref().unwrap();
+    // the file's largest move of an edge node to its midpoint, relative to the edge
+    let file = file_coordinates(&path);
+    let x = |n: usize| file[&imp.node_tags[n]];
+    let mut moved: f64 = 0.0;
+    for (t, edges) in m.tets.iter().zip(&so.tet_edges) {
+        for (k, &[i, j]) in TET_EDGES.iter().enumerate() {
+            let (a, b) = (x(t[i]), x(t[j]));
+            moved = moved.max(dist(x(edges[k]), midpoint(a, b)) / dist(a, b));
+            // the mesh's edge nodes are at the midpoints
+            let (a, b) = (m.nodes[t[i]], m.nodes[t[j]]);
+            assert!(dist(m.nodes[edges[k]], midpoint(a, b)) <= 1e-12 * dist(a, b));
+        }
+    }
+    println!("cylinder_p2.msh: {} tetrahedra, largest relative move {moved:e}; {:?}", m.n_elements(), imp.warnings);
+    assert!(moved > 1e-3, "the side's edge nodes are on the cylinder, off their edges: {moved:e}");
+    assert_eq!(imp.warnings.len(), 1, "{:?}", imp.warnings);
+    let w = &imp.warnings[0];
+    assert!(w.contains(&format!("{moved:.2e}")) && w.contains("straight"), "{w}");
+    // the straight-sided mesh: inscribed in the cylinder
+    let v = total_volume(m);
+    assert!(v < 0.25 * std::f64::consts::PI && v > 0.8 * 0.25 * std::f64::consts::PI, "volume {v}");
+    assert_eq!(m.group_names(), vec!["base"]);
+}
+
+#[test]
+fn mixed_order_tetrahedra_are_refused() {
+    // (e) box_p2.msh with one more element block: a 4-node tetrahedron (the corners of its first
+    // 10-node tetrahedron), after the 10-node block
+    let p2 = std::fs::read_to_string(repo("tests/data/box_p2.msh")).unwrap();
+    let section = |text: &str, name: &str| -> String {
+        let start = text.find(&format!("${name}\n")).unwrap();
+        let end = text.find(&format!("$End{name}\n")).unwrap() + name.len() + 5;
+        text[start..end].to_string()
+    };
+    let elements = section(&p2, "Elements");
+    let lines: Vec<&str> = elements.lines().collect();
+    let header = lines.iter().position(|l| l.split_whitespace().nth(2) == Some("11")).unwrap();
+    let n: usize = lines[header].split_whitespace().nth(3).unwrap().parse().unwrap();
+    let first: Vec<&str> = lines[header + 1].split_whitespace().collect();
+    let counts: Vec<usize> = lines[1].split_whitespace().map(|t| t.parse().unwrap()).collect();
+    let mut mixed: Vec<String> =
+        vec!["$Elements".into(), format!("{} {} {} {}", counts[0] + 1, counts[1] + 1, counts[2], counts[3] + 1)];
+    mixed.extend(lines[2..header + 1 + n].iter().map(|l| l.to_string()));
+    mixed.push("3 1 4 1".into());
+    mixed.push(format!("{} {}", counts[3] + 1, first[1..5].join(" ")));
+    mixed.extend(lines[header + 1 + n..].iter().map(|l| l.to_string()));
+    let text = p2.replace(&elements, &(mixed.join("\n") + "\n"));
+    assert_ne!(text, p2);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("mixed.msh");
+    std::fs::write(&file, &text).unwrap();
+    let err = read_msh(&file, 1.0).unwrap_err().to_string();
+    println!("{err}");
+    assert_contains(
+        &err,
+        &[
+            "mixed.msh",
+            "mixes first- and second-order tetrahedra",
+            "10-node tetrahedra (element type 11) in volume 1 and 4-node tetrahedra (element type 4) in volume 1",
+        ],
+    );
 }

@@ -15,7 +15,7 @@
 
 mod common;
 use common::*;
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution};
+use saddle::core::{Discretisation, Silent, Solution};
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
@@ -62,13 +62,13 @@ fn half_space_axis_displacement(a: f64, p0: f64, z: f64) -> f64 {
 }
 
 /// The quarter model with whole force 0.3, solved once for all tests.
-fn default_solution() -> &'static (P1P0Lagrangian, Solution) {
-    static SOLVED: OnceLock<(P1P0Lagrangian, Solution)> = OnceLock::new();
+fn default_solution() -> &'static (Box<dyn Discretisation>, Solution) {
+    static SOLVED: OnceLock<(Box<dyn Discretisation>, Solution)> = OnceLock::new();
     SOLVED.get_or_init(|| solve(0.3))
 }
 
 /// The quarter model with whole force `f`.
-fn solve(f: f64) -> (P1P0Lagrangian, Solution) {
+fn solve(f: f64) -> (Box<dyn Discretisation>, Solution) {
     let mut t = example("hertz.toml");
     set(&mut t, "obstacle.F", toml::Value::Float(f / 4.0));
     let (l, solver) = build(&t);
@@ -78,7 +78,7 @@ fn solve(f: f64) -> (P1P0Lagrangian, Solution) {
 }
 
 /// Measured (a, p₀, δ).
-fn measure(l: &P1P0Lagrangian, sol: &Solution) -> (f64, f64, f64) {
+fn measure(l: &dyn Discretisation, sol: &Solution) -> (f64, f64, f64) {
     let mesh = l.mesh();
     // each node's share of the contact face x₃ = 0
     let mut area = vec![0.0; mesh.n_nodes()];
@@ -108,7 +108,7 @@ fn measure(l: &P1P0Lagrangian, sol: &Solution) -> (f64, f64, f64) {
         pts.iter().map(|p| (p.0 - sx) * (p.1 - sy)).sum::<f64>() / pts.iter().map(|p| (p.0 - sx).powi(2)).sum::<f64>();
     let p0 = (sy - slope * sx).sqrt();
     // δ against the axis node nearest to depth 3a
-    let disp = l.nodal_displacements(&sol.u);
+    let disp = l.nodal_vectors(&sol.u);
     let axis = (0..mesh.n_nodes())
         .filter(|&k| mesh.nodes[k][0] == 0.0 && mesh.nodes[k][1] == 0.0)
         .min_by(|&i, &j| (mesh.nodes[i][2] - 3.0 * a).abs().total_cmp(&(mesh.nodes[j][2] - 3.0 * a).abs()))

@@ -2,7 +2,7 @@
 //! P1/P0, elastic and plastic, for every solver; an elastic scene without contact is one linear
 //! solve and builds no contact structures and runs no return mapping.
 
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solver};
+use saddle::core::{Discretisation, Lagrangian, Silent, Solver};
 use saddle::scene::Scene;
 use std::path::Path;
 
@@ -18,7 +18,7 @@ components = ["y"]
 on = { group = "zmin" }
 components = ["z"]"#;
 
-fn bar(p: f64, plastic: bool) -> P1P0Lagrangian {
+fn bar(p: f64, plastic: bool) -> Box<dyn Discretisation> {
     let yield_table = if plastic { "[yield]\ntype = \"von_mises\"\nk0 = 1.0\nh = 5.0\n" } else { "" };
     let text = format!(
         r#"
@@ -82,7 +82,7 @@ fn uniaxial_tension_is_exact_for_every_solver() {
                 sol.report.residual_history,
                 sol.report.counters
             );
-            for (x, d) in l.mesh().nodes.iter().zip(l.nodal_displacements(&sol.u)) {
+            for (x, d) in l.mesh().nodes.iter().zip(l.nodal_vectors(&sol.u)) {
                 let exact = [e11 * x[0], e11 * x[1], e33 * x[2]];
                 for c in 0..3 {
                     assert!(
@@ -143,7 +143,7 @@ b = [0.0, 0.0, -0.8]
     l.mesh()
         .nodes
         .iter()
-        .zip(l.nodal_displacements(&sol.u))
+        .zip(l.nodal_vectors(&sol.u))
         .map(|(x, d)| (d[2] + (0.8 / 100.0) * (x[2] - 0.5 * x[2] * x[2])).abs())
         .fold(0.0, f64::max)
 }

@@ -29,7 +29,7 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, SolveError, Solver, StopReason, Workspace};
+use saddle::core::{Discretisation, Lagrangian, Silent, Solution, SolveError, Solver, StopReason, Workspace};
 use saddle::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -88,7 +88,7 @@ impl Case {
         self.f_rel * self.first_yield_force()
     }
 
-    fn scene(&self) -> P1P0Lagrangian {
+    fn scene(&self) -> Box<dyn Discretisation> {
         let yield_table = if self.elastic {
             String::new()
         } else {

@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use saddle::core::{BoxMesh, Elasticity, Lagrangian, P1P0Lagrangian, Silent, Solver, Sym};
+use saddle::core::{BoxMesh, Discretisation, Elasticity, Lagrangian, P1P0Lagrangian, Silent, Solver, Sym};
 use saddle::report::convergence::{fitted_rate, observed_rate, refinement_levels, richardson};
 use saddle::report::runs::{Errors, RunRecord, errors, strain_distance};
 use saddle::report::tables::{
@@ -90,13 +90,13 @@ fn split_csv(line: &str) -> Vec<String> {
 }
 
 /// A box mesh problem without boundary conditions or plasticity (every dof free).
-fn free_problem(cells: [usize; 3], ratio: f64) -> P1P0Lagrangian {
+fn free_problem(cells: [usize; 3], ratio: f64) -> Box<dyn Discretisation> {
     let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], cells).graded([0.0, 0.0, 0.0], ratio).mesh().unwrap();
-    P1P0Lagrangian::new(mesh, &[], Elasticity::new(100.0, 0.3).unwrap(), None, None).unwrap()
+    Box::new(P1P0Lagrangian::new(mesh, &[], Elasticity::new(100.0, 0.3).unwrap(), None, None).unwrap())
 }
 
 /// The nodal values of the linear field u(x) = G x + c.
-fn linear_field(l: &P1P0Lagrangian, g: [[f64; 3]; 3]) -> Vec<f64> {
+fn linear_field(l: &dyn Discretisation, g: [[f64; 3]; 3]) -> Vec<f64> {
     let mut u = vec![0.0; l.n_dofs()];
     for (n, x) in l.mesh().nodes.iter().enumerate() {
         for c in 0..3 {
@@ -164,7 +164,7 @@ fn a_field_transferred_to_its_own_mesh_has_no_difference() {
     assert!(direct > 1e-3 && (d.strain_l2 - direct).abs() < 1e-12 * direct, "{} vs {direct}", d.strain_l2);
 }
 
-fn small_johnson_problem() -> P1P0Lagrangian {
+fn small_johnson_problem() -> Box<dyn Discretisation> {
     build(&small_johnson()).0
 }
 

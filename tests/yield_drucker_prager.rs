@@ -14,7 +14,7 @@ mod common;
 use common::*;
 use saddle::conformance::agreement;
 use saddle::core::problem::tensor::{deviator, trace};
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, Sym};
+use saddle::core::{Discretisation, Lagrangian, Silent, Solution, Solver, Sym};
 use saddle::solvers::{Newton, Penalty, Uzawa};
 use std::path::Path;
 
@@ -40,7 +40,7 @@ fn solvers() -> Vec<(&'static str, Box<dyn Solver>)> {
     v
 }
 
-fn solve(l: &P1P0Lagrangian, name: &str, s: &dyn Solver) -> Solution {
+fn solve(l: &dyn Discretisation, name: &str, s: &dyn Solver) -> Solution {
     let sol = s.solve(l, &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
     sol
@@ -81,7 +81,7 @@ fn homogeneous_compression_matches_the_closed_form() {
             es = es.max((sol.stress.sigma[i] - exact).norm() / f);
             eq = eq.max((sol.stress.q(i)[0] - xi).abs() / xi);
         }
-        for (x, d) in l.mesh().nodes.iter().zip(l.nodal_displacements(&sol.u)) {
+        for (x, d) in l.mesh().nodes.iter().zip(l.nodal_vectors(&sol.u)) {
             let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
             for k in 0..3 {
                 eu = eu.max((d[k] - exact[k]).abs() / u_exact);
@@ -141,7 +141,7 @@ fn apex_elements(sol: &Solution, k0: f64, alpha: f64) -> usize {
 
 /// The laterally confined cube (rollers on all four sides, u₃ = 0 on top) pulled down by the
 /// traction p on its bottom face, with the flat punch pushing up with force F on `zone`.
-fn confined_cube(k0: f64, alpha: f64, h: f64, p: f64, f: f64, zone: &str, cells: usize) -> P1P0Lagrangian {
+fn confined_cube(k0: f64, alpha: f64, h: f64, p: f64, f: f64, zone: &str, cells: usize) -> Box<dyn Discretisation> {
     let text = format!(
         r#"
 title = "Laterally confined cube in tension against a punch (theory §9.1)"

@@ -11,7 +11,7 @@
 mod common;
 use common::*;
 use saddle::conformance::agreement;
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, Sym};
+use saddle::core::{Discretisation, Lagrangian, Silent, Solution, Solver, Sym};
 use saddle::solvers::{Newton, Penalty, Uzawa};
 
 /// The `[yield]` table of kinematic hardening.
@@ -36,7 +36,7 @@ fn solvers() -> Vec<(&'static str, Box<dyn Solver>)> {
     v
 }
 
-fn solve(l: &P1P0Lagrangian, name: &str, s: &dyn Solver) -> Solution {
+fn solve(l: &dyn Discretisation, name: &str, s: &dyn Solver) -> Solution {
     let sol = s.solve(l, &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
     sol
@@ -77,7 +77,7 @@ fn homogeneous(h: f64, c: f64, f: f64) {
                 eq = eq.max((q[1 + k] - chi[k]).abs() / chi[1]);
             }
         }
-        for (x, d) in l.mesh().nodes.iter().zip(l.nodal_displacements(&sol.u)) {
+        for (x, d) in l.mesh().nodes.iter().zip(l.nodal_vectors(&sol.u)) {
             let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
             for k in 0..3 {
                 eu = eu.max((d[k] - exact[k]).abs() / u_exact);

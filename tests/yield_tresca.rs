@@ -10,7 +10,7 @@
 mod common;
 use common::*;
 use saddle::conformance::agreement;
-use saddle::core::{Lagrangian, P1P0Lagrangian, Silent, Solution, Solver, Sym};
+use saddle::core::{Discretisation, Lagrangian, Silent, Solution, Solver, Sym};
 use saddle::solvers::{Newton, Penalty, Uzawa};
 use saddle::yield_surfaces::{Tresca, TrescaReturn};
 
@@ -23,7 +23,7 @@ fn tresca(sigma0: f64, h: f64) -> toml::Value {
     toml::Value::Table(t)
 }
 
-fn solve(l: &P1P0Lagrangian, name: &str, s: &dyn Solver) -> Solution {
+fn solve(l: &dyn Discretisation, name: &str, s: &dyn Solver) -> Solution {
     let sol = s.solve(l, &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
     sol

@@ -13,7 +13,7 @@
 //! too high; the rates of the coarsest pairs are the least affected. The differences between
 //! *consecutive* levels do not depend on the finest level; their rates are reported as well.
 
-use saddle_core::{Lagrangian, P1P0Lagrangian};
+use saddle_core::Discretisation;
 
 /// The cells of each refinement level: `base` scaled by each factor (rounded, at least 1),
 /// ascending, levels with the same cells merged.
@@ -46,7 +46,7 @@ impl MeshSize {
 }
 
 /// The mesh sizes of `l` (module docs).
-pub fn mesh_size(l: &P1P0Lagrangian) -> MeshSize {
+pub fn mesh_size(l: &dyn Discretisation) -> MeshSize {
     let mesh = l.mesh();
     let volume: f64 = l.weights().iter().sum();
     let mean = (volume / mesh.n_elements() as f64).cbrt();

@@ -31,7 +31,7 @@ pub mod transfer;
 use crate::scene::Scene;
 use convergence::{ConvergenceStudy, LevelResult, mesh_size, refinement_levels};
 use runs::{RunRecord, Rung, RungKind, Timed, ladder, record, reference_solver, timed_polish, timed_solve};
-use saddle_core::{Lagrangian, Monitor, P1P0Lagrangian, SceneError, Silent, Solution, SolveError, Workspace};
+use saddle_core::{Discretisation, Lagrangian, Monitor, SceneError, Silent, Solution, SolveError, Workspace};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use thiserror::Error;
@@ -120,7 +120,7 @@ impl SceneSource {
     }
 
     /// The assembled problem (with `cells`: on the refined box mesh).
-    pub fn problem(&self, cells: Option<[usize; 3]>) -> Result<P1P0Lagrangian, ReportError> {
+    pub fn problem(&self, cells: Option<[usize; 3]>) -> Result<Box<dyn Discretisation>, ReportError> {
         Ok(self.scene(cells)?.into_problem()?.0)
     }
 
@@ -185,7 +185,7 @@ impl Report {
 /// reports the reference run), the reference solution and its wall time. `counter` numbers the
 /// runs for `progress`.
 pub fn work_precision(
-    l: &P1P0Lagrangian,
+    l: &dyn Discretisation,
     rungs: &[Rung],
     progress: &mut dyn Progress,
     counter: &mut usize,
@@ -260,7 +260,7 @@ pub struct KnownLevel {
     /// Its cells.
     pub cells: [usize; 3],
     /// The problem.
-    pub problem: P1P0Lagrangian,
+    pub problem: Box<dyn Discretisation>,
     /// Its solution by [`runs::reference_solver`].
     pub solution: Solution,
     /// The solve's wall time, seconds.
@@ -269,7 +269,7 @@ pub struct KnownLevel {
 
 /// A level's solve and its fields, kept while the next coarser level is compared with it.
 struct Solved {
-    l: P1P0Lagrangian,
+    l: Box<dyn Discretisation>,
     sol: Solution,
     strain: Vec<saddle_core::Sym>,
 }
@@ -305,8 +305,8 @@ pub fn convergence_study(
         Ok((l, timed))
     };
     // U as the single obstacle reports it, by name
-    let u_of = |l: &P1P0Lagrangian, s: &Solution| crate::output::single_quantity(l, s, "U").unwrap_or(f64::NAN);
-    let level_result = |l: &P1P0Lagrangian, cells: [usize; 3], timed: &Timed| {
+    let u_of = |l: &dyn Discretisation, s: &Solution| crate::output::single_quantity(l, s, "U").unwrap_or(f64::NAN);
+    let level_result = |l: &dyn Discretisation, cells: [usize; 3], timed: &Timed| {
         let (status, converged, iterations, kkt, u) = match &timed.result {
             Ok(s) => (
                 runs::status_of(s.report.stop_reason).to_string(),

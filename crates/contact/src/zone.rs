@@ -157,11 +157,11 @@ pub fn rim_rows_facing(
         in_zone[n] = true;
     }
     let mut on_rim = vec![false; mesh.n_nodes()];
-    for f in &mesh.boundary {
+    for (fi, f) in mesh.boundary.iter().enumerate() {
         let [a, b, c] = f.map(|i| mesh.nodes[i]);
         let centroid = std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0);
-        if f.iter().any(|&n| !in_zone[n]) && faces(tri_normal(a, b, c), centroid) {
-            for &n in f {
+        if mesh.facet_nodes(fi).any(|n| !in_zone[n]) && faces(tri_normal(a, b, c), centroid) {
+            for n in mesh.facet_nodes(fi) {
                 on_rim[n] = true;
             }
         }
@@ -182,21 +182,31 @@ fn norm(v: [f64; 3]) -> f64 {
 
 /// Each row's share of the contact face: a third of every boundary facet facing the punch
 /// (outward normal n₃ < 0) at each of its row nodes — the nodal area that turns a contact force
-/// λ_i into a pressure.
+/// λ_i into a pressure. On a second-order mesh a facet is split into its four sub-triangles
+/// (corners and edge midpoints), a third of each going to its nodes.
 pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
     let mut row_of = vec![usize::MAX; mesh.n_nodes()];
     for (i, &n) in rows.node.iter().enumerate() {
         row_of[n] = i;
     }
     let mut area = vec![0.0; rows.n_rows()];
-    for f in &mesh.boundary {
+    let mut add = |n: usize, a: f64| {
+        if row_of[n] != usize::MAX {
+            area[row_of[n]] += a;
+        }
+    };
+    for (fi, f) in mesh.boundary.iter().enumerate() {
         let [a, b, c] = f.map(|i| mesh.nodes[i]);
         let n3 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
         let area2 = tri_area2(a, b, c);
         if n3 < -FACING_TOL * area2 {
-            for &n in f {
-                if row_of[n] != usize::MAX {
-                    area[row_of[n]] += area2 / 6.0;
+            match &mesh.second_order {
+                None => f.iter().for_each(|&n| add(n, area2 / 6.0)),
+                // the 6-node triangle split into its four corner-and-midpoint triangles, a third
+                // of each to its nodes: 1/12 of the facet to a vertex, 1/4 to an edge node
+                Some(so) => {
+                    f.iter().for_each(|&n| add(n, area2 / 24.0));
+                    so.facet_edges[fi].iter().for_each(|&n| add(n, area2 / 8.0));
                 }
             }
         }

@@ -103,6 +103,9 @@ pub enum MeshError {
     /// A file could not be read or parsed.
     #[error("{path}: {message}")]
     File { path: PathBuf, message: String },
+    /// An edge node of a 10-node tetrahedron that does not fit the mesh.
+    #[error("element {element}: edge node {node} is unusable: {reason}")]
+    BadEdgeNode { element: usize, node: usize, reason: &'static str },
 }
 
 /// Anything that stops a scene from being built: bad parameters, a bad mesh, an empty region,

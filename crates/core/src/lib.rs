@@ -15,7 +15,7 @@
 //! | [`linalg`] | sparse Cholesky, CSR, conjugate gradients, smoothed-aggregation multigrid: matrices and vectors only | `error` |
 //! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
 //! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), **L** [`Lagrangian`], the [`Solver`] interface | `error`, `mesh` |
-//! | [`fem`] | discretisations of L: [`P1P0Lagrangian`]; loads as nodal forces | `error`, `mesh`, `problem` |
+//! | [`fem`] | discretisations of L: [`P1P0Lagrangian`], [`P2Lagrangian`]; loads as nodal forces | `error`, `mesh`, `problem` |
 //!
 //! Linear algebra knows no mesh and no mechanics (the multigrid takes its near-nullspace as
 //! vectors), and the contracts name no linear-algebra type: solvers (crate `saddle-solvers`)
@@ -29,9 +29,10 @@ pub mod mesh;
 pub mod problem;
 
 pub use error::{MeshError, ParameterError, SceneError};
-pub use fem::Discretisation;
 pub use fem::loads::Load;
-pub use fem::p1p0::P1P0Lagrangian;
+pub use fem::p1p0::{P1, P1P0Lagrangian};
+pub use fem::p2::{P2, P2Lagrangian};
+pub use fem::{Discretisation, FiniteElement};
 pub use mesh::box_mesh::{BoxMesh, Grading, Subdivision};
 pub use mesh::dofs::{Component, Dirichlet, DofMap};
 #[cfg(feature = "gmsh")]

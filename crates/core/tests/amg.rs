@@ -7,7 +7,7 @@ use saddle_core::linalg::{
 };
 use saddle_core::mesh::dofs::FIXED;
 use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
-use saddle_core::{BoxMesh, Dirichlet, Elasticity, Lagrangian, Material, P1P0Lagrangian, Region};
+use saddle_core::{BoxMesh, Dirichlet, Discretisation, Elasticity, Lagrangian, Material, P1P0Lagrangian, Region};
 
 /// The elastic block of the default scene (graded, clamped but for the bottom square).
 fn problem(cells: [usize; 3]) -> P1P0Lagrangian {

@@ -48,9 +48,11 @@ impl Load {
     }
 }
 
-/// The consistent nodal forces f_u of `loads` on the free dofs (fixed dofs take none). For
-/// constant data on P1 elements each node of a facet receives a third of the facet's force,
-/// each node of a tetrahedron a quarter of its force.
+/// The consistent nodal forces f_u of `loads` on the free dofs (fixed dofs take none): ∫N·t and
+/// ∫N·b for constant data. On P1 elements each node of a facet receives a third of the facet's
+/// force, each node of a tetrahedron a quarter of its force; on a second-order mesh (P2) the
+/// edge nodes of a facet receive a third each and its vertices none, and a tetrahedron gives
+/// −1/20 of its force to each vertex and 1/5 to each edge node.
 pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<f64>, SceneError> {
     let mut f = vec![0.0; dofs.n_free];
     let mut add = |node: usize, force: [f64; 3], share: f64| {
@@ -82,16 +84,25 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
                     let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
                     let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
                     let area = 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                    for &node in &mesh.boundary[fi] {
-                        add(node, *t, area / 3.0);
+                    // ∫N over a triangle: ⅓|F| for P1; 0 at the vertices and ⅓|F| at the edge
+                    // nodes for P2
+                    match &mesh.second_order {
+                        None => mesh.boundary[fi].iter().for_each(|&node| add(node, *t, area / 3.0)),
+                        Some(so) => so.facet_edges[fi].iter().for_each(|&node| add(node, *t, area / 3.0)),
                     }
                 }
             }
             Load::BodyForce { b } => {
                 for (e, tet) in mesh.tets.iter().enumerate() {
                     let vol = mesh.volume(e);
-                    for &node in tet {
-                        add(node, *b, vol / 4.0);
+                    // ∫N over a tetrahedron: ¼|T| for P1; −|T|/20 at the vertices and |T|/5 at
+                    // the edge nodes for P2
+                    match &mesh.second_order {
+                        None => tet.iter().for_each(|&node| add(node, *b, vol / 4.0)),
+                        Some(so) => {
+                            tet.iter().for_each(|&node| add(node, *b, -vol / 20.0));
+                            so.tet_edges[e].iter().for_each(|&node| add(node, *b, vol / 5.0));
+                        }
                     }
                 }
             }
@@ -104,6 +115,26 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
 mod tests {
     use super::*;
     use crate::mesh::box_mesh::BoxMesh;
+
+    #[test]
+    fn p2_loads_integrate_quadratic_fields_exactly() {
+        // f·u = ∫ t·u dA + ∫ b·u dV for u quadratic: the P2 shares are ∫N exactly
+        let m = BoxMesh::new([0.0; 3], [2.0, 1.0, 1.0], [3, 2, 2]).graded([0.0; 3], 2.0).mesh().unwrap().second_order();
+        let dofs = DofMap::new(&m, &[]).unwrap();
+        let loads = [
+            Load::Traction { on: Region::Group("xmax".into()), t: [0.0, 0.0, 3.0] },
+            Load::BodyForce { b: [1.0, 0.0, 0.0] },
+        ];
+        let f = nodal_loads(&m, &dofs, &loads).unwrap();
+        // u = (x², 0, y²): ∫_box x² = 8/3, ∫_{x=2} 3y² = 1
+        let work: f64 = (0..m.n_nodes())
+            .map(|n| {
+                let x = m.nodes[n];
+                f[dofs.free(n, 0).unwrap()] * x[0] * x[0] + f[dofs.free(n, 2).unwrap()] * x[1] * x[1]
+            })
+            .sum();
+        assert!((work - (8.0 / 3.0 + 1.0)).abs() < 1e-12, "{work}");
+    }
 
     #[test]
     fn resultants_equal_traction_times_area_and_body_force_times_volume() {

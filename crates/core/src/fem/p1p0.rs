@@ -8,19 +8,40 @@
 //! the values; the sparsity pattern is built once).
 
 use super::Discretisation;
+use super::topology::{assemble_columns, node_element_adjacency, stiffness_pattern};
 use crate::error::SceneError;
 use crate::fem::loads::{Load, nodal_loads};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
-use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows};
+use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
-use crate::problem::obstacles::{DiscreteObstacles, ObstacleReport, Obstacles};
+use crate::problem::obstacles::{DiscreteObstacles, Obstacles};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
 use crate::problem::tensor::{SQRT2, Sym};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
+
+/// The P1–P0 element as a scene's choice: `[discretisation] type = "p1"` (the default).
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct P1 {}
+
+#[typetag::serde(name = "p1")]
+impl super::FiniteElement for P1 {
+    fn build(
+        &self,
+        mesh: TetMesh,
+        dirichlet: &[Dirichlet],
+        law: Elasticity,
+        stresses: Option<Box<dyn AdmissibleStresses>>,
+        obstacles: Obstacles,
+        loads: &[Load],
+    ) -> Result<Box<dyn Discretisation>, SceneError> {
+        Ok(Box::new(P1P0Lagrangian::new(mesh, dirichlet, law, stresses, obstacles)?.with_loads(loads)?))
+    }
+}
 
 /// L for P1 displacements and P0 generalised stresses on a tetrahedral mesh.
 #[derive(Debug)]
@@ -64,12 +85,14 @@ impl P1P0Lagrangian {
         if let Some(p) = &stresses {
             assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
         }
+        // the vertices of a second-order mesh: P1 has no edge nodes
+        let mesh = if mesh.is_second_order() { mesh.first_order() } else { mesh };
         let dofs = DofMap::new(&mesh, dirichlet)?;
         let (grads, weights): (Vec<_>, Vec<_>) =
             (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
-        let (adj_ptr, adj) = node_element_adjacency(&mesh);
+        let (adj_ptr, adj) = node_element_adjacency(mesh.n_nodes(), &mesh.tets);
         let (dof_node, dof_comp) = dofs.owners();
-        let pattern = stiffness_pattern(&mesh, &dofs, &adj_ptr, &adj);
+        let pattern = stiffness_pattern(&mesh.tets, &dofs, &adj_ptr, &adj);
         let obstacles = obstacles.into().discretise(&mesh, &dofs, crate::problem::obstacles::OBSTACLE_PATH)?;
         Ok(Self {
             mesh,
@@ -95,62 +118,9 @@ impl P1P0Lagrangian {
         Ok(self)
     }
 
-    /// The mesh.
-    pub fn mesh(&self) -> &TetMesh {
-        &self.mesh
-    }
-
-    /// The dof numbering.
-    pub fn dofs(&self) -> &DofMap {
-        &self.dofs
-    }
-
-    /// The only obstacle when there is exactly one (None without obstacle and with several).
-    pub fn obstacle(&self) -> Option<&dyn AdmissibleDisplacements> {
-        self.obstacles.obstacles().only()
-    }
-
-    /// K = K₁ ∩ K₂ ∩ …: none, one or several obstacles.
-    pub fn obstacles(&self) -> &Obstacles {
-        self.obstacles.obstacles()
-    }
-
-    /// The obstacles discretised: concatenated rows and load, each obstacle's own rows and ranges.
-    pub fn discrete_obstacles(&self) -> &DiscreteObstacles {
-        &self.obstacles
-    }
-
-    /// Nodal displacements (fixed components zero).
-    pub fn nodal_displacements(&self, u: &[f64]) -> Vec<[f64; 3]> {
-        self.dofs.nodal(u)
-    }
-
-    /// Warnings about the set-up (P's parameters, nodes dropped from K_h).
-    pub fn warnings(&self) -> Vec<String> {
-        let mut w = self.stresses.as_ref().map_or(vec![], |p| p.warnings());
-        w.extend(self.obstacles.rows().warnings.iter().cloned());
-        w
-    }
-
     #[inline]
     fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
         self.dofs.dof[n].map(|d| if d == FIXED { 0.0 } else { u[d as usize] })
-    }
-
-    /// Assembles the columns lo..hi into `vals` (their part of the values), splitting the
-    /// range in two halves run in parallel until it is small.
-    fn assemble_range(&self, lo: usize, hi: usize, vals: &mut [f64], material: &Material<'_>) {
-        let cp = self.pattern.col_ptr();
-        if hi - lo <= 128 {
-            let base = cp[lo];
-            for j in lo..hi {
-                self.assemble_column(j, &mut vals[cp[j] - base..cp[j + 1] - base], material);
-            }
-        } else {
-            let mid = (lo + hi) / 2;
-            let (a, b) = vals.split_at_mut(cp[mid] - cp[lo]);
-            rayon::join(|| self.assemble_range(lo, mid, a, material), || self.assemble_range(mid, hi, b, material));
-        }
     }
 
     /// Column j of Σ_T |T| B_Tᵀ C_T B_T (rows ≥ j), gathered from the elements around its node.
@@ -182,7 +152,7 @@ impl P1P0Lagrangian {
 /// The Mandel strain of the unit displacement e_c at a node with barycentric gradient g:
 /// the column of B for that dof.
 #[inline]
-fn strain_of_unit(g: &[f64; 3], c: usize) -> Sym {
+pub(super) fn strain_of_unit(g: &[f64; 3], c: usize) -> Sym {
     let s = 1.0 / SQRT2;
     match c {
         0 => Sym::new(g[0], 0.0, 0.0, 0.0, s * g[2], s * g[1]),
@@ -193,7 +163,7 @@ fn strain_of_unit(g: &[f64; 3], c: usize) -> Sym {
 
 /// strain_of_unit(g, c) · v without forming the vector: row c of the tensor v applied to g.
 #[inline]
-fn strain_of_unit_dot(g: &[f64; 3], c: usize, v: &Sym) -> f64 {
+pub(super) fn strain_of_unit_dot(g: &[f64; 3], c: usize, v: &Sym) -> f64 {
     let s = 1.0 / SQRT2;
     match c {
         0 => g[0] * v[0] + s * (g[2] * v[4] + g[1] * v[5]),
@@ -203,7 +173,7 @@ fn strain_of_unit_dot(g: &[f64; 3], c: usize, v: &Sym) -> f64 {
 }
 
 /// Gradients of the barycentric coordinates and the volume of element e.
-fn element_gradients(mesh: &TetMesh, e: usize) -> ([[f64; 3]; 4], f64) {
+pub(super) fn element_gradients(mesh: &TetMesh, e: usize) -> ([[f64; 3]; 4], f64) {
     let x = mesh.tets[e].map(|n| mesh.nodes[n]);
     let jac = Matrix3::from_fn(|i, k| x[k + 1][i] - x[0][i]);
     let inv = jac.try_inverse().expect("validated mesh has no degenerate element");
@@ -217,81 +187,21 @@ fn element_gradients(mesh: &TetMesh, e: usize) -> ([[f64; 3]; 4], f64) {
     (g, jac.determinant() / 6.0)
 }
 
-/// Node → (element, local vertex) adjacency in CSR form.
-fn node_element_adjacency(mesh: &TetMesh) -> (Vec<usize>, Vec<(u32, u8)>) {
-    let mut ptr = vec![0usize; mesh.n_nodes() + 1];
-    for t in &mesh.tets {
-        for &n in t {
-            ptr[n + 1] += 1;
-        }
-    }
-    for i in 0..mesh.n_nodes() {
-        ptr[i + 1] += ptr[i];
-    }
-    let mut fill = ptr.clone();
-    let mut adj = vec![(0u32, 0u8); ptr[mesh.n_nodes()]];
-    for (e, t) in mesh.tets.iter().enumerate() {
-        for (a, &n) in t.iter().enumerate() {
-            adj[fill[n]] = (e as u32, a as u8);
-            fill[n] += 1;
-        }
-    }
-    (ptr, adj)
-}
-
-/// The lower-triangle pattern coupling every pair of free dofs of nodes sharing an element.
-fn stiffness_pattern(mesh: &TetMesh, dofs: &DofMap, adj_ptr: &[usize], adj: &[(u32, u8)]) -> SymmetricPattern {
-    let neighbours: Vec<Vec<usize>> = (0..mesh.n_nodes())
-        .into_par_iter()
-        .map(|b| {
-            let mut nb: Vec<usize> = adj[adj_ptr[b]..adj_ptr[b + 1]]
-                .iter()
-                .flat_map(|&(e, _)| mesh.tets[e as usize])
-                .filter(|&a| a >= b)
-                .collect();
-            nb.sort_unstable();
-            nb.dedup();
-            nb
-        })
-        .collect();
-    let mut col_ptr = Vec::with_capacity(dofs.n_free + 1);
-    col_ptr.push(0);
-    let mut row_idx = Vec::new();
-    for (b, nb) in neighbours.iter().enumerate() {
-        for c in 0..3 {
-            let Some(j) = dofs.free(b, c) else { continue };
-            for &a in nb {
-                for k in 0..3 {
-                    if let Some(i) = dofs.free(a, k).filter(|&i| i >= j) {
-                        row_idx.push(i);
-                    }
-                }
-            }
-            col_ptr.push(row_idx.len());
-        }
-    }
-    SymmetricPattern::new(dofs.n_free, col_ptr, row_idx)
-}
-
 impl Discretisation for P1P0Lagrangian {
     fn mesh(&self) -> &TetMesh {
         &self.mesh
     }
 
-    fn nodal_vectors(&self, u: &[f64]) -> Vec<[f64; 3]> {
-        self.dofs.nodal(u)
+    fn dofs(&self) -> &DofMap {
+        &self.dofs
     }
 
-    fn obstacles(&self) -> &Obstacles {
-        self.obstacles.obstacles()
+    fn discrete_obstacles(&self) -> &DiscreteObstacles {
+        &self.obstacles
     }
 
-    fn contact_reports(&self, extras: &[f64], lambda: &[f64]) -> Vec<ObstacleReport> {
-        self.obstacles.reports(&self.mesh, extras, lambda)
-    }
-
-    fn warnings(&self) -> Vec<String> {
-        P1P0Lagrangian::warnings(self)
+    fn name(&self) -> &'static str {
+        "p1"
     }
 }
 
@@ -391,7 +301,8 @@ impl Lagrangian for P1P0Lagrangian {
 
     fn assemble(&self, material: Material<'_>, values: &mut [f64]) {
         assert_eq!(values.len(), self.pattern.nnz());
-        self.assemble_range(0, self.dofs.n_free, values, &material);
+        let column = |j: usize, col: &mut [f64]| self.assemble_column(j, col, &material);
+        assemble_columns(&self.pattern, 0, self.dofs.n_free, values, 128, &column);
     }
 }
 

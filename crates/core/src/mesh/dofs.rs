@@ -85,7 +85,7 @@ impl DofMap {
                 return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
             }
             for f in facets {
-                for &n in &mesh.boundary[f] {
+                for n in mesh.facet_nodes(f) {
                     for comp in &c.components {
                         fixed[n][comp.index()] = true;
                     }

@@ -10,19 +10,30 @@
 //!
 //! What is read:
 //!
-//! * **Tetrahedra**: every 4-node tetrahedron (element type 4) of the file is an element of the
-//!   body, whatever volume it belongs to. Other volume elements (hexahedra, prisms, pyramids) and
-//!   second-order elements (10-node tetrahedra, 6-node triangles, …) are errors: mesh with
-//!   order 1 (`Mesh.ElementOrder = 1`).
+//! * **Tetrahedra**: every 4-node tetrahedron (element type 4) or every 10-node tetrahedron
+//!   (element type 11, order 2) of the file is an element of the body, whatever volume it
+//!   belongs to. A file mixing the two orders is an error. Other volume elements (hexahedra,
+//!   prisms, pyramids) and elements of order 3 and up (20-node tetrahedra, 10-node triangles, …)
+//!   are errors: mesh with order 1 or 2 (`Mesh.ElementOrder`).
+//! * **Second order**: the four corner nodes of a 10-node tetrahedron are its vertices, its six
+//!   other nodes its edge nodes, which become the mesh's [`SecondOrder`] edge nodes (Gmsh's
+//!   local order, edges (0,1), (1,2), (2,0), (3,0), (3,2), (3,1), is mapped to the order of
+//!   [`TET_EDGES`]). The elements are straight-sided: every edge node is moved to the midpoint of
+//!   its edge ([`TetMesh::with_edge_nodes`]). A file whose edge nodes lie off their midpoints by
+//!   more than 10⁻⁶ of the edge's length (curved elements, e.g. on a cylinder) is read all the
+//!   same, with a warning in [`GmshImport::warnings`]: the curved edges are straightened.
 //! * **Facet groups**: the 3-node triangles (element type 2) of each *physical surface* form a
-//!   named facet group: the group's name from `$PhysicalNames`, or `physical_<tag>` when the
-//!   group is unnamed. A scene selects them with `{ group = "name" }` (see [`Region`]); every such
+//!   named facet group — in a second-order mesh the 6-node triangles (element type 9) too, whose
+//!   edge nodes must be those of the tetrahedra; a first-order mesh refuses 6-node triangles.
+//!   The group's name comes from `$PhysicalNames`, or is `physical_<tag>` when the group is
+//!   unnamed. A scene selects them with `{ group = "name" }` (see [`Region`]); every such
 //!   triangle must be a boundary face of the tetrahedra. Physical points, curves and volumes are
 //!   ignored (they are listed in [`GmshImport::ignored_groups`]); triangles outside any physical
 //!   surface are ignored.
-//! * **Nodes**: Gmsh's node tags become dense indices in increasing tag order; nodes on no
-//!   tetrahedron are dropped. The tetrahedra are ordered by their first node (for memory
-//!   locality), ties by tag. [`GmshImport::node_tags`] and [`GmshImport::element_tags`] map back.
+//! * **Nodes**: Gmsh's node tags become dense indices: the vertices in increasing tag order,
+//!   then (second order) the edge nodes in increasing tag order; nodes on no tetrahedron are
+//!   dropped. The tetrahedra are ordered by their first vertex (for memory locality), ties by
+//!   tag. [`GmshImport::node_tags`] and [`GmshImport::element_tags`] map back.
 //!
 //! The node rules of the scene apply to groups as to any region: a node belongs to every group
 //! one of whose facets it lies on, so the nodes on the rim between two physical surfaces belong
@@ -37,9 +48,11 @@
 //! `$Nodes` section, so a dense but permuted numbering is still mapped correctly.
 //!
 //! [`Region`]: crate::mesh::region::Region
+//! [`SecondOrder`]: crate::mesh::SecondOrder
+//! [`TET_EDGES`]: crate::mesh::TET_EDGES
 
 use crate::error::{MeshError, ParameterError, check, join};
-use crate::mesh::{MeshSource, TetMesh};
+use crate::mesh::{MeshSource, TRI_EDGES, TetMesh};
 use mshio::{ElementType, MshHeader};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
@@ -111,7 +124,8 @@ pub struct PhysicalGroup {
 pub struct GmshImport {
     /// The validated mesh; its facet groups are the physical surfaces.
     pub mesh: TetMesh,
-    /// Gmsh node tag of each mesh node (increasing).
+    /// Gmsh node tag of each mesh node: the vertices' in increasing order, then (second order)
+    /// the edge nodes' in increasing order.
     pub node_tags: Vec<u64>,
     /// Gmsh element tag of each tetrahedron.
     pub element_tags: Vec<u64>,
@@ -121,7 +135,26 @@ pub struct GmshImport {
     pub ignored_groups: Vec<PhysicalGroup>,
     /// Nodes of the file that lie on no tetrahedron (dropped).
     pub unused_nodes: usize,
+    /// What the import changed and the user should know, in words: curved second-order
+    /// elements straightened (their edge nodes moved to the midpoints, with the largest move
+    /// relative to the edge's length). Empty for a file read as it is.
+    pub warnings: Vec<String>,
 }
+
+/// Gmsh's local node of a 10-node tetrahedron (element type 11) on each edge of
+/// [`TET_EDGES`](crate::mesh::TET_EDGES) (VTK's order): Gmsh puts nodes 4…9 on the edges
+/// (0,1), (1,2), (2,0), (3,0), (3,2), (3,1), so the last two are swapped. (From the reference
+/// coordinates of `gmsh.model.mesh.getElementProperties(11)`, gmsh 4.15.2; the unit test
+/// `gmsh_tet10_edge_nodes_follow_the_reference_element` checks the map against them.)
+const GMSH_TET10_EDGE_NODES: [usize; 6] = [4, 5, 6, 7, 9, 8];
+
+/// Gmsh's local node of a 6-node triangle (element type 9) on each edge of [`TRI_EDGES`]: nodes
+/// 3, 4, 5 on (0,1), (1,2), (2,0), the same order.
+const GMSH_TRI6_EDGE_NODES: [usize; 3] = [3, 4, 5];
+
+/// Edge nodes farther than this from their edge's midpoint, relative to the edge's length, make
+/// the import warn that curved elements were straightened.
+const CURVED_EDGE_TOLERANCE: f64 = 1e-6;
 
 /// Reads a Gmsh MSH 4.1 file (ASCII or binary), multiplying coordinates by `scale`. Errors are
 /// [`MeshError::File`] naming the file and what is wrong where (element and node tags of the
@@ -234,9 +267,15 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
         }
     }
 
-    // Elements: tetrahedra, and the triangles of physical surfaces.
-    let mut tets: Vec<(u64, [u64; 4])> = Vec::new();
-    let mut triangles: BTreeMap<i32, Vec<(u64, [u64; 3])>> = BTreeMap::new();
+    // Elements: tetrahedra (their vertices and, for 10-node ones, the tags of their edge nodes
+    // in the order of TET_EDGES), and the triangles of physical surfaces (corners and, for
+    // 6-node ones, edge nodes in the order of TRI_EDGES).
+    let mut tets: Vec<(u64, [u64; 4], [u64; 6])> = Vec::new();
+    // the type of the tetrahedra and where its first block is (a file mixing orders is refused)
+    let mut tet_type: Option<(ElementType, String)> = None;
+    let mut triangles: BTreeMap<i32, Vec<FileTriangle>> = BTreeMap::new();
+    // the first block of 6-node triangles in a physical surface: (group, where, count)
+    let mut tri6: Option<(i32, String, usize)> = None;
     let mut group_elements: BTreeMap<(i32, i32), usize> = BTreeMap::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
     for block in &elements_section.element_blocks {
@@ -250,32 +289,56 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
         let where_ =
             format!("{} {entity}", ["point", "curve", "surface", "volume"].get(dim as usize).unwrap_or(&"entity"));
         match ty {
-            ElementType::Tet4 => {
+            ElementType::Tet4 | ElementType::Tet10 => {
+                match &tet_type {
+                    None => tet_type = Some((ty, where_.clone())),
+                    Some((first, first_where)) if *first != ty => {
+                        return Err(format!(
+                            "the file mixes first- and second-order tetrahedra: {}-node tetrahedra (element type {}) \
+                             in {first_where} and {nodes}-node tetrahedra (element type {}) in {where_}; all \
+                             tetrahedra must have the same order (Gmsh: Mesh.ElementOrder = 1 or 2)",
+                            describe(*first).1,
+                            *first as i32,
+                            ty as i32
+                        ));
+                    }
+                    Some(_) => {}
+                }
+                let second = ty == ElementType::Tet10;
                 for e in &block.elements {
-                    tets.push((e.element_tag, [e.nodes[0], e.nodes[1], e.nodes[2], e.nodes[3]]));
+                    let n = &e.nodes;
+                    let edges = if second { GMSH_TET10_EDGE_NODES.map(|k| n[k]) } else { [0; 6] };
+                    tets.push((e.element_tag, [n[0], n[1], n[2], n[3]], edges));
                 }
             }
-            ElementType::Tri3 => {
+            ElementType::Tri3 | ElementType::Tri6 => {
+                let second = ty == ElementType::Tri6;
                 if groups.is_empty() {
-                    *skipped.entry("3-node triangles outside physical surfaces".into()).or_default() +=
+                    *skipped.entry(format!("{nodes}-node triangles outside physical surfaces")).or_default() +=
                         block.elements.len();
+                } else if second && tri6.is_none() {
+                    tri6 = Some((groups[0], where_.clone(), block.elements.len()));
                 }
                 for &g in groups {
                     let list = triangles.entry(g).or_default();
-                    list.extend(block.elements.iter().map(|e| (e.element_tag, [e.nodes[0], e.nodes[1], e.nodes[2]])));
+                    list.extend(block.elements.iter().map(|e| {
+                        let n = &e.nodes;
+                        (e.element_tag, [n[0], n[1], n[2]], second.then(|| GMSH_TRI6_EDGE_NODES.map(|k| n[k])))
+                    }));
                 }
             }
-            _ if dim >= 2 && higher_order(ty) => {
+            _ if dim >= 2 && beyond_second_order(ty) => {
                 return Err(format!(
-                    "second-order elements are not supported; mesh with order 1 (Gmsh: Mesh.ElementOrder = 1, \
-                     or `gmsh -3 -order 1`): the file has {nodes}-node {shape} (element type {}) in {where_}",
+                    "elements of order 3 and higher are not supported; mesh with order 1 or 2 (Gmsh: \
+                     Mesh.ElementOrder = 1 or 2, or `gmsh -3 -order 2`): the file has {nodes}-node {shape} (element \
+                     type {}) in {where_}",
                     ty as i32
                 ));
             }
             _ if dim == 3 => {
                 return Err(format!(
-                    "only 4-node tetrahedra are supported as volume elements: the file has {} {nodes}-node {shape} \
-                     (element type {}) in {where_}",
+                    "only 4-node and 10-node tetrahedra are supported as volume elements: the file has {} \
+                     {nodes}-node {shape} (element type {}) in {where_}",
                     block.elements.len(),
                     ty as i32
                 ));
@@ -283,7 +346,7 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
             _ if dim == 2 && !groups.is_empty() => {
                 return Err(format!(
                     "physical surface {:?} has {} {nodes}-node {shape} (element type {}) in {where_}: only 3-node \
-                     triangles can be facets of a tetrahedral mesh",
+                     triangles (and 6-node ones in a second-order mesh) can be facets of a tetrahedral mesh",
                     group_name(2, groups[0]),
                     block.elements.len(),
                     ty as i32
@@ -300,23 +363,43 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
         }
         let found = if found.is_empty() { "no elements".to_string() } else { found.join(", ") };
         return Err(format!(
-            "the file has no tetrahedra (4-node, element type 4), only {found}; {SAVE_HINT}; a 2D mesh cannot be used"
+            "the file has no tetrahedra (4-node or 10-node, element type 4 or 11), only {found}; {SAVE_HINT}; a 2D \
+             mesh cannot be used"
+        ));
+    }
+    let second_order = matches!(tet_type, Some((ElementType::Tet10, _)));
+    if let (false, Some((g, where_, n))) = (second_order, &tri6) {
+        return Err(format!(
+            "physical surface {:?} has {n} 6-node triangles (element type 9) in {where_}, but the tetrahedra are \
+             4-node (element type 4): the facets of a first-order mesh are 3-node triangles (mesh the surfaces and \
+             the volume with the same order)",
+            group_name(2, *g)
         ));
     }
 
-    // Dense numbering of the nodes of the tetrahedra, in increasing tag order.
+    // Dense numbering of the nodes of the tetrahedra: the vertices in increasing tag order, then
+    // the edge nodes in increasing tag order.
     const NONE: usize = usize::MAX;
-    let mut used = vec![false; file_tags.len()];
-    for (etag, t) in &tets {
+    // what each node of the file is: 0 on no tetrahedron, 1 a vertex, 2 an edge node only (a
+    // node that is both is a vertex, and `with_edge_nodes` refuses it as an edge node)
+    let mut role = vec![0u8; file_tags.len()];
+    for (etag, t, edges) in &tets {
         for n in t {
             match position.get(n) {
-                Some(&i) => used[i] = true,
+                Some(&i) => role[i] = 1,
+                None => return Err(dangling("tetrahedron", *etag, *n, "")),
+            }
+        }
+        for n in edges.iter().filter(|_| second_order) {
+            match position.get(n) {
+                Some(&i) if role[i] == 0 => role[i] = 2,
+                Some(_) => {}
                 None => return Err(dangling("tetrahedron", *etag, *n, "")),
             }
         }
     }
-    let mut order: Vec<usize> = (0..file_tags.len()).filter(|&i| used[i]).collect();
-    order.sort_unstable_by_key(|&i| file_tags[i]);
+    let mut order: Vec<usize> = (0..file_tags.len()).filter(|&i| role[i] != 0).collect();
+    order.sort_unstable_by_key(|&i| (role[i], file_tags[i]));
     let mut dense = vec![NONE; file_tags.len()];
     for (k, &i) in order.iter().enumerate() {
         dense[i] = k;
@@ -324,17 +407,26 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
     let node_tags: Vec<u64> = order.iter().map(|&i| file_tags[i]).collect();
     let nodes: Vec<[f64; 3]> = order.iter().map(|&i| coords[i]).collect();
     let index = |n: &u64| dense[position[n]];
-    // tetrahedra in the order of their first node (ties by tag): Gmsh lists them by geometric
+    // tetrahedra in the order of their first vertex (ties by tag): Gmsh lists them by geometric
     // entity and in the mesher's order, scattered in memory against the nodes; the assembly
     // visits the elements around each node in node order (unstructured 19.8k-dof mesh: Newton
-    // 1.24 s → 1.05 s)
-    let mut tets: Vec<(u64, [usize; 4])> = tets.iter().map(|(e, t)| (*e, t.map(|n| index(&n)))).collect();
-    tets.sort_unstable_by_key(|(e, t)| (t.iter().min().copied(), *e));
+    // 1.24 s → 1.05 s). The edge nodes go with their tetrahedron (the vertices keep their local
+    // order, so edge k still joins the local vertices TET_EDGES[k]).
+    type Tet = (u64, [usize; 4], [usize; 6]);
+    let mut tets: Vec<Tet> = tets
+        .iter()
+        .map(|(e, t, edges)| (*e, t.map(|n| index(&n)), if second_order { edges.map(|n| index(&n)) } else { [0; 6] }))
+        .collect();
+    tets.sort_unstable_by_key(|(e, t, _)| (t.iter().min().copied(), *e));
     let element_tags: Vec<u64> = tets.iter().map(|t| t.0).collect();
-    let tet_nodes: Vec<[usize; 4]> = tets.iter().map(|(_, t)| *t).collect();
+    let tet_nodes: Vec<[usize; 4]> = tets.iter().map(|t| t.1).collect();
+    let tet_edges: Vec<[usize; 6]> = if second_order { tets.iter().map(|t| t.2).collect() } else { Vec::new() };
 
     let mut named: Vec<(String, Vec<[usize; 3]>)> = Vec::new();
     let mut facet_tags: HashMap<(String, [usize; 3]), u64> = HashMap::new();
+    // the 6-node triangles, to check their edge nodes against the tetrahedra's:
+    // (group, element tag, corners, edge node tags)
+    let mut triangle_edges: Vec<(String, u64, [usize; 3], [u64; 3])> = Vec::new();
     let mut surface_groups = Vec::new();
     let surface_tags: BTreeSet<i32> = group_tags.iter().filter(|(d, _)| *d == 2).map(|&(_, t)| t).collect();
     for &g in &surface_tags {
@@ -346,7 +438,7 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
             ));
         }
         let mut facets = Vec::with_capacity(list.len());
-        for (etag, t) in list {
+        for (etag, t, edges) in list {
             let mut f = [0; 3];
             for (k, n) in t.iter().enumerate() {
                 let Some(&i) = position.get(n) else {
@@ -360,6 +452,12 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
                     ));
                 }
                 f[k] = dense[i];
+            }
+            if let Some(edges) = edges {
+                if let Some(n) = edges.iter().find(|n| !position.contains_key(n)) {
+                    return Err(dangling("triangle", *etag, *n, &format!(" of physical surface {name:?}")));
+                }
+                triangle_edges.push((name.clone(), *etag, f, *edges));
             }
             let mut key = f;
             key.sort_unstable();
@@ -380,36 +478,59 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
         })
         .collect();
 
-    let mesh = TetMesh::new(nodes, tet_nodes, named).map_err(|e| {
-        let tags = |t: &[usize]| t.iter().map(|&n| node_tags[n].to_string()).collect::<Vec<_>>().join(", ");
-        match e {
-            MeshError::Inverted { element, nodes, volume } => format!(
-                "tetrahedron {} (nodes {}) is inverted: signed volume {volume:.3e} < 0 (index {element} in the imported \
-                 mesh); MSH tetrahedra must be positively oriented",
-                element_tags[element],
-                tags(&nodes)
-            ),
-            MeshError::Degenerate { element, nodes, volume } => format!(
-                "tetrahedron {} (nodes {}) has zero volume ({volume:.3e}): the mesh is degenerate there (index {element} \
-                 in the imported mesh)",
-                element_tags[element],
-                tags(&nodes)
-            ),
-            MeshError::NotABoundaryFacet { group, facet } => {
-                let mut key = facet;
-                key.sort_unstable();
-                let etag = facet_tags.get(&(group.clone(), key)).map_or("?".into(), u64::to_string);
-                format!(
-                    "triangle {etag} (nodes {}) of physical surface {group:?} is not a boundary face of the \
-                     tetrahedra: a physical surface used as a facet group must lie on the boundary of the meshed \
-                     volume (an interior surface, such as the interface between two volumes of the body, cannot be \
-                     one; and a surface meshed separately from the volume does not share its nodes)",
-                    tags(&facet)
-                )
-            }
-            other => other.to_string(),
+    let tags = |t: &[usize]| t.iter().map(|&n| node_tags[n].to_string()).collect::<Vec<_>>().join(", ");
+    let mesh = TetMesh::new(nodes, tet_nodes, named).map_err(|e| match e {
+        MeshError::Inverted { element, nodes, volume } => format!(
+            "tetrahedron {} (nodes {}) is inverted: signed volume {volume:.3e} < 0 (index {element} in the imported \
+             mesh); MSH tetrahedra must be positively oriented",
+            element_tags[element],
+            tags(&nodes)
+        ),
+        MeshError::Degenerate { element, nodes, volume } => format!(
+            "tetrahedron {} (nodes {}) has zero volume ({volume:.3e}): the mesh is degenerate there (index {element} \
+             in the imported mesh)",
+            element_tags[element],
+            tags(&nodes)
+        ),
+        MeshError::NotABoundaryFacet { group, facet } => {
+            let mut key = facet;
+            key.sort_unstable();
+            let etag = facet_tags.get(&(group.clone(), key)).map_or("?".into(), u64::to_string);
+            format!(
+                "triangle {etag} (nodes {}) of physical surface {group:?} is not a boundary face of the \
+                 tetrahedra: a physical surface used as a facet group must lie on the boundary of the meshed \
+                 volume (an interior surface, such as the interface between two volumes of the body, cannot be \
+                 one; and a surface meshed separately from the volume does not share its nodes)",
+                tags(&facet)
+            )
         }
+        other => other.to_string(),
     })?;
+
+    let mut warnings = Vec::new();
+    let mesh = if second_order {
+        let (mesh, moved) = mesh.with_edge_nodes(tet_edges).map_err(|e| match e {
+            MeshError::BadEdgeNode { element, node, reason } => format!(
+                "10-node tetrahedron {}: its edge node {} is unusable: {reason} (the 10-node tetrahedra must share \
+                 one node per edge, and no vertex can be an edge node)",
+                element_tags[element],
+                node_tags.get(node).map_or_else(|| format!("#{node}"), u64::to_string)
+            ),
+            other => other.to_string(),
+        })?;
+        check_triangle_edges(&mesh, &triangle_edges, &node_tags, &|n: &u64| dense[position[n]])?;
+        if moved > CURVED_EDGE_TOLERANCE {
+            warnings.push(format!(
+                "the 10-node tetrahedra are curved: an edge node lies {moved:.2e} of its edge's length off the edge's \
+                 midpoint (more than {CURVED_EDGE_TOLERANCE:.0e}); the elements are treated as straight-sided, every \
+                 edge node moved to its edge's midpoint, so the curved edges are straightened (a curved boundary \
+                 becomes the flat facets through its vertices)"
+            ));
+        }
+        mesh
+    } else {
+        mesh
+    };
     Ok(GmshImport {
         mesh,
         node_tags,
@@ -417,8 +538,52 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
         surface_groups,
         ignored_groups,
         unused_nodes: file_tags.len() - order.len(),
+        warnings,
     })
 }
+
+/// Checks that the edge nodes of the 6-node triangles of the facet groups are the tetrahedra's:
+/// `triangles` holds (group, element tag, corners, edge node tags in the order of
+/// [`TRI_EDGES`]); `index` maps a node tag to its mesh index (`usize::MAX` for a node on no
+/// tetrahedron).
+fn check_triangle_edges(
+    mesh: &TetMesh,
+    triangles: &[(String, u64, [usize; 3], [u64; 3])],
+    node_tags: &[u64],
+    index: &dyn Fn(&u64) -> usize,
+) -> Result<(), String> {
+    let Some(so) = &mesh.second_order else { return Ok(()) };
+    if triangles.is_empty() {
+        return Ok(());
+    }
+    // the edge node of every boundary edge
+    let mut edge_node: HashMap<(usize, usize), usize> = HashMap::with_capacity(3 * mesh.boundary.len());
+    for (f, edges) in mesh.boundary.iter().zip(&so.facet_edges) {
+        for (&[i, j], &n) in TRI_EDGES.iter().zip(edges) {
+            edge_node.insert((f[i].min(f[j]), f[i].max(f[j])), n);
+        }
+    }
+    for (group, etag, f, edges) in triangles {
+        for (&[i, j], tag) in TRI_EDGES.iter().zip(edges) {
+            let (a, b) = (f[i], f[j]);
+            // the triangle is a boundary facet (TetMesh::new checked it), so its edges are known
+            let Some(&expected) = edge_node.get(&(a.min(b), a.max(b))) else { continue };
+            if index(tag) != expected {
+                return Err(format!(
+                    "6-node triangle {etag} of physical surface {group:?} has node {tag} on its edge from node {} to \
+                     node {}, but the tetrahedra have node {} there: the surface's edge nodes must be those of the \
+                     volume (mesh the surfaces and the volume together)",
+                    node_tags[a], node_tags[b], node_tags[expected]
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A triangle of a physical surface as the file gives it: element tag, corner node tags, and
+/// for a 6-node triangle its edge node tags in the order of [`TRI_EDGES`].
+type FileTriangle = (u64, [u64; 3], Option<[u64; 3]>);
 
 fn dangling(what: &str, element: u64, node: u64, context: &str) -> String {
     format!(
@@ -444,19 +609,15 @@ fn describe(ty: ElementType) -> (&'static str, usize) {
     (shape, ty.nodes().unwrap_or(0))
 }
 
-/// True for elements with more nodes than the vertices of their shape (second order and up).
-fn higher_order(ty: ElementType) -> bool {
-    let (shape, nodes) = describe(ty);
-    let vertices = match shape {
-        "lines" => 2,
-        "triangles" => 3,
-        "quadrangles" | "tetrahedra" => 4,
-        "hexahedra" => 8,
-        "prisms" => 6,
-        "pyramids" => 5,
-        _ => return false,
-    };
-    nodes > vertices
+/// True for triangles and tetrahedra of order 3 and higher: more nodes than the 6-node
+/// triangle or the 10-node tetrahedron (complete or not, e.g. the 9-node triangle, the 20-node
+/// tetrahedron).
+fn beyond_second_order(ty: ElementType) -> bool {
+    match describe(ty) {
+        ("triangles", nodes) => nodes > 6,
+        ("tetrahedra", nodes) => nodes > 10,
+        _ => false,
+    }
 }
 
 /// Checks the `$MeshFormat` header: MSH version 4.1, ASCII (0) or binary (1), size_t of 4 or 8
@@ -809,14 +970,24 @@ $EndElements
                 vec!["no tetrahedra", "1 triangle(s) of physical surfaces", "Mesh.SaveAll"],
             ),
             (
-                TINY.replace("3 1 4 2\n2 1 2 3 4\n3 2 3 4 5\n", "3 1 11 1\n2 1 2 3 4 1 2 3 4 1 2\n")
-                    .replace("2 3 1 3\n", "2 2 1 2\n"),
-                vec!["second-order elements are not supported; mesh with order 1", "10-node tetrahedra"],
+                TINY.replace(
+                    "3 1 4 2\n2 1 2 3 4\n3 2 3 4 5\n",
+                    "3 1 29 1\n2 1 2 3 4 1 2 3 4 1 2 3 4 1 2 3 4 1 2 3 4\n",
+                )
+                .replace("2 3 1 3\n", "2 2 1 2\n"),
+                vec![
+                    "elements of order 3 and higher are not supported; mesh with order 1 or 2",
+                    "20-node tetrahedra (element type 29) in volume 1",
+                ],
+            ),
+            (
+                TINY.replace("2 1 2 1\n1 1 2 3\n", "2 1 21 1\n1 1 2 3 1 2 3 1 2 3 4\n"),
+                vec!["order 3 and higher", "10-node triangles (element type 21) in surface 1"],
             ),
             (
                 TINY.replace("3 1 4 2\n2 1 2 3 4\n3 2 3 4 5\n", "3 1 5 1\n2 1 2 3 4 5 1 2 3\n")
                     .replace("2 3 1 3\n", "2 2 1 2\n"),
-                vec!["only 4-node tetrahedra", "1 8-node hexahedra (element type 5) in volume 1"],
+                vec!["only 4-node and 10-node tetrahedra", "1 8-node hexahedra (element type 5) in volume 1"],
             ),
             (
                 TINY.replace("2 1 2 1\n1 1 2 3\n", "2 1 3 1\n1 1 2 3 4\n"),
@@ -846,5 +1017,209 @@ $EndElements
         assert!(src.validate("mesh").is_ok());
         let e = toml::from_str::<Box<dyn MeshSource>>("type = \"gmsh\"\nfile = \"m.msh\"\nscal = 2.0").unwrap_err();
         assert!(e.to_string().contains("scal"), "{e}");
+    }
+
+    /// [`TINY`] at order 2: the two tetrahedra with their edge nodes, the bottom triangle a
+    /// 6-node one. Vertices 1, 2, 3, 4 and 14 (the apex of the second tetrahedron); the edge
+    /// nodes 6 (1–2), 7 (2–3), 8 (1–3), 9 (1–4), 10 (2–4), 11 (3–4), 12 (2–14), 13 (3–14) and
+    /// 5 (4–14), at the midpoints; the elements list them in Gmsh's local order.
+    const TINY_P2: &str = "$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+2
+2 1 \"bottom\"
+3 2 \"body\"
+$EndPhysicalNames
+$Entities
+0 0 1 1
+1 0 0 0 1 1 0 1 1 0
+1 0 0 0 1 1 1 1 2 1 1
+$EndEntities
+$Nodes
+1 14 1 14
+3 1 0 14
+1
+2
+3
+4
+5
+6
+7
+8
+9
+10
+11
+12
+13
+14
+0 0 0
+1 0 0
+0 1 0
+0 0 1
+0.5 0.5 1
+0.5 0 0
+0.5 0.5 0
+0 0.5 0
+0 0 0.5
+0.5 0 0.5
+0 0.5 0.5
+1 0.5 0.5
+0.5 1 0.5
+1 1 1
+$EndNodes
+$Elements
+2 3 1 3
+2 1 9 1
+1 1 2 3 6 7 8
+3 1 11 2
+2 1 2 3 4 6 7 8 9 11 10
+3 2 3 4 14 7 11 10 12 5 13
+$EndElements
+";
+
+    fn tags_of(imp: &GmshImport, nodes: &[usize]) -> Vec<u64> {
+        nodes.iter().map(|&n| imp.node_tags[n]).collect()
+    }
+
+    #[test]
+    fn gmsh_tet10_edge_nodes_follow_the_reference_element() {
+        // gmsh.model.mesh.getElementProperties(11)[4] and (9)[4], gmsh 4.15.2: the local nodes'
+        // reference coordinates
+        let tet10: [[f64; 3]; 10] = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.5, 0.0, 0.0],
+            [0.5, 0.5, 0.0],
+            [0.0, 0.5, 0.0],
+            [0.0, 0.0, 0.5],
+            [0.0, 0.5, 0.5],
+            [0.5, 0.0, 0.5],
+        ];
+        for (k, [i, j]) in crate::mesh::TET_EDGES.into_iter().enumerate() {
+            let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (tet10[i][c] + tet10[j][c]));
+            assert_eq!(tet10[GMSH_TET10_EDGE_NODES[k]], mid, "edge {k} ({i}, {j})");
+        }
+        let tri6: [[f64; 2]; 6] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]];
+        for (k, [i, j]) in TRI_EDGES.into_iter().enumerate() {
+            let mid: [f64; 2] = std::array::from_fn(|c| 0.5 * (tri6[i][c] + tri6[j][c]));
+            assert_eq!(tri6[GMSH_TRI6_EDGE_NODES[k]], mid, "edge {k} ({i}, {j})");
+        }
+    }
+
+    #[test]
+    fn reads_second_order_tets_and_triangles() {
+        let imp = read(TINY_P2).unwrap();
+        let m = &imp.mesh;
+        let so = m.second_order.as_ref().expect("a second-order mesh");
+        assert_eq!((m.n_nodes(), m.n_elements(), so.n_vertices), (14, 2, 5));
+        // the vertices first, then the edge nodes, each in tag order (edge node 5 after vertex 14)
+        assert_eq!(imp.node_tags, vec![1, 2, 3, 4, 14, 5, 6, 7, 8, 9, 10, 11, 12, 13]);
+        assert_eq!(imp.element_tags, vec![2, 3]);
+        assert_eq!(imp.unused_nodes, 0);
+        assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+        // the edge nodes in the order of TET_EDGES: (0,1), (1,2), (0,2), (0,3), (1,3), (2,3)
+        assert_eq!(tags_of(&imp, &m.tets[0]), [1, 2, 3, 4]);
+        assert_eq!(tags_of(&imp, &so.tet_edges[0]), [6, 7, 8, 9, 10, 11]);
+        assert_eq!(tags_of(&imp, &m.tets[1]), [2, 3, 4, 14]);
+        assert_eq!(tags_of(&imp, &so.tet_edges[1]), [7, 11, 10, 12, 13, 5]);
+        let f = m.groups["bottom"][0];
+        let (corners, edges) = (tags_of(&imp, &m.boundary[f]), tags_of(&imp, &so.facet_edges[f]));
+        for (k, [i, j]) in TRI_EDGES.into_iter().enumerate() {
+            let expected = match (corners[i].min(corners[j]), corners[i].max(corners[j])) {
+                (1, 2) => 6,
+                (2, 3) => 7,
+                (1, 3) => 8,
+                other => panic!("edge {other:?} is not on the bottom facet"),
+            };
+            assert_eq!(edges[k], expected);
+        }
+        // the vertices and tetrahedra of the first-order file
+        let p1 = read(TINY).unwrap();
+        assert_eq!(m.first_order().tets, p1.mesh.tets);
+        assert_eq!(m.first_order().nodes, p1.mesh.nodes);
+        assert_eq!(m.first_order().boundary, p1.mesh.boundary);
+        // 3-node triangles name facets of a second-order mesh too
+        let tri3 = TINY_P2.replace("2 1 9 1\n1 1 2 3 6 7 8\n", "2 1 2 1\n1 1 2 3\n");
+        let imp3 = read(&tri3).unwrap();
+        assert_eq!(imp3.mesh.second_order, imp.mesh.second_order);
+        assert_eq!(imp3.mesh.groups, imp.mesh.groups);
+    }
+
+    #[test]
+    fn curved_edge_nodes_are_straightened_with_a_warning() {
+        // edge node 5 (the midpoint of 4 (0, 0, 1) and 14 (1, 1, 1)) lifted by 0.1: 0.1 / √2 of
+        // its edge's length
+        let curved = TINY_P2.replace("0.5 0.5 1\n", "0.5 0.5 1.1\n");
+        assert_ne!(curved, TINY_P2);
+        let imp = read(&curved).unwrap();
+        assert_eq!(imp.warnings.len(), 1, "{:?}", imp.warnings);
+        let w = &imp.warnings[0];
+        assert!(w.contains("7.07e-2") && w.contains("straight"), "{w}");
+        assert_eq!(coords_by_tag(&imp)[&5], [0.5, 0.5, 1.0]);
+        assert_eq!(imp.mesh.nodes, read(TINY_P2).unwrap().mesh.nodes);
+        // below the tolerance: no warning
+        let nearly = TINY_P2.replace("0.5 0.5 1\n", "0.5 0.5 1.0000000001\n");
+        assert!(read(&nearly).unwrap().warnings.is_empty());
+    }
+
+    #[test]
+    fn second_order_errors_name_the_problem() {
+        let cases: Vec<(String, Vec<&str>)> = vec![
+            (
+                // a 4-node and a 10-node tetrahedron
+                TINY_P2
+                    .replace("3 1 11 2\n2 1 2 3 4 6 7 8 9 11 10\n", "3 1 4 1\n2 1 2 3 4\n3 1 11 1\n")
+                    .replace("2 3 1 3\n", "3 3 1 3\n"),
+                vec![
+                    "mixes first- and second-order tetrahedra",
+                    "4-node tetrahedra (element type 4) in volume 1",
+                    "10-node tetrahedra (element type 11) in volume 1",
+                ],
+            ),
+            (
+                // the same, the 10-node block first
+                TINY_P2
+                    .replace(
+                        "3 1 11 2\n2 1 2 3 4 6 7 8 9 11 10\n3 2 3 4 14 7 11 10 12 5 13\n",
+                        "3 1 11 1\n3 2 3 4 14 7 11 10 12 5 13\n3 1 4 1\n2 1 2 3 4\n",
+                    )
+                    .replace("2 3 1 3\n", "3 3 1 3\n"),
+                vec!["10-node tetrahedra (element type 11) in volume 1 and 4-node tetrahedra (element type 4)"],
+            ),
+            (
+                TINY.replace("2 1 2 1\n1 1 2 3\n", "2 1 9 1\n1 1 2 3 4 5 1\n"),
+                vec!["physical surface \"bottom\" has 1 6-node triangles (element type 9)", "4-node"],
+            ),
+            (
+                TINY_P2.replace("1 1 2 3 6 7 8\n", "1 1 2 3 6 8 7\n"),
+                vec![
+                    "6-node triangle 1 of physical surface \"bottom\" has node 8 on its edge from node 2 to node 3, \
+                      but the tetrahedra have node 7 there",
+                ],
+            ),
+            (
+                TINY_P2.replace("1 1 2 3 6 7 8\n", "1 1 2 3 6 7 99\n"),
+                vec!["triangle 1 of physical surface \"bottom\" refers to node 99"],
+            ),
+            (
+                // edge 2–3 given node 7 by one tetrahedron and node 9 by the other
+                TINY_P2.replace("3 2 3 4 14 7 11", "3 2 3 4 14 9 11"),
+                vec!["10-node tetrahedron 3: its edge node 9 is unusable", "another element"],
+            ),
+            (
+                TINY_P2.replace("3 2 3 4 14 7 11 10 12 5 13", "3 2 3 4 14 7 11 10 12 1 13"),
+                vec!["10-node tetrahedron 3: its edge node 1 is unusable: it is a vertex"],
+            ),
+            (TINY_P2.replace("12 5 13\n", "12 5 77\n"), vec!["tetrahedron 3 refers to node 77"]),
+        ];
+        for (text, expected) in cases {
+            let err = read(&text).err().unwrap_or_else(|| panic!("no error for\n{text}"));
+            for e in expected {
+                assert!(err.contains(e), "error {err:?} lacks {e:?}");
+            }
+        }
     }
 }

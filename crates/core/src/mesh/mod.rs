@@ -27,6 +27,30 @@ pub struct TetMesh {
     pub boundary: Vec<[usize; 3]>,
     /// Named groups of boundary facets, as indices into `boundary`.
     pub groups: BTreeMap<String, Vec<usize>>,
+    /// The edge nodes of a second-order mesh (10-node tetrahedra, 6-node triangles); `None` for
+    /// a first-order mesh. See [`TetMesh::second_order`].
+    pub second_order: Option<SecondOrder>,
+}
+
+/// The edges of a tetrahedron [v₀, v₁, v₂, v₃] in the order of VTK's quadratic tetrahedron
+/// (type 24): local nodes 4…9 of a 10-node tetrahedron sit on these edges.
+pub const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]];
+
+/// The edges of a triangle [a, b, c] in the order of VTK's quadratic triangle (type 22):
+/// (a, b), (b, c), (c, a).
+pub const TRI_EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
+
+/// The edge nodes of a second-order mesh: one node per edge of the tetrahedra, shared by the
+/// elements around the edge. The elements stay straight-sided (subparametric): the geometry is
+/// the vertices', and an edge node is the midpoint of its edge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SecondOrder {
+    /// The number of vertices (the other nodes are edge nodes).
+    pub n_vertices: usize,
+    /// The six edge nodes of each tetrahedron, edges in the order of [`TET_EDGES`].
+    pub tet_edges: Vec<[usize; 6]>,
+    /// The three edge nodes of each boundary facet, edges in the order of [`TRI_EDGES`].
+    pub facet_edges: Vec<[usize; 3]>,
 }
 
 /// The faces of a tetrahedron [a, b, c, d], each opposite one vertex and oriented outward
@@ -78,7 +102,121 @@ impl TetMesh {
             ids.dedup();
             groups.entry(name).or_insert_with(Vec::new).extend(ids);
         }
-        Ok(Self { nodes, tets, boundary, groups })
+        Ok(Self { nodes, tets, boundary, groups, second_order: None })
+    }
+
+    /// True for a second-order mesh (10-node tetrahedra).
+    pub fn is_second_order(&self) -> bool {
+        self.second_order.is_some()
+    }
+
+    /// The nodes of boundary facet `f`: its three vertices, then (second order) its three edge
+    /// nodes.
+    pub fn facet_nodes(&self, f: usize) -> impl Iterator<Item = usize> + '_ {
+        self.boundary[f].into_iter().chain(self.second_order.iter().flat_map(move |s| s.facet_edges[f]))
+    }
+
+    /// The nodes of element `e`: its four vertices, then (second order) its six edge nodes.
+    pub fn element_nodes(&self, e: usize) -> impl Iterator<Item = usize> + '_ {
+        self.tets[e].into_iter().chain(self.second_order.iter().flat_map(move |s| s.tet_edges[e]))
+    }
+
+    /// The second-order mesh of the same tetrahedra (10-node tetrahedra, 6-node triangles): a
+    /// node at the midpoint of every edge, appended after the vertices in the order the edges
+    /// are first met. A second-order mesh is returned as it is.
+    pub fn second_order(&self) -> TetMesh {
+        if self.is_second_order() {
+            return self.clone();
+        }
+        let mut nodes = self.nodes.clone();
+        let mut edge_node = std::collections::HashMap::with_capacity(7 * self.nodes.len());
+        let mut node_of = |a: usize, b: usize, nodes: &mut Vec<[f64; 3]>| -> usize {
+            *edge_node.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (x, y) = (self.nodes[a], self.nodes[b]);
+                nodes.push(std::array::from_fn(|k| 0.5 * (x[k] + y[k])));
+                nodes.len() - 1
+            })
+        };
+        let tet_edges: Vec<[usize; 6]> =
+            self.tets.iter().map(|t| TET_EDGES.map(|[i, j]| node_of(t[i], t[j], &mut nodes))).collect();
+        let facet_edges =
+            self.boundary.iter().map(|f| TRI_EDGES.map(|[i, j]| node_of(f[i], f[j], &mut nodes))).collect();
+        TetMesh {
+            nodes,
+            second_order: Some(SecondOrder { n_vertices: self.nodes.len(), tet_edges, facet_edges }),
+            ..self.clone()
+        }
+    }
+
+    /// The second-order mesh whose edge nodes are given (a file's 10-node tetrahedra):
+    /// `tet_edges[e]` are the nodes on the edges of element e in the order of [`TET_EDGES`],
+    /// indices into `self.nodes`, which must hold them. Errors: an edge given two different
+    /// nodes by two elements, an edge node that is also a vertex. The edge nodes are moved to
+    /// their edges' midpoints (straight-sided elements); the largest distance moved, relative to
+    /// the edge's length, is returned with the mesh.
+    pub fn with_edge_nodes(mut self, tet_edges: Vec<[usize; 6]>) -> Result<(TetMesh, f64), MeshError> {
+        let mut is_vertex = vec![false; self.nodes.len()];
+        self.tets.iter().flatten().for_each(|&n| is_vertex[n] = true);
+        let mut edge_node = std::collections::HashMap::with_capacity(7 * self.nodes.len());
+        let mut moved: f64 = 0.0;
+        for (element, (t, edges)) in self.tets.iter().zip(&tet_edges).enumerate() {
+            for (k, &[i, j]) in TET_EDGES.iter().enumerate() {
+                let (a, b, node) = (t[i].min(t[j]), t[i].max(t[j]), edges[k]);
+                if node >= self.nodes.len() || is_vertex[node] {
+                    return Err(MeshError::BadEdgeNode { element, node, reason: "it is a vertex or does not exist" });
+                }
+                if *edge_node.entry((a, b)).or_insert(node) != node {
+                    return Err(MeshError::BadEdgeNode {
+                        element,
+                        node,
+                        reason: "another element puts another node on this edge",
+                    });
+                }
+                let (x, y) = (self.nodes[a], self.nodes[b]);
+                let mid: [f64; 3] = std::array::from_fn(|k| 0.5 * (x[k] + y[k]));
+                let d = sub(self.nodes[node], mid);
+                let l = sub(x, y);
+                moved = moved.max(
+                    ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / (l[0] * l[0] + l[1] * l[1] + l[2] * l[2])).sqrt(),
+                );
+            }
+        }
+        for (&(a, b), &node) in &edge_node {
+            let (x, y) = (self.nodes[a], self.nodes[b]);
+            self.nodes[node] = std::array::from_fn(|k| 0.5 * (x[k] + y[k]));
+        }
+        let facet_edges = self
+            .boundary
+            .iter()
+            .map(|f| TRI_EDGES.map(|[i, j]| edge_node[&(f[i].min(f[j]), f[i].max(f[j]))]))
+            .collect();
+        let n_vertices = is_vertex.iter().filter(|v| **v).count();
+        self.second_order = Some(SecondOrder { n_vertices, tet_edges, facet_edges });
+        Ok((self, moved))
+    }
+
+    /// The first-order mesh of the same tetrahedra: the edge nodes dropped and the vertices
+    /// renumbered densely in their order. A first-order mesh is returned as it is.
+    pub fn first_order(&self) -> TetMesh {
+        if !self.is_second_order() {
+            return self.clone();
+        }
+        let mut new_index = vec![usize::MAX; self.nodes.len()];
+        self.tets.iter().flatten().for_each(|&n| new_index[n] = 0);
+        let mut nodes = Vec::new();
+        for (n, i) in new_index.iter_mut().enumerate() {
+            if *i == 0 {
+                *i = nodes.len();
+                nodes.push(self.nodes[n]);
+            }
+        }
+        TetMesh {
+            nodes,
+            tets: self.tets.iter().map(|t| t.map(|n| new_index[n])).collect(),
+            boundary: self.boundary.iter().map(|f| f.map(|n| new_index[n])).collect(),
+            groups: self.groups.clone(),
+            second_order: None,
+        }
     }
 
     /// Number of nodes.

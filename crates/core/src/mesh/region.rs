@@ -2,8 +2,8 @@
 //! zones: a named facet group, a box, a disc, and their intersections, unions and complements.
 //!
 //! A region selects *facets* (by group membership, and by the centroid for geometric tests) and
-//! *nodes* (a node is in a group when it lies on one of its facets; geometric tests use the
-//! node's coordinates). Example, Γ₁ of the default scene:
+//! *nodes* (a node is in a group when it lies on one of its facets, edge nodes of a second-order
+//! mesh included; geometric tests use the node's coordinates). Example, Γ₁ of the default scene:
 //! `{ all = [ { group = "zmin" }, { box = { min = [-0.75, -0.75, -1], max = [0.75, 0.75, 1] } } ] }`.
 
 use crate::error::{ParameterError, check, join};
@@ -148,8 +148,8 @@ impl FacetGroups {
     /// Tables for `mesh`.
     pub fn new(mesh: &TetMesh) -> Self {
         let mut on_boundary = vec![false; mesh.n_nodes()];
-        for f in &mesh.boundary {
-            for &n in f {
+        for f in 0..mesh.boundary.len() {
+            for n in mesh.facet_nodes(f) {
                 on_boundary[n] = true;
             }
         }
@@ -161,7 +161,7 @@ impl FacetGroups {
             let mut nm = vec![false; mesh.n_nodes()];
             for &f in facets {
                 fm[f] = true;
-                for &n in &mesh.boundary[f] {
+                for n in mesh.facet_nodes(f) {
                     nm[n] = true;
                 }
             }

@@ -1,0 +1,551 @@
+//! The P2 discretisation of L (theory §10): continuous piecewise-quadratic displacements on
+//! 10-node tetrahedra, generalised stresses at the four Gauss points of every element, and the
+//! mean-dilatation strain operator B̄.
+//!
+//! B̄ replaces the volumetric strain tr ε at each point by its mean over the element (the L²
+//! projection of div u onto P0): `ε̄ = ε(u) + ⅓(θ̄_T − tr ε(u)) I`, θ̄_T = (1/|T|)∫_T div u.
+//! Nearly incompressible elasticity and isochoric plastic flow then constrain one volume change
+//! per element instead of one per point, and P2–P0 is inf-sup stable, so the element does not
+//! lock. B̄ is linear, so L keeps the form of theory §3 with B̄ in place of B: every yield
+//! surface, obstacle and solver works unchanged.
+//!
+//! The four-point rule integrates the energy of a P2 field exactly (ε(u) is linear on an
+//! element, the energy quadratic). Elements are straight-sided (the geometry is the vertices').
+//! Hot loops gather, as in [`super::p1p0`]: strains over elements, Bᵀσ over dofs, assembly
+//! over matrix columns.
+
+use super::Discretisation;
+use super::p1p0::{element_gradients, strain_of_unit, strain_of_unit_dot};
+use super::topology::{assemble_columns, node_element_adjacency, stiffness_pattern};
+use crate::error::SceneError;
+use crate::fem::loads::{Load, nodal_loads};
+use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
+use crate::mesh::{TET_EDGES, TetMesh};
+use crate::problem::displacements::ConstraintRows;
+use crate::problem::elasticity::Elasticity;
+use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
+use crate::problem::obstacles::{DiscreteObstacles, Obstacles};
+use crate::problem::pattern::SymmetricPattern;
+use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
+use crate::problem::tensor::{SQRT2, Sym};
+use rayon::prelude::*;
+
+/// Stress points per element: the four-point Gauss rule of degree 2.
+pub const POINTS: usize = 4;
+/// Nodes per element.
+const NODES: usize = 10;
+/// Barycentric coordinates of Gauss point q: `A` at vertex q, `B` at the other three.
+const A: f64 = 0.585_410_196_624_968_5;
+const B: f64 = 0.138_196_601_125_010_5;
+
+/// The P2 element as a scene's choice: `[discretisation] type = "p2"`, with
+/// `mean_dilatation = true` (B̄, the default) or `false` (plain P2, which locks as ν → ½; for
+/// studies).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct P2 {
+    /// B̄: the volumetric strain is the element mean.
+    #[serde(default = "yes")]
+    pub mean_dilatation: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for P2 {
+    fn default() -> Self {
+        Self { mean_dilatation: true }
+    }
+}
+
+#[typetag::serde(name = "p2")]
+impl super::FiniteElement for P2 {
+    fn build(
+        &self,
+        mesh: TetMesh,
+        dirichlet: &[Dirichlet],
+        law: Elasticity,
+        stresses: Option<Box<dyn AdmissibleStresses>>,
+        obstacles: Obstacles,
+        loads: &[Load],
+    ) -> Result<Box<dyn Discretisation>, SceneError> {
+        Ok(Box::new(
+            P2Lagrangian::new(mesh, dirichlet, law, stresses, obstacles)?
+                .with_mean_dilatation(self.mean_dilatation)
+                .with_loads(loads)?,
+        ))
+    }
+}
+
+/// L for P2 displacements with the B̄ strain and stresses at four points per element.
+#[derive(Debug)]
+pub struct P2Lagrangian {
+    mesh: TetMesh,
+    dofs: DofMap,
+    law: Elasticity,
+    stresses: Option<Box<dyn AdmissibleStresses>>,
+    obstacles: DiscreteObstacles,
+    nodal_load: Vec<f64>,
+    /// |T|/4 at each of the four points of every element.
+    weights: Vec<f64>,
+    /// Gradients of the barycentric coordinates of each element.
+    grads: Vec<[[f64; 3]; 4]>,
+    /// The ten nodes of each element: vertices, then edge nodes in the order of [`TET_EDGES`].
+    nodes: Vec<[usize; NODES]>,
+    /// Node → (element, local node 0..10) adjacency, CSR.
+    adj_ptr: Vec<usize>,
+    adj: Vec<(u32, u8)>,
+    dof_node: Vec<u32>,
+    dof_comp: Vec<u8>,
+    pattern: SymmetricPattern,
+    /// Whether the volumetric strain is the element mean (B̄; the default) or pointwise (plain
+    /// P2, which locks as ν → ½).
+    mean_dilatation: bool,
+}
+
+/// ∇N_a at Gauss point q, from the gradients g of the barycentric coordinates: vertex functions
+/// λ_a(2λ_a − 1), edge functions 4λ_iλ_j.
+#[inline]
+fn shape_gradient(g: &[[f64; 3]; 4], a: usize, q: usize) -> [f64; 3] {
+    let l = |i: usize| if i == q { A } else { B };
+    if a < 4 {
+        let s = 4.0 * l(a) - 1.0;
+        g[a].map(|x| s * x)
+    } else {
+        let [i, j] = TET_EDGES[a - 4];
+        let (li, lj) = (l(i), l(j));
+        std::array::from_fn(|k| 4.0 * (li * g[j][k] + lj * g[i][k]))
+    }
+}
+
+/// (1/|T|)∫_T ∇N_a: zero for a vertex function, ∇λ_i + ∇λ_j for the edge (i, j).
+#[inline]
+fn mean_gradient(g: &[[f64; 3]; 4], a: usize) -> [f64; 3] {
+    if a < 4 {
+        [0.0; 3]
+    } else {
+        let [i, j] = TET_EDGES[a - 4];
+        std::array::from_fn(|k| g[i][k] + g[j][k])
+    }
+}
+
+/// The B̄ column of dof (a, c) at point q: ε(N_a e_c) + δ I, with δ = ⅓(mean − point value) of
+/// ∂_c N_a (zero without mean dilatation). Returns the pointwise gradient and δ.
+#[inline]
+fn column(g: &[[f64; 3]; 4], a: usize, c: usize, q: usize, mean_dilatation: bool) -> ([f64; 3], f64) {
+    let ga = shape_gradient(g, a, q);
+    let delta = if mean_dilatation { (mean_gradient(g, a)[c] - ga[c]) / 3.0 } else { 0.0 };
+    (ga, delta)
+}
+
+impl P2Lagrangian {
+    /// Assembles L as [`super::p1p0::P1P0Lagrangian::new`] does, on the second-order mesh of
+    /// `mesh` (a first-order mesh gets a node at the midpoint of every edge,
+    /// [`TetMesh::second_order`]), with the mean-dilatation B̄ strain.
+    pub fn new(
+        mesh: TetMesh,
+        dirichlet: &[Dirichlet],
+        law: Elasticity,
+        stresses: Option<Box<dyn AdmissibleStresses>>,
+        obstacles: impl Into<Obstacles>,
+    ) -> Result<Self, SceneError> {
+        if let Some(p) = &stresses {
+            assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
+        }
+        let mesh = if mesh.is_second_order() { mesh } else { mesh.second_order() };
+        let dofs = DofMap::new(&mesh, dirichlet)?;
+        let (grads, volumes): (Vec<_>, Vec<_>) =
+            (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
+        let weights = volumes.iter().flat_map(|v| [v / POINTS as f64; POINTS]).collect();
+        let so = mesh.second_order.as_ref().expect("second order");
+        let nodes: Vec<[usize; NODES]> = mesh
+            .tets
+            .iter()
+            .zip(&so.tet_edges)
+            .map(|(t, ed)| std::array::from_fn(|a| if a < 4 { t[a] } else { ed[a - 4] }))
+            .collect();
+        let (adj_ptr, adj) = node_element_adjacency(mesh.n_nodes(), &nodes);
+        let (dof_node, dof_comp) = dofs.owners();
+        let pattern = stiffness_pattern(&nodes, &dofs, &adj_ptr, &adj);
+        let obstacles = obstacles.into().discretise(&mesh, &dofs, crate::problem::obstacles::OBSTACLE_PATH)?;
+        Ok(Self {
+            mesh,
+            dofs,
+            law,
+            stresses,
+            obstacles,
+            nodal_load: Vec::new(),
+            weights,
+            grads,
+            nodes,
+            adj_ptr,
+            adj,
+            dof_node,
+            dof_comp,
+            pattern,
+            mean_dilatation: true,
+        })
+    }
+
+    /// The same problem with the volumetric strain pointwise (`false`: plain P2, which locks as
+    /// ν → ½) or the element mean (`true`, B̄: the default).
+    pub fn with_mean_dilatation(mut self, on: bool) -> Self {
+        self.mean_dilatation = on;
+        self
+    }
+
+    /// The same problem with tractions and body forces (consistent P2 nodal forces).
+    pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
+        let f = nodal_loads(&self.mesh, &self.dofs, loads)?;
+        self.nodal_load = if loads.is_empty() { Vec::new() } else { f };
+        Ok(self)
+    }
+
+    #[inline]
+    fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
+        self.dofs.dof[n].map(|d| if d == FIXED { 0.0 } else { u[d as usize] })
+    }
+
+    /// Column j of Σ_T Σ_q w_q B̄_qᵀ C_q B̄_q (rows ≥ j), gathered from the elements around its
+    /// node.
+    fn assemble_column(&self, j: usize, col: &mut [f64], material: &Material<'_>) {
+        col.iter_mut().for_each(|v| *v = 0.0);
+        let cp = self.pattern.col_ptr();
+        let rows = &self.pattern.row_idx()[cp[j]..cp[j + 1]];
+        let (b, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
+        let md = self.mean_dilatation;
+        for &(e, lb) in &self.adj[self.adj_ptr[b]..self.adj_ptr[b + 1]] {
+            let e = e as usize;
+            let g = &self.grads[e];
+            // C B̄ of the column at each point, weighted, and its trace
+            let mut cb = [Sym::zeros(); POINTS];
+            let mut tr = [0.0; POINTS];
+            for q in 0..POINTS {
+                let (gb, delta) = column(g, lb as usize, c, q, md);
+                let mut bq = strain_of_unit(&gb, c);
+                for k in 0..3 {
+                    bq[k] += delta;
+                }
+                cb[q] = material.at(POINTS * e + q) * bq * self.weights[POINTS * e + q];
+                tr[q] = cb[q][0] + cb[q][1] + cb[q][2];
+            }
+            for a in 0..NODES {
+                let da = self.dofs.dof[self.nodes[e][a]];
+                let Some(first) = (0..3).find(|&k| da[k] != FIXED && da[k] as usize >= j) else { continue };
+                let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
+                let ga: [[f64; 3]; POINTS] = std::array::from_fn(|q| shape_gradient(g, a, q));
+                let mean = mean_gradient(g, a);
+                for (k, &dk) in da.iter().enumerate().skip(first) {
+                    if dk != FIXED {
+                        let mut v = 0.0;
+                        for q in 0..POINTS {
+                            v += strain_of_unit_dot(&ga[q], k, &cb[q]);
+                            if md {
+                                v += (mean[k] - ga[q][k]) / 3.0 * tr[q];
+                            }
+                        }
+                        col[pos] += v;
+                        pos += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl Discretisation for P2Lagrangian {
+    fn mesh(&self) -> &TetMesh {
+        &self.mesh
+    }
+
+    fn dofs(&self) -> &DofMap {
+        &self.dofs
+    }
+
+    fn discrete_obstacles(&self) -> &DiscreteObstacles {
+        &self.obstacles
+    }
+
+    fn name(&self) -> &'static str {
+        "p2"
+    }
+
+    fn points_per_element(&self) -> usize {
+        POINTS
+    }
+}
+
+impl Lagrangian for P2Lagrangian {
+    fn n_dofs(&self) -> usize {
+        self.dofs.n_free
+    }
+
+    /// The rigid-body motions at the nodes (vertices and edge nodes) of the free dofs.
+    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+        Some(RigidBodyModes::new(self.dof_node.clone(), &self.dof_comp, &self.mesh.nodes))
+    }
+
+    fn n_points(&self) -> usize {
+        POINTS * self.mesh.n_elements()
+    }
+
+    fn elasticity(&self) -> &Elasticity {
+        &self.law
+    }
+
+    fn stresses(&self) -> Option<&dyn AdmissibleStresses> {
+        self.stresses.as_deref()
+    }
+
+    fn constraints(&self) -> &ConstraintRows {
+        self.obstacles.rows()
+    }
+
+    fn load(&self) -> &[f64] {
+        self.obstacles.load()
+    }
+
+    fn nodal_load(&self) -> &[f64] {
+        &self.nodal_load
+    }
+
+    fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    fn strain(&self, u: &[f64], eps: &mut [Sym]) {
+        let md = self.mean_dilatation;
+        eps.par_chunks_mut(POINTS).enumerate().for_each(|(e, out)| {
+            let g = &self.grads[e];
+            // ∇u at each point = Σ_a u_a ⊗ ∇N_a(x_q)
+            let mut m = [[[0.0; 3]; 3]; POINTS];
+            for (a, &n) in self.nodes[e].iter().enumerate() {
+                let ua = self.nodal(u, n);
+                if ua == [0.0; 3] {
+                    continue;
+                }
+                for (q, mq) in m.iter_mut().enumerate() {
+                    let ga = shape_gradient(g, a, q);
+                    for i in 0..3 {
+                        for k in 0..3 {
+                            mq[i][k] += ua[i] * ga[k];
+                        }
+                    }
+                }
+            }
+            let theta: [f64; POINTS] = std::array::from_fn(|q| m[q][0][0] + m[q][1][1] + m[q][2][2]);
+            let mean = theta.iter().sum::<f64>() / POINTS as f64;
+            let s = 1.0 / SQRT2;
+            for (q, (o, m)) in out.iter_mut().zip(&m).enumerate() {
+                let d = if md { (mean - theta[q]) / 3.0 } else { 0.0 };
+                *o = Sym::new(
+                    m[0][0] + d,
+                    m[1][1] + d,
+                    m[2][2] + d,
+                    s * (m[1][2] + m[2][1]),
+                    s * (m[0][2] + m[2][0]),
+                    s * (m[0][1] + m[1][0]),
+                );
+            }
+        });
+    }
+
+    fn divergence(&self, sigma: &[Sym], f: &mut [f64]) {
+        let md = self.mean_dilatation;
+        f.par_iter_mut().enumerate().for_each(|(j, fj)| {
+            let (n, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
+            *fj = self.adj[self.adj_ptr[n]..self.adj_ptr[n + 1]]
+                .iter()
+                .map(|&(e, a)| {
+                    let (e, a) = (e as usize, a as usize);
+                    let g = &self.grads[e];
+                    (0..POINTS)
+                        .map(|q| {
+                            let p = POINTS * e + q;
+                            let (ga, delta) = column(g, a, c, q, md);
+                            let s = &sigma[p];
+                            self.weights[p] * (strain_of_unit_dot(&ga, c, s) + delta * (s[0] + s[1] + s[2]))
+                        })
+                        .sum::<f64>()
+                })
+                .sum();
+        });
+    }
+
+    fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)> {
+        let mut out = Vec::with_capacity(self.n_points() * 90);
+        for (e, t) in self.nodes.iter().enumerate() {
+            for q in 0..POINTS {
+                for (a, &n) in t.iter().enumerate() {
+                    for c in 0..3 {
+                        let Some(j) = self.dofs.free(n, c) else { continue };
+                        let (ga, delta) = column(&self.grads[e], a, c, q, self.mean_dilatation);
+                        let mut col = strain_of_unit(&ga, c);
+                        for k in 0..3 {
+                            col[k] += delta;
+                        }
+                        out.extend((0..6).filter(|&k| col[k] != 0.0).map(|k| (POINTS * e + q, k, j, col[k])));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn pattern(&self) -> &SymmetricPattern {
+        &self.pattern
+    }
+
+    fn assemble(&self, material: Material<'_>, values: &mut [f64]) {
+        assert_eq!(values.len(), self.pattern.nnz());
+        let column = |j: usize, col: &mut [f64]| self.assemble_column(j, col, &material);
+        assemble_columns(&self.pattern, 0, self.dofs.n_free, values, 64, &column);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::box_mesh::BoxMesh;
+    use crate::mesh::region::Region;
+    use nalgebra::Matrix3;
+    use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    fn problem(mean_dilatation: bool) -> P2Lagrangian {
+        let mesh =
+            BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [2, 3, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
+        let bc = [
+            Dirichlet::clamped(Region::Group("zmax".into())),
+            Dirichlet::roller(Region::Group("xmin".into()), crate::mesh::dofs::Component::X),
+        ];
+        P2Lagrangian::new(mesh, &bc, Elasticity::new(10.0, 0.3).unwrap(), None, None)
+            .unwrap()
+            .with_mean_dilatation(mean_dilatation)
+    }
+
+    /// u(x) with components quadratic in x: u_i = G_ij x_j + ½ H_ijk x_j x_k.
+    fn quadratic_field(l: &P2Lagrangian, grad: &Matrix3<f64>, hess: &[[[f64; 3]; 3]; 3]) -> Vec<f64> {
+        let mut u = vec![0.0; l.n_dofs()];
+        for (n, x) in l.mesh.nodes.iter().enumerate() {
+            for i in 0..3 {
+                let mut v = 0.0;
+                for j in 0..3 {
+                    v += grad[(i, j)] * x[j];
+                    for k in 0..3 {
+                        v += 0.5 * hess[i][j][k] * x[j] * x[k];
+                    }
+                }
+                u[l.dofs.free(n, i).unwrap()] = v;
+            }
+        }
+        u
+    }
+
+    /// The Gauss points of element e.
+    fn points(l: &P2Lagrangian, e: usize) -> [[f64; 3]; POINTS] {
+        let x = l.mesh.tets[e].map(|n| l.mesh.nodes[n]);
+        std::array::from_fn(|q| std::array::from_fn(|k| (0..4).map(|i| if i == q { A } else { B } * x[i][k]).sum()))
+    }
+
+    #[test]
+    fn strain_of_a_quadratic_field_is_exact_at_the_points() {
+        // without B̄ ε(u) of a quadratic u is reproduced exactly at every Gauss point; with B̄
+        // its deviatoric part is, and the trace is the element mean of div u
+        let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
+        let grad = Matrix3::new(0.1, 0.2, -0.3, 0.05, -0.4, 0.7, 0.3, 0.0, 0.25);
+        let mut rng = StdRng::seed_from_u64(5);
+        let hess: [[[f64; 3]; 3]; 3] = std::array::from_fn(|_| {
+            let h: [[f64; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(-1.0..1.0)));
+            std::array::from_fn(|j| std::array::from_fn(|k| h[j][k] + h[k][j]))
+        });
+        for md in [false, true] {
+            let l = P2Lagrangian::new(mesh.clone(), &[], Elasticity::new(1.0, 0.2).unwrap(), None, None)
+                .unwrap()
+                .with_mean_dilatation(md);
+            let u = quadratic_field(&l, &grad, &hess);
+            let mut eps = vec![Sym::zeros(); l.n_points()];
+            l.strain(&u, &mut eps);
+            let exact = |x: &[f64; 3]| {
+                let g = Matrix3::from_fn(|i, j| grad[(i, j)] + (0..3).map(|k| hess[i][j][k] * x[k]).sum::<f64>());
+                crate::problem::tensor::from_matrix(&g)
+            };
+            let mut worst: f64 = 0.0;
+            for e in 0..l.mesh.n_elements() {
+                let xs = points(&l, e);
+                let exact_q: Vec<Sym> = xs.iter().map(exact).collect();
+                let mean_tr: f64 = exact_q.iter().map(|s| s[0] + s[1] + s[2]).sum::<f64>() / 4.0;
+                for q in 0..POINTS {
+                    let mut want = exact_q[q];
+                    if md {
+                        let d = (mean_tr - (want[0] + want[1] + want[2])) / 3.0;
+                        for k in 0..3 {
+                            want[k] += d;
+                        }
+                    }
+                    worst = worst.max((eps[POINTS * e + q] - want).norm());
+                }
+            }
+            assert!(worst < 1e-13, "mean dilatation {md}: {worst}");
+        }
+    }
+
+    #[test]
+    fn divergence_is_the_transpose_of_strain_and_entries_reproduce_it() {
+        for md in [false, true] {
+            let l = problem(md);
+            let mut rng = StdRng::seed_from_u64(7);
+            let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let sigma: Vec<Sym> = (0..l.n_points()).map(|_| Sym::from_fn(|_, _| rng.random_range(-1.0..1.0))).collect();
+            let mut eps = vec![Sym::zeros(); l.n_points()];
+            l.strain(&u, &mut eps);
+            let lhs: f64 = eps.iter().zip(&sigma).zip(&l.weights).map(|((e, s), w)| w * e.dot(s)).sum();
+            let mut f = vec![0.0; l.n_dofs()];
+            l.divergence(&sigma, &mut f);
+            let rhs: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
+            assert!((lhs - rhs).abs() < 1e-12 * lhs.abs().max(1.0), "{lhs} vs {rhs}");
+            let mut from_entries = vec![Sym::zeros(); l.n_points()];
+            for (p, c, j, v) in l.strain_entries() {
+                from_entries[p][c] += v * u[j];
+            }
+            let err = eps.iter().zip(&from_entries).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+            assert!(err < 1e-12, "{err}");
+        }
+    }
+
+    #[test]
+    fn assembled_stiffness_matches_the_operator_and_the_energy() {
+        for md in [false, true] {
+            let l = problem(md);
+            let c = l.law.stiffness_matrix();
+            let values = l.stiffness(Material::Uniform(&c));
+            let mut rng = StdRng::seed_from_u64(3);
+            let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut ku = vec![0.0; l.n_dofs()];
+            l.pattern.matvec(&values, &u, &mut ku);
+            let mut eps = vec![Sym::zeros(); l.n_points()];
+            l.strain(&u, &mut eps);
+            let sigma: Vec<Sym> = eps.iter().map(|e| c * e).collect();
+            let mut f = vec![0.0; l.n_dofs()];
+            l.divergence(&sigma, &mut f);
+            let err = ku.iter().zip(&f).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let scale = f.iter().map(|a| a.abs()).fold(0.0, f64::max);
+            assert!(err < 1e-12 * scale, "{err} vs {scale}");
+            let e1: f64 = 0.5 * ku.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
+            assert!((e1 - l.energy_of_strain(&eps)).abs() < 1e-12 * e1);
+        }
+    }
+
+    #[test]
+    fn rigid_motions_have_no_strain() {
+        let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
+        let l = P2Lagrangian::new(mesh, &[], Elasticity::new(1.0, 0.2).unwrap(), None, None).unwrap();
+        let modes = l.rigid_body_modes().unwrap();
+        let mut eps = vec![Sym::zeros(); l.n_points()];
+        for m in 0..6 {
+            let u: Vec<f64> = (0..modes.n()).map(|d| modes.modes[6 * d + m]).collect();
+            l.strain(&u, &mut eps);
+            assert!(eps.iter().all(|e| e.norm() < 1e-13), "mode {m}");
+        }
+    }
+}

@@ -1,0 +1,75 @@
+//! The locking-free element (issue 15, theory §10): `[discretisation] type = "p2"` reproduces
+//! Prandtl's limit load of a flat strip punch where P1 keeps rising, and keeps its accuracy as
+//! ν → ½ where P1 loses half of the displacement.
+
+mod common;
+use common::*;
+use saddle::core::{Lagrangian, Silent, Solver};
+
+/// Prandtl's limit force on the strip of `examples/strip_punch.toml`: (2 + π) k B t with
+/// k = k₀/√2 = 1/√2, B = 1, thickness t = 0.25 (theory §10).
+fn prandtl_force() -> f64 {
+    (2.0 + std::f64::consts::PI) / 2f64.sqrt() * 0.25
+}
+
+/// The strip punch on a coarse mesh (32 × 1 × 16 cells) with `element` at punch displacement u.
+fn strip(element: &str, u: f64) -> toml::Table {
+    let mut t = example("strip_punch.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([32, 1, 16]).unwrap());
+    set(&mut t, "obstacle.U", toml::Value::Float(u));
+    let mut d = toml::Table::new();
+    d.insert("type".into(), toml::Value::String(element.into()));
+    t.insert("discretisation".into(), toml::Value::Table(d));
+    t
+}
+
+/// The punch force of a converged solve.
+fn force(t: &toml::Table) -> f64 {
+    let (l, solver) = build(t);
+    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
+    sol.lambda.iter().sum()
+}
+
+#[test]
+fn p2_strip_punch_reaches_prandtls_limit_where_p1_keeps_rising() {
+    let f = prandtl_force();
+    let (p2_1, p2_2) = (force(&strip("p2", 0.1)), force(&strip("p2", 0.2)));
+    let (p1_1, p1_2) = (force(&strip("p1", 0.1)), force(&strip("p1", 0.2)));
+    println!("Prandtl {f:.4}; p2 {p2_1:.4} {p2_2:.4}; p1 {p1_1:.4} {p1_2:.4}");
+    // p2: a plateau (doubling U changes the force by < 0.1 %) within 3 % of Prandtl (the issue
+    // asks 10 % on a coarse mesh; measured +1.2 %)
+    assert!((p2_2 / f - 1.0).abs() < 0.03, "p2 plateau {p2_2} against Prandtl {f}");
+    assert!((p2_2 / p2_1 - 1.0).abs() < 1e-3, "p2 force still changing: {p2_1} → {p2_2}");
+    // p1 on the same mesh locks: far above the limit and still rising
+    assert!(p1_2 > 1.3 * f && p1_2 > 1.05 * p1_1, "p1 {p1_1} → {p1_2} against Prandtl {f}");
+}
+
+/// The elastic default scene (small family, no yield surface) at ν = 0.4999: U with `element`
+/// on `cells`.
+fn incompressible_u(element: &str, cells: [usize; 3]) -> f64 {
+    let mut t = small_johnson();
+    t.remove("yield");
+    set(&mut t, "material.nu", toml::Value::Float(0.4999));
+    set(&mut t, "mesh.cells", toml::Value::try_from(cells).unwrap());
+    let mut d = toml::Table::new();
+    d.insert("type".into(), toml::Value::String(element.into()));
+    t.insert("discretisation".into(), toml::Value::Table(d));
+    let (l, _) = build(&t);
+    let newton = saddle::solvers::Newton { linear: saddle::solvers::LinearSolver::Direct, ..Default::default() };
+    let sol = newton.solve(&l, &mut Silent).unwrap();
+    assert!(sol.report.converged);
+    assert_eq!(l.n_extras(), 1);
+    sol.extras[0]
+}
+
+#[test]
+fn p2_keeps_its_displacement_as_nu_tends_to_one_half() {
+    // the small default mesh 12 × 12 × 6 against 16 × 16 × 8 cells: P2 within 5 %, P1 loses
+    // much more (README: 12 × 12 × 6 against 24 × 24 × 12, P2 0.998 and P1 0.46)
+    let p2 = incompressible_u("p2", [12, 12, 6]) / incompressible_u("p2", [16, 16, 8]);
+    let p1 = incompressible_u("p1", [12, 12, 6]) / incompressible_u("p1", [16, 16, 8]);
+    println!("U coarse / fine at ν = 0.4999: p2 {p2:.3}, p1 {p1:.3}");
+    assert!((0.95..=1.05).contains(&p2), "p2 {p2}");
+    assert!(p1 < 0.8, "p1 {p1}");
+}
