@@ -27,6 +27,7 @@ pub use saddle_yield as yield_surfaces;
 
 pub mod bench;
 pub mod conformance;
+pub mod locking;
 pub mod output;
 #[cfg(feature = "gmsh")]
 pub mod peer;

@@ -36,6 +36,9 @@ enum Command {
         /// Use this solver type with its default parameters instead of the scene's.
         #[arg(long)]
         solver: Option<String>,
+        /// Use this finite element (`p1`, `p2`) instead of the scene's `[discretisation]`.
+        #[arg(long)]
+        discretisation: Option<String>,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -72,6 +75,9 @@ enum Command {
         /// Use this solver type with its default parameters instead of the scene's.
         #[arg(long)]
         solver: Option<String>,
+        /// Use this finite element (`p1`, `p2`) instead of the scene's `[discretisation]`.
+        #[arg(long)]
+        discretisation: Option<String>,
         /// The quantity on the plot's x axis: one the obstacle reports, or `factor`.
         #[arg(long, default_value = "U")]
         x: String,
@@ -232,9 +238,20 @@ fn print_summary(s: &Summary) {
     }
 }
 
-fn run(scene: PathBuf, out: Option<PathBuf>, solver: Option<String>, quiet: bool) -> Result<ExitCode, RunError> {
+fn run(
+    scene: PathBuf,
+    out: Option<PathBuf>,
+    solver: Option<String>,
+    element: Option<String>,
+    quiet: bool,
+) -> Result<ExitCode, RunError> {
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(scene.file_stem().unwrap_or_default()));
-    let loaded = run::load(&scene, solver.as_deref())?;
+    let element = element.as_deref().map(saddle::scene::element_by_type).transpose()?;
+    let loaded = run::load_with(&scene, solver.as_deref(), |s| {
+        if let Some(e) = element {
+            s.discretisation = Some(e);
+        }
+    })?;
     if !quiet {
         eprintln!(
             "{}: {} dofs, {} elements, {} contact rows, solver {}",
@@ -308,12 +325,12 @@ fn sweep(
     scene: PathBuf,
     out: PathBuf,
     factors: Vec<f64>,
-    solver: Option<String>,
+    (solver, element): (Option<String>, Option<String>),
     axes: (String, String),
 ) -> Result<ExitCode, String> {
     eprintln!("{}: sweep over load factors {factors:?} into {}", scene.display(), out.display());
     let started = Instant::now();
-    let opts = saddle::sweep::SweepOptions { factors, solver, axes };
+    let opts = saddle::sweep::SweepOptions { factors, solver, element, axes };
     let s = saddle::sweep::generate(&scene, &opts, &out, &mut |line| {
         eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
     })
@@ -345,9 +362,13 @@ fn bench_meshes(_: PathBuf, _: PathBuf, _: Vec<PathBuf>, _: Vec<PathBuf>) -> Res
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { scene, out, solver, quiet } => run(scene, out, solver, quiet).map_err(|e| e.to_string()),
+        Command::Run { scene, out, solver, discretisation, quiet } => {
+            run(scene, out, solver, discretisation, quiet).map_err(|e| e.to_string())
+        }
         Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
-        Command::Sweep { scene, out, factors, solver, x, y } => sweep(scene, out, factors, solver, (x, y)),
+        Command::Sweep { scene, out, factors, solver, discretisation, x, y } => {
+            sweep(scene, out, factors, (solver, discretisation), (x, y))
+        }
         Command::Bench { scene, out, meshes, peer, .. } if !meshes.is_empty() => bench_meshes(scene, out, meshes, peer),
         Command::Bench { scene, out, sizes, solvers, direct_max_dofs, .. } => {
             bench(scene, out, sizes, solvers, direct_max_dofs)

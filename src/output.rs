@@ -67,6 +67,10 @@ pub struct Summary {
     pub discretisation: String,
     /// Nodes (vertices, and the edge nodes of a second-order mesh).
     pub nodes: usize,
+    /// The locking indicator (theory §10): the volume fraction of the body whose response at
+    /// the solution is nearly incompressible (effective Poisson ratio of the tangent ≥ 0.49,
+    /// [`crate::locking`]). Above 0.1 a `p1` solution is warned about.
+    pub near_incompressible_fraction: f64,
     /// Rows of K_h (candidate contact nodes).
     pub contact_rows: usize,
     /// Everything the obstacle reports (U, force, peak and mean contact pressure, ...); with
@@ -167,6 +171,8 @@ impl Summary {
         let extras = l.extra_names().into_iter().zip(sol.extras.iter().copied()).collect();
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
+        let near_incompressible_fraction = crate::locking::near_incompressible_fraction(l, sol);
+        warnings.extend(crate::locking::locking_warning(l, near_incompressible_fraction));
         let mesh_quality = l.mesh().quality();
         if mesh_quality.max_aspect_ratio > 30.0 {
             warnings.push(format!(
@@ -205,6 +211,7 @@ impl Summary {
             stress_points: l.n_points(),
             discretisation: l.name().to_string(),
             nodes: l.mesh().n_nodes(),
+            near_incompressible_fraction,
             contact_rows: l.constraints().n_rows(),
             contact,
             extras,

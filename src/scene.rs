@@ -225,6 +225,15 @@ impl Scene {
     }
 }
 
+/// The finite element of type `name` with its default options (as `[discretisation] type =
+/// "name"`), looked up by its `type` tag; an unknown name lists the known ones.
+pub fn element_by_type(name: &str) -> Result<Box<dyn FiniteElement>, SceneError> {
+    let table = toml::Table::from_iter([("type".to_string(), toml::Value::String(name.to_string()))]);
+    toml::Value::Table(table)
+        .try_into::<Box<dyn FiniteElement>>()
+        .map_err(|e| SceneError::Parse { path: "--discretisation".into(), message: format!("{name}: {}", e.message()) })
+}
+
 /// The first NaN or infinite number in a scene's TOML, as an error naming its path (`mesh.min[0]`).
 fn non_finite_number(v: &toml::Value, path: &mut String) -> Result<(), SceneError> {
     match v {

@@ -12,13 +12,14 @@
 //! ([`Johnson::default`]: 12×12×6 cells graded 3, 5 184 tetrahedra) with one parameter changed,
 //! so that the whole table takes about a minute; the solvers are typed values too.
 
-use crate::conformance::{Johnson, assemble};
+use crate::conformance::{Johnson, assemble, johnson_p2};
 use crate::output::Summary;
 use crate::run::solver_by_type;
 use crate::scene::Scene;
 use saddle_contact::{Flat, Paraboloid};
 use saddle_core::{
-    Discretisation, Lagrangian, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace,
+    Discretisation, FiniteElement, Lagrangian, P2, SceneError, Silent, Solution, SolveError, Solver, StopReason,
+    Workspace,
 };
 use saddle_solvers::{Penalty, Uzawa};
 use std::sync::Arc;
@@ -129,6 +130,17 @@ pub fn cases() -> Vec<Case> {
     for nu in [0.49, 0.499, 0.4999] {
         c.push(Case::new(2, format!("ν = {nu}"), Johnson { nu, ..d() }.scene()));
     }
+    // the same rows with P2 (B̄) on 6×6×3 cells: the nodes of the P1 mesh, theory §10
+    for h_rel in [1e-2, 1e-4, 1e-8, 0.0] {
+        let label = if h_rel == 0.0 { "p2: h = 0".to_string() } else { format!("p2: h/E = {h_rel:e}") };
+        c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..johnson_p2() }.scene()));
+    }
+    for nu in [0.49, 0.499, 0.4999] {
+        c.push(Case::new(2, format!("p2: ν = {nu}"), Johnson { nu, ..johnson_p2() }.scene()));
+    }
+    // 8. strongly plastic: k₀ = 0.05, most of the body plastic, with both elements
+    c.push(Case::new(8, "strongly plastic: k₀ = 0.05", strongly_plastic(d())));
+    c.push(Case::new(8, "p2: strongly plastic: k₀ = 0.05", strongly_plastic(johnson_p2())));
     // 3. units: SI-like stresses ×1e9, lengths ×1e-3
     c.push(Case::new(3, "stresses ×1e9, lengths ×1e-3", scaled_units(1e9, 1e-3).scene()));
     // 4. loads
@@ -144,6 +156,12 @@ pub fn cases() -> Vec<Case> {
     c.push(Case::new(7, "slivers (aspect ratio ~100)", sliver_scene()));
     c.push(Case::new(7, "no clamped node", unclamped_scene()));
     c
+}
+
+/// Case 8: the default scene with the yield radius k₀ = 0.05 (20 times smaller): most elements
+/// plastic (92 % with P1 on the small mesh), the contact set up to the rim of the zone.
+pub fn strongly_plastic(base: Johnson) -> Scene {
+    Johnson { k0: 0.05, ..base }.scene()
 }
 
 /// Case 6: the penalty at μ = 1e-14.
@@ -279,6 +297,9 @@ pub fn markdown(rows: &[Row]) -> String {
                 if r.case.group == 7 {
                     notes.push(format!("aspect ratio {:.0}", s.mesh_quality.max_aspect_ratio));
                 }
+                if r.case.group == 8 {
+                    notes.push(format!("{} of {} elements plastic", s.plastic_elements, s.elements));
+                }
                 if s.stop_reason == StopReason::ApproximationLimit {
                     notes.push("penalty approximation limit".into());
                 }
@@ -309,25 +330,50 @@ pub fn markdown(rows: &[Row]) -> String {
     out
 }
 
-/// U of Newton on the default scene with Poisson ratio `nu` at `cells` (for the locking study).
-pub fn newton_u(nu: f64, cells: [usize; 3]) -> f64 {
-    let scene = Johnson { nu, cells, ..Johnson::default() }.scene();
-    match run(&scene, default_solver("newton").as_ref()).0 {
+/// U of Newton on the default scene with Poisson ratio `nu` at `cells` with `element` (P1 when
+/// `None`; the locking study). The linear backend is direct: the multigrid is built on the
+/// rigid-body modes and slows down as ν → ½ (`incompressibility_factor`).
+pub fn newton_u(nu: f64, cells: [usize; 3], element: Option<Box<dyn FiniteElement>>) -> f64 {
+    let scene = Johnson { nu, cells, element, ..Johnson::default() }.scene();
+    let newton = saddle_solvers::Newton { linear: saddle_solvers::LinearSolver::Direct, ..Default::default() };
+    match run(&scene, &newton).0 {
         Outcome::Returned { summary, .. } if summary.converged => summary.U.expect("the punch reports U"),
         other => panic!("newton failed at nu = {nu}: {other:?}"),
     }
 }
 
-/// Locking of P1 displacements: U on the small mesh over U on the twice finer mesh, per ν.
-pub fn locking(nus: &[f64]) -> Vec<(f64, f64, f64)> {
-    nus.iter().map(|&nu| (nu, newton_u(nu, [12, 12, 6]), newton_u(nu, [24, 24, 12]))).collect()
+/// One row of the locking study: ν, then U on the small and on the twice finer mesh with P1,
+/// then the same with P2.
+pub type LockingRow = (f64, [f64; 2], [f64; 2]);
+
+/// Locking of P1 displacements and its absence with P2 (B̄): U on the small mesh (12×12×6)
+/// over U on the twice finer mesh (24×24×12), per ν, for both elements.
+pub fn locking(nus: &[f64]) -> Vec<LockingRow> {
+    let p2 = || Some(Box::new(P2::default()) as Box<dyn FiniteElement>);
+    nus.iter()
+        .map(|&nu| {
+            let p1 = [newton_u(nu, [12, 12, 6], None), newton_u(nu, [24, 24, 12], None)];
+            (nu, p1, [newton_u(nu, [12, 12, 6], p2()), newton_u(nu, [24, 24, 12], p2())])
+        })
+        .collect()
 }
 
 /// The locking table in markdown.
-pub fn locking_markdown(rows: &[(f64, f64, f64)]) -> String {
-    let mut out = String::from("| ν | U (12×12×6) | U (24×24×12) | coarse / fine |\n|---:|---:|---:|---:|\n");
-    for (nu, coarse, fine) in rows {
-        out += &format!("| {nu} | {coarse:.4e} | {fine:.4e} | {:.3} |\n", coarse / fine);
+pub fn locking_markdown(rows: &[LockingRow]) -> String {
+    let mut out = String::from(
+        "| ν | p1: U (12×12×6) | p1: U (24×24×12) | p1: coarse / fine | p2: U (12×12×6) | p2: U (24×24×12) | p2: coarse / fine |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (nu, p1, p2) in rows {
+        out += &format!(
+            "| {nu} | {:.4e} | {:.4e} | {:.3} | {:.4e} | {:.4e} | {:.3} |\n",
+            p1[0],
+            p1[1],
+            p1[0] / p1[1],
+            p2[0],
+            p2[1],
+            p2[0] / p2[1]
+        );
     }
     out
 }

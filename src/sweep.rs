@@ -50,6 +50,8 @@ pub struct SweepOptions {
     pub factors: Vec<f64>,
     /// A solver type instead of the scene's.
     pub solver: Option<String>,
+    /// A finite element type (`p1`, `p2`) instead of the scene's.
+    pub element: Option<String>,
     /// The reported quantities plotted: (x, y), e.g. (`U`, `force`); `factor` is one too.
     pub axes: (String, String),
 }
@@ -107,7 +109,7 @@ impl Sweep {
     pub fn last_log_slope(&self) -> Option<f64> {
         let c = self.curve();
         let [.., (x0, y0), (x1, y1)] = c.as_slice() else { return None };
-        Some(((y1 - y0) / y1) / ((x1 - x0) / x1))
+        Some((y1 / y0).ln() / (x1 / x0).ln())
     }
 }
 
@@ -124,7 +126,10 @@ pub fn generate(
     if let Some(f) = opts.factors.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
         return Err(SweepError::Factors(format!("{f} is not a finite factor >= 0")));
     }
-    let scene = Scene::from_file(scene_path)?;
+    let mut scene = Scene::from_file(scene_path)?;
+    if let Some(name) = &opts.element {
+        scene.discretisation = Some(crate::scene::element_by_type(name)?);
+    }
     let solver = match &opts.solver {
         Some(name) => Some(run::solver_by_type(name)?),
         None => None,

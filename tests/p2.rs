@@ -5,6 +5,7 @@
 mod common;
 use common::*;
 use saddle::core::{Lagrangian, Silent, Solver};
+use saddle::output::Summary;
 
 /// Prandtl's limit force on the strip of `examples/strip_punch.toml`: (2 + π) k B t with
 /// k = k₀/√2 = 1/√2, B = 1, thickness t = 0.25 (theory §10).
@@ -23,19 +24,25 @@ fn strip(element: &str, u: f64) -> toml::Table {
     t
 }
 
-/// The punch force of a converged solve.
-fn force(t: &toml::Table) -> f64 {
+/// The summary of a converged solve.
+fn solve(t: &toml::Table) -> Summary {
     let (l, solver) = build(t);
     let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
     assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
-    sol.lambda.iter().sum()
+    Summary::new(&l, &sol, None)
+}
+
+/// Whether a summary carries the locking warning.
+fn warns_of_locking(s: &Summary) -> bool {
+    s.warnings.iter().any(|w| w.contains("nearly incompressibly") && w.contains("type = \"p2\""))
 }
 
 #[test]
 fn p2_strip_punch_reaches_prandtls_limit_where_p1_keeps_rising() {
     let f = prandtl_force();
-    let (p2_1, p2_2) = (force(&strip("p2", 0.1)), force(&strip("p2", 0.2)));
-    let (p1_1, p1_2) = (force(&strip("p1", 0.1)), force(&strip("p1", 0.2)));
+    let (s2_1, s2_2) = (solve(&strip("p2", 0.1)), solve(&strip("p2", 0.2)));
+    let (s1_1, s1_2) = (solve(&strip("p1", 0.1)), solve(&strip("p1", 0.2)));
+    let [p2_1, p2_2, p1_1, p1_2] = [&s2_1, &s2_2, &s1_1, &s1_2].map(|s| s.force.unwrap());
     println!("Prandtl {f:.4}; p2 {p2_1:.4} {p2_2:.4}; p1 {p1_1:.4} {p1_2:.4}");
     // p2: a plateau (doubling U changes the force by < 0.1 %) within 3 % of Prandtl (the issue
     // asks 10 % on a coarse mesh; measured +1.2 %)
@@ -43,6 +50,27 @@ fn p2_strip_punch_reaches_prandtls_limit_where_p1_keeps_rising() {
     assert!((p2_2 / p2_1 - 1.0).abs() < 1e-3, "p2 force still changing: {p2_1} → {p2_2}");
     // p1 on the same mesh locks: far above the limit and still rising
     assert!(p1_2 > 1.3 * f && p1_2 > 1.05 * p1_1, "p1 {p1_1} → {p1_2} against Prandtl {f}");
+    // the locking indicator fires for p1 (most of the strip flows plastically with h = 0), and
+    // not for p2, which does not lock
+    println!(
+        "near-incompressible fraction: p1 {:.2}, p2 {:.2}",
+        s1_2.near_incompressible_fraction, s2_2.near_incompressible_fraction
+    );
+    assert!(s1_2.near_incompressible_fraction > 0.5 && warns_of_locking(&s1_2), "{:?}", s1_2.warnings);
+    assert!(!warns_of_locking(&s2_2), "{:?}", s2_2.warnings);
+}
+
+#[test]
+fn the_locking_indicator_is_quiet_on_the_default_scene() {
+    // the plastic zone under the punch is under 1 % of the volume, the rest elastic with
+    // ν = 0.3: no warning (P1 and P2 agree there to 1.3 % in U)
+    let s = solve(&small_johnson());
+    assert!(
+        s.near_incompressible_fraction < 0.1 && !warns_of_locking(&s),
+        "{} {:?}",
+        s.near_incompressible_fraction,
+        s.warnings
+    );
 }
 
 /// The elastic default scene (small family, no yield surface) at ν = 0.4999: U with `element`

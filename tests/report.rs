@@ -10,7 +10,7 @@ use saddle::report::runs::{Errors, RunRecord, errors, strain_distance};
 use saddle::report::tables::{
     CONVERGENCE_HEADER, WORK_PRECISION_HEADER, convergence_csv, csv_field, work_precision_csv,
 };
-use saddle::report::transfer::{Locator, Quadrature, SampleMap, field_distance, red_children, strains};
+use saddle::report::transfer::{Locator, Metric, Quadrature, SampleMap, field_distance, red_children, strains};
 use saddle::report::{ReportOptions, SceneSource, convergence_study, generate};
 use saddle::scene::Scene;
 use saddle::solvers::Newton;
@@ -148,7 +148,7 @@ fn a_field_transferred_to_its_own_mesh_has_no_difference() {
     for q in [Quadrature::Centroid, Quadrature::Children] {
         let map = SampleMap::new(l.mesh(), l.mesh(), q).unwrap();
         assert!(map.coarse.chunks(q.points()).enumerate().all(|(e, c)| c.iter().all(|&x| x == e)));
-        let d = field_distance(&l, &sol.stress, &eps, &sol.stress, &eps, &map);
+        let d = field_distance(&Metric::of(&l), &sol.stress, &eps, &sol.stress, &eps, &map);
         assert_eq!((d.stress_energy, d.strain_l2), (0.0, 0.0));
     }
     // and the same-mesh error measures of the work–precision runs vanish against themselves
@@ -159,7 +159,7 @@ fn a_field_transferred_to_its_own_mesh_has_no_difference() {
     u2.iter_mut().enumerate().for_each(|(i, x)| *x *= 1.0 + 0.01 * ((i % 7) as f64 - 3.0));
     let eps2 = strains(&l, &u2);
     let map = SampleMap::new(l.mesh(), l.mesh(), Quadrature::Children).unwrap();
-    let d = field_distance(&l, &sol.stress, &eps, &sol.stress, &eps2, &map);
+    let d = field_distance(&Metric::of(&l), &sol.stress, &eps, &sol.stress, &eps2, &map);
     let direct = strain_distance(&l, &u2, &sol.u);
     assert!(direct > 1e-3 && (d.strain_l2 - direct).abs() < 1e-12 * direct, "{} vs {direct}", d.strain_l2);
 }
@@ -181,11 +181,11 @@ fn the_strain_error_of_a_linear_field_between_meshes_vanishes() {
         let sc = saddle::core::StressField { sigma: ec.clone(), ..saddle::core::StressField::new(ec.len(), 0) };
         let sf = saddle::core::StressField { sigma: ef.clone(), ..saddle::core::StressField::new(ef.len(), 0) };
         let map = SampleMap::new(coarse.mesh(), fine.mesh(), Quadrature::Children).unwrap();
-        let d = field_distance(&fine, &sf, &ef, &sc, &ec, &map);
+        let d = field_distance(&Metric::of(&fine), &sf, &ef, &sc, &ec, &map);
         assert!(d.strain_l2 < 1e-13 && d.stress_energy < 1e-13, "{d:?}");
         // a field that is not linear has a visible difference
         let bent: Vec<Sym> = ec.iter().enumerate().map(|(i, e)| e * (1.0 + 0.1 * (i % 2) as f64)).collect();
-        let d = field_distance(&fine, &sf, &ef, &sc, &bent, &map);
+        let d = field_distance(&Metric::of(&fine), &sf, &ef, &sc, &bent, &map);
         assert!(d.strain_l2 > 1e-3, "{d:?}");
     }
 }
@@ -259,13 +259,32 @@ fn report_quick_writes_every_file() {
     }
     assert_eq!(wp.lines().filter(|l| l.contains(",true,converged,")).count(), 1, "one reference row:\n{wp}");
     assert_eq!(read("convergence.csv").lines().next().unwrap(), CONVERGENCE_HEADER);
+    // P1 against P2 on meshes with the same nodes: every P1 level of even cells has a P2 level
+    // (half the cells) with exactly its dofs; homogeneous compression is exact for both, so U
+    // agrees with the reference to round-off at every level
+    let elements = csv_rows(&read("elements.csv"));
+    let dofs = |e: &str| elements.iter().filter(|r| r["element"] == e).map(|r| r["dofs"].clone()).collect::<Vec<_>>();
+    let (p1, p2) = (dofs("p1"), dofs("p2"));
+    assert!(!p1.is_empty() && !p2.is_empty(), "{elements:?}");
+    for r in elements.iter().filter(|r| r["element"] == "p1") {
+        let even = r["cells"].split('x').all(|n| n.parse::<usize>().unwrap() % 2 == 0);
+        assert!(!even || p2.contains(&r["dofs"]), "p1 {} has no p2 level with its dofs {p2:?}", r["cells"]);
+        assert!(csv_num(r, "err_u_reference") < 1e-9, "{r:?}");
+    }
     let md = read("report.md");
-    for part in ["# Accuracy and cost", "## Work–precision", "## Mesh convergence", "| solver | setting |", "cores"] {
+    for part in [
+        "# Accuracy and cost",
+        "## Work–precision",
+        "## Mesh convergence",
+        "## P1 against P2",
+        "| solver | setting |",
+        "cores",
+    ] {
         assert!(md.contains(part), "report.md lacks {part}:\n{md}");
     }
     #[cfg(feature = "report")]
     {
-        for name in ["work_precision", "convergence"] {
+        for name in ["work_precision", "convergence", "elements"] {
             let png = std::fs::read(out.join(format!("{name}.png"))).unwrap();
             assert!(png.len() > 10_000 && png.starts_with(b"\x89PNG\r\n\x1a\n"), "{name}.png");
             let svg = read(&format!("{name}.svg"));

@@ -5,14 +5,14 @@
 //! The scenes and solvers are typed values ([`Johnson`] with one parameter changed); a case
 //! that must fail is checked for its kind of error, so that a failure for another reason fails.
 
-use saddle::conformance::Johnson;
+use saddle::conformance::{Johnson, johnson_p2};
 use saddle::core::linalg::error::LinalgError;
 use saddle::core::{Lagrangian, P1P0Lagrangian, SceneError, Silent, SolveError, Solver, StopReason};
 use saddle::output::Summary;
 use saddle::scene::Scene;
 use saddle::stability::{
-    Outcome, all_solvers, default_solver, first_yield_force, locking, run, scene, sliver_scene, tiny_penalty,
-    unclamped_scene, units_check, unstable_uzawa,
+    Outcome, all_solvers, default_solver, first_yield_force, newton_u, run, scene, sliver_scene, strongly_plastic,
+    tiny_penalty, unclamped_scene, units_check, unstable_uzawa,
 };
 use std::path::Path;
 
@@ -74,10 +74,26 @@ fn near_perfect_plasticity() {
 fn near_incompressibility_and_locking() {
     all_agree(&Johnson { nu: 0.49, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
     all_agree(&Johnson { nu: 0.4999, ..Johnson::default() }.scene(), &all_solvers(), 1e-6);
-    let lock = locking(&[0.3, 0.4999]);
-    let ratio = |i: usize| lock[i].1 / lock[i].2;
-    assert!(ratio(0) > 0.9 && ratio(0) < 1.0, "ν = 0.3: coarse/fine = {}", ratio(0));
-    assert!(ratio(1) < ratio(0) - 0.2, "ν = 0.4999 locks: coarse/fine = {} vs {}", ratio(1), ratio(0));
+    let ratio = |nu: f64| newton_u(nu, [12, 12, 6], None) / newton_u(nu, [24, 24, 12], None);
+    let (r3, r4999) = (ratio(0.3), ratio(0.4999));
+    assert!(r3 > 0.9 && r3 < 1.0, "ν = 0.3: coarse/fine = {r3}");
+    assert!(r4999 < r3 - 0.2, "ν = 0.4999 locks: coarse/fine = {r4999} vs {r3}");
+    // P2 (B̄) on the nodes of the P1 mesh: every solver agrees at ν = 0.4999 (its locking
+    // study is tests/p2.rs)
+    all_agree(&Johnson { nu: 0.4999, ..johnson_p2() }.scene(), &all_solvers(), 1e-6);
+}
+
+/// Case 8: most of the body plastic (k₀ = 0.05): every solver converges and agrees with both
+/// elements, and P1's answer is flagged as likely locked while P2's is not.
+#[test]
+fn strongly_plastic_with_both_elements() {
+    let p1 = all_agree(&strongly_plastic(Johnson::default()), &all_solvers(), 1e-6);
+    let p2 = all_agree(&strongly_plastic(johnson_p2()), &all_solvers(), 1e-6);
+    assert!(p1.plastic_elements * 10 > p1.elements * 8, "{} of {}", p1.plastic_elements, p1.elements);
+    let locked = |s: &Summary| s.warnings.iter().any(|w| w.contains("nearly incompressibly"));
+    assert!(locked(&p1) && !locked(&p2), "{:?} / {:?}", p1.warnings, p2.warnings);
+    // the locked P1 answer is stiffer: its U is well below P2's on the same nodes
+    assert!(p1.U.unwrap() < 0.85 * p2.U.unwrap(), "U: p1 {:?}, p2 {:?}", p1.U, p2.U);
 }
 
 /// Case 3: stresses ×1e9 and lengths ×1e-3 scale u by 1e-3 and σ by 1e9 to 1e-9, with the same

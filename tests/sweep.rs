@@ -27,10 +27,11 @@ fn sweep(t: &toml::Table, factors: &str) -> (i32, Vec<CsvRow>, String) {
     (code, rows, std::fs::read_to_string(out.join("sweep.md")).unwrap())
 }
 
-/// The strip punch of examples/strip_punch.toml on a coarse mesh.
+/// The strip punch of examples/strip_punch.toml on a coarse mesh, with P1 elements.
 fn coarse_strip() -> toml::Table {
     let mut t = example("strip_punch.toml");
     set(&mut t, "mesh.cells", toml::Value::try_from([16, 2, 8]).unwrap());
+    set(&mut t, "discretisation.type", toml::Value::String("p1".into()));
     t
 }
 

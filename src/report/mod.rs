@@ -22,6 +22,7 @@
 //! ([`convergence`]), the writers ([`tables`]).
 
 pub mod convergence;
+pub mod elements;
 #[cfg(feature = "report")]
 pub mod plot;
 pub mod runs;
@@ -167,6 +168,8 @@ pub struct Report {
     pub scene_cells: Option<[usize; 3]>,
     /// The convergence study, or why there is none.
     pub convergence: Result<ConvergenceStudy, String>,
+    /// P1 against P2 on meshes with the same nodes ([`elements`]), or why there is none.
+    pub element_comparison: Result<elements::ElementComparison, String>,
     /// Wall time of the whole report, seconds.
     pub total_s: f64,
     /// Whether the images were drawn (feature `report`).
@@ -270,7 +273,7 @@ pub struct KnownLevel {
 /// A level's solve and its fields, kept while the next coarser level is compared with it.
 struct Solved {
     l: Box<dyn Discretisation>,
-    sol: Solution,
+    stress: saddle_core::StressField,
     strain: Vec<saddle_core::Sym>,
 }
 
@@ -344,7 +347,8 @@ pub fn convergence_study(
     finest_result.err_u = 0.0;
     finest_result.err_stress = 0.0;
     finest_result.err_strain = 0.0;
-    let fine_strain = transfer::strains(&fl, &fsol.u);
+    let fine_metric = transfer::Metric::of(&*fl);
+    let (fine_stress, fine_strain) = transfer::p0_fields(&*fl, &fsol.u, &fsol.stress);
     let u_f = u_of(&fl, &fsol);
     let mut results = vec![finest_result];
     // the next finer level that was solved, for the consecutive differences
@@ -353,9 +357,9 @@ pub fn convergence_study(
         let (l, timed) = solve_level(cells, progress)?;
         let mut res = level_result(&l, cells, &timed);
         if let Ok(sol) = timed.result {
-            let strain = transfer::strains(&l, &sol.u);
+            let (stress, strain) = transfer::p0_fields(&*l, &sol.u, &sol.stress);
             let map = SampleMap::new(l.mesh(), fl.mesh(), Quadrature::default())?;
-            let d = transfer::field_distance(&fl, &fsol.stress, &fine_strain, &sol.stress, &strain, &map);
+            let d = transfer::field_distance(&fine_metric, &fine_stress, &fine_strain, &stress, &strain, &map);
             res.err_u = (res.u - u_f).abs() / u_f.abs();
             res.err_stress = d.stress_energy;
             res.err_strain = d.strain_l2;
@@ -363,11 +367,11 @@ pub fn convergence_study(
                 None => d.stress_energy,
                 Some(next) => {
                     let map = SampleMap::new(l.mesh(), next.l.mesh(), Quadrature::default())?;
-                    transfer::field_distance(&next.l, &next.sol.stress, &next.strain, &sol.stress, &strain, &map)
-                        .stress_energy
+                    let metric = transfer::Metric::of(&*next.l);
+                    transfer::field_distance(&metric, &next.stress, &next.strain, &stress, &strain, &map).stress_energy
                 }
             };
-            finer = Some(Solved { l, sol, strain });
+            finer = Some(Solved { l, stress, strain });
         }
         results.push(res);
     }
@@ -398,7 +402,18 @@ pub fn generate(
     });
     // the scene's own level is the work–precision reference: not solved again
     let other_levels = levels.as_ref().map_or(0, |v| v.len().saturating_sub(1));
-    let solves = 1 + rungs.iter().filter(|r| !matches!(r.kind, RungKind::Reference)).count() + other_levels;
+    // the other element's levels, on meshes with the same nodes (theory §10)
+    let own = source.scene.element_name();
+    let other = if own == "p2" { "p1" } else { "p2" };
+    let other_levels_cells = levels
+        .as_ref()
+        .ok()
+        .filter(|v| v.len() >= 2)
+        .map(|v| if other == "p2" { elements::p2_levels(v) } else { elements::p1_levels(v) });
+    let solves = 1
+        + rungs.iter().filter(|r| !matches!(r.kind, RungKind::Reference)).count()
+        + other_levels
+        + other_levels_cells.as_ref().map_or(0, |v| v.len());
     progress.plan(solves);
     let mut counter = 0;
     std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
@@ -413,6 +428,21 @@ pub fn generate(
         Ok(_) => Err("the scene's mesh is too coarse to coarsen (fewer than two distinct levels)".to_string()),
         Err(why) => Err(why),
     };
+    let comparison = match (&convergence, other_levels_cells) {
+        (Ok(own_study), Some(cells)) => {
+            let element: Box<dyn saddle_core::FiniteElement> =
+                if other == "p2" { Box::new(saddle_core::P2::default()) } else { Box::new(saddle_core::P1::default()) };
+            let other_source = SceneSource { scene: source.scene.with_element(element), ..source.clone() };
+            let other_study = convergence_study(&other_source, &cells, None, progress, &mut counter)?;
+            Ok(if other == "p2" {
+                elements::ElementComparison::new(own_study.clone(), other_study)
+            } else {
+                elements::ElementComparison::new(other_study, own_study.clone())
+            })
+        }
+        (Err(why), _) => Err(why.clone()),
+        (Ok(_), None) => Err("no levels to compare".to_string()),
+    };
     let mut report = Report {
         scene: scene.to_path_buf(),
         title: source.title(),
@@ -424,6 +454,7 @@ pub fn generate(
         runs,
         scene_cells: base.ok(),
         convergence,
+        element_comparison: comparison,
         total_s: 0.0,
         plots: cfg!(feature = "report"),
     };
@@ -440,11 +471,17 @@ fn write_outputs(report: &mut Report, out: &Path, t0: Instant) -> Result<(), Rep
     };
     write("work_precision.csv", &tables::work_precision_csv(&report.runs))?;
     write("convergence.csv", &tables::convergence_csv(report.convergence.as_ref().ok()))?;
+    if let Ok(c) = &report.element_comparison {
+        write("elements.csv", &c.csv())?;
+    }
     #[cfg(feature = "report")]
     {
         plot::work_precision(report, &out.join("work_precision.png"), &out.join("work_precision.svg"))?;
         if let Ok(study) = &report.convergence {
             plot::convergence(report, study, &out.join("convergence.png"), &out.join("convergence.svg"))?;
+        }
+        if let Ok(c) = &report.element_comparison {
+            plot::elements(&c.series(), &out.join("elements.png"), &out.join("elements.svg"))?;
         }
     }
     report.total_s = t0.elapsed().as_secs_f64();

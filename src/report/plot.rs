@@ -480,6 +480,36 @@ pub fn convergence(
 /// `bench.png` and `.svg`: wall time against DOFs on log–log axes, one line per entry of
 /// `series` (name with its fitted slope, points (DOFs, seconds)), and a dashed N¹ reference.
 pub fn scaling(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> Result<(), super::ReportError> {
+    let labels = [
+        "saddle bench: the default scene family (2 cores)",
+        "wall time against problem size",
+        "degrees of freedom",
+        "wall time (s)",
+    ];
+    lines_figure(series, labels, true, png, svg)
+}
+
+/// `elements.png` and `.svg` (`saddle report`): the error of U against the wall time of each
+/// level, one line per element (theory §10).
+pub fn elements(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> Result<(), super::ReportError> {
+    let labels = [
+        "saddle report: p1 against p2",
+        "error of U against wall time",
+        "wall time of the solve (s)",
+        "relative error of U",
+    ];
+    lines_figure(series, labels, false, png, svg)
+}
+
+/// One log–log panel with a line per series; `labels` are the title, the caption and the
+/// axes; with `slope_one` a dashed line of slope 1 through the first series' ends.
+fn lines_figure(
+    series: &[(String, Vec<(f64, f64)>)],
+    labels: [&str; 4],
+    slope_one: bool,
+    png: &Path,
+    svg: &Path,
+) -> Result<(), super::ReportError> {
     let mut lines: Vec<Series> = series
         .iter()
         .enumerate()
@@ -493,7 +523,9 @@ pub fn scaling(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> 
             dashed: false,
         })
         .collect();
-    if let Some((first, last)) = lines.first().and_then(|s| Some((*s.line.first()?, *s.line.last()?))) {
+    if let Some((first, last)) =
+        lines.first().filter(|_| slope_one).and_then(|s| Some((*s.line.first()?, *s.line.last()?)))
+    {
         lines.push(Series {
             name: "slope 1 (linear in N)".into(),
             color: GREY,
@@ -503,14 +535,10 @@ pub fn scaling(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> 
             dashed: true,
         });
     }
-    let panel = Panel {
-        caption: "wall time against problem size".into(),
-        x_desc: "degrees of freedom".into(),
-        y_desc: "wall time (s)".into(),
-        series: lines.clone(),
-    };
+    let panel =
+        Panel { caption: labels[1].into(), x_desc: labels[2].into(), y_desc: labels[3].into(), series: lines.clone() };
     let fig = Figure {
-        title: "saddle bench: the default scene family (2 cores)".into(),
+        title: labels[0].into(),
         panels: vec![panel],
         legend: lines,
         legend_note: None,

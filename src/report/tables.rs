@@ -333,6 +333,23 @@ pub fn markdown(report: &Report) -> String {
             }
         }
     }
+    let _ = writeln!(s, "\n## P1 against P2 (theory §10)\n");
+    match &report.element_comparison {
+        Err(why) => {
+            let _ = writeln!(s, "Skipped: {why}.");
+        }
+        Ok(c) => {
+            if report.plots {
+                let _ = writeln!(
+                    s,
+                    "![elements](elements.png)\n\n([SVG](elements.svg), data: [elements.csv](elements.csv))\n"
+                );
+            } else {
+                let _ = writeln!(s, "Data: [elements.csv](elements.csv)\n");
+            }
+            s.push_str(&c.markdown());
+        }
+    }
     let _ = writeln!(
         s,
         "\nColumns of the CSV files: times in seconds (`_s`) or microseconds (`_us`), errors and residuals \

@@ -303,6 +303,60 @@ pub fn strains(l: &dyn Lagrangian, u: &[f64]) -> Vec<Sym> {
     eps
 }
 
+/// The measure of [`field_distance`] on a mesh: the elements' volumes and the energy metric
+/// (elasticity and P, for the norm of q).
+pub struct Metric<'a> {
+    /// Element volumes.
+    pub weights: Vec<f64>,
+    /// Elasticity.
+    pub law: saddle_core::Elasticity,
+    /// P.
+    pub plasticity: Option<&'a dyn saddle_core::AdmissibleStresses>,
+}
+
+impl<'a> Metric<'a> {
+    /// The metric of `l`'s mesh.
+    pub fn of(l: &'a dyn saddle_core::Discretisation) -> Self {
+        let k = l.points_per_element();
+        Self {
+            weights: l.weights().chunks(k).map(|w| w.iter().sum()).collect(),
+            law: *l.elasticity(),
+            plasticity: l.plasticity(),
+        }
+    }
+}
+
+/// A solution's fields as P0 fields on its mesh: for an element with several stress points
+/// (P2) the weighted means over its points (the L² projection onto P0); P1–P0 fields as they
+/// are. The convergence study compares these ([`field_distance`]), so both elements are
+/// measured alike (P2's stresses are measured by their element means, which caps their
+/// observed rate at that of P0).
+pub fn p0_fields(l: &dyn saddle_core::Discretisation, u: &[f64], stress: &StressField) -> (StressField, Vec<Sym>) {
+    let k = l.points_per_element();
+    let strain = strains(l, u);
+    if k == 1 {
+        return (stress.clone(), strain);
+    }
+    let w = l.weights();
+    let n = l.mesh().n_elements();
+    let mut out = StressField::new(n, stress.q_dim);
+    let mut mean_strain = vec![Sym::zeros(); n];
+    let stride = out.stride();
+    for e in 0..n {
+        let we: f64 = w[e * k..(e + 1) * k].iter().sum();
+        for i in e * k..(e + 1) * k {
+            let f = w[i] / we;
+            out.sigma[e] += f * stress.sigma[i];
+            mean_strain[e] += f * strain[i];
+            for c in 0..stress.q_dim {
+                out.q[e * stride + c] += f * stress.q(i)[c];
+            }
+            out.plastic[e] |= stress.plastic[i];
+        }
+    }
+    (out, mean_strain)
+}
+
 /// The differences of a coarse solution to a fine one on the fine mesh (theory §5).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FieldDistance {
@@ -316,19 +370,19 @@ pub struct FieldDistance {
 /// P0 fields are sampled through `map` and the squared differences integrated over the fine
 /// elements (each sample point carries |T|/points).
 pub fn field_distance(
-    fine: &dyn Lagrangian,
+    fine: &Metric<'_>,
     fine_stress: &StressField,
     fine_strain: &[Sym],
     coarse_stress: &StressField,
     coarse_strain: &[Sym],
     map: &SampleMap,
 ) -> FieldDistance {
-    let law = *fine.elasticity();
-    let p = fine.plasticity();
+    let (law, p) = (fine.law, fine.plasticity);
+    debug_assert_eq!(fine.weights.len(), fine_stress.len(), "P0 fields ([`p0_fields`])");
     let m = fine_stress.q_dim;
     let (mut s_num, mut s_den, mut e_num, mut e_den) = (0.0, 0.0, 0.0, 0.0);
     let mut dq = vec![0.0; m];
-    for (e, &w) in fine.weights().iter().enumerate() {
+    for (e, &w) in fine.weights.iter().enumerate() {
         let (sf, qf, ef) = (&fine_stress.sigma[e], fine_stress.q(e), &fine_strain[e]);
         let wq = w / map.per_element as f64;
         for &c in map.of(e) {

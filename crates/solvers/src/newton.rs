@@ -63,7 +63,8 @@ pub struct Newton {
     /// symbolic analysis, [`direct_is_cheaper`]; AMG above `auto_amg_dofs` free dofs).
     pub linear: LinearSolver,
     /// `linear = "auto"` picks AMG without analysing above this many free dofs (default
-    /// [`AUTO_AMG_DOFS`]); below, the cost rule decides.
+    /// [`AUTO_AMG_DOFS`]) times the multigrid's slow-down as ν → ½
+    /// ([`crate::active_set::incompressibility_factor`]); below, the cost rule decides.
     pub auto_amg_dofs: usize,
     /// The forcing term of inexact Newton with AMG (theory §4.2): each CG solve stops at the
     /// relative residual `cg_forcing · min(r, 1)`, r the current KKT residual (floored at
@@ -305,7 +306,8 @@ impl<'a> Run<'a> {
         timer: &mut PhaseTimer,
     ) -> Result<Self, SolveError> {
         let nr = l.constraints().n_rows();
-        let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs);
+        let nu = l.elasticity().poisson;
+        let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs, nu);
         monitor.phase("analysis");
         let multigrid = |timer: &mut PhaseTimer| {
             timer.time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))
@@ -318,7 +320,7 @@ impl<'a> Run<'a> {
                 // the cost rule: the symbolic analysis gives the factor's fill and flops
                 let mut direct = timer.time("analysis", || ActiveSetSystem::new(l, name))?;
                 let chol = direct.direct().expect("the direct backend");
-                let (cheaper, d, a) = direct_is_cheaper(chol, nr, l.pattern().nnz());
+                let (cheaper, d, a) = direct_is_cheaper(chol, nr, l.pattern().nnz(), nu);
                 count.cost_estimates = Some((d, a));
                 // without nodal dofs (no rigid-body modes) there is no multigrid: stay direct
                 if cheaper || l.rigid_body_modes().is_none() {

@@ -94,6 +94,11 @@ pub trait Discretisation: Lagrangian + Send + Debug {
     fn points_per_element(&self) -> usize {
         1
     }
+    /// Whether the element locks where the response is nearly incompressible (theory §10):
+    /// true for P1 tetrahedra, false for P2 with B̄. Reports warn about a locked answer by it.
+    fn locks(&self) -> bool {
+        true
+    }
 }
 
 /// A boxed discretisation (what a scene assembles) is L itself: it passes to every solver.
@@ -157,5 +162,8 @@ impl Discretisation for Box<dyn Discretisation> {
     }
     fn points_per_element(&self) -> usize {
         (**self).points_per_element()
+    }
+    fn locks(&self) -> bool {
+        (**self).locks()
     }
 }

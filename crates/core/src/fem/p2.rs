@@ -274,6 +274,11 @@ impl Discretisation for P2Lagrangian {
     fn points_per_element(&self) -> usize {
         POINTS
     }
+
+    /// Plain P2 (without B̄) locks as ν → ½; with B̄ it does not.
+    fn locks(&self) -> bool {
+        !self.mean_dilatation
+    }
 }
 
 impl Lagrangian for P2Lagrangian {
