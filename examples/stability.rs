@@ -3,7 +3,7 @@
 //! between `<!-- stability:begin -->` and `<!-- stability:end -->` in README.md.
 //!
 //! ```text
-//! cargo run --release --example stability            # about two minutes on 2 cores
+//! cargo run --release --example stability            # about eight minutes on 2 cores (the P2 locking rows: 157k dofs, 4 GB)
 //! cargo run --release --example stability -- --print # print only, leave README.md alone
 //! ```
 
@@ -37,7 +37,7 @@ fn main() {
     let units = units_markdown(&units);
     let block = format!(
         "Measured by `cargo run --release --example stability` ({:.0} s on this machine) on the small \
-         default scene (12×12×6 cells graded 3, 5 184 tetrahedra, theory §6 with the edit in the case column). \
+         default scene (12×12×6 cells graded 3, 5 184 tetrahedra, theory §6 with the edit in the case column; rows marked p2: the P2 element on 6×6×3 cells, the same nodes). \
          KKT is the relative residual recomputed from the returned solution; \"U vs Newton\" is the relative \
          difference from Newton's U on the same case.\n\n{table}\n**Units** (case 3: stresses ×1e9, lengths ×1e-3, \
          force ×1e3): relative deviation of u/10⁻³ and σ/10⁹ from the solution in the default units.\n\n{units}\n\

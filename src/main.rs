@@ -44,8 +44,9 @@ enum Command {
         quiet: bool,
     },
     /// Accuracy and cost: every solver along a ladder of settings against a tight reference
-    /// (work–precision), and the mesh convergence of the scene's box mesh. Writes DIR/
-    /// work_precision.{csv,png,svg}, convergence.{csv,png,svg} and report.md.
+    /// (work–precision), the mesh convergence of the scene's box mesh, and P1 against P2 on
+    /// meshes with the same nodes. Writes DIR/ work_precision.{csv,png,svg},
+    /// convergence.{csv,png,svg}, elements.{csv,png,svg} and report.md.
     Report {
         /// The scene file (TOML); its [solver] table is ignored.
         scene: PathBuf,

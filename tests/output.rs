@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use saddle::core::problem::tensor::to_matrix;
-use saddle::core::{Lagrangian, Silent};
+use saddle::core::{Discretisation, Lagrangian, Silent};
 use saddle::output::write_vtu;
 use saddle::scene::Scene;
 use serde::Deserialize;
@@ -183,4 +183,58 @@ fn default_scene_resolves_the_contact_zone() {
     across += xs.len() - 1;
     assert!(largest <= 0.055 * 3f64.sqrt(), "largest bottom element in the contact zone: {largest}");
     assert!(across >= 8, "only {across} element edges across the contact diameter");
+}
+
+#[test]
+fn p2_vtu_has_quadratic_cells_and_element_means() {
+    let mut t = small_johnson();
+    set(&mut t, "mesh.cells", toml::Value::try_from([6, 6, 3]).unwrap());
+    let mut d = toml::Table::new();
+    d.insert("type".into(), toml::Value::String("p2".into()));
+    t.insert("discretisation".into(), toml::Value::Table(d));
+    let (l, solver) = build(&t);
+    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.vtu");
+    write_vtu(&path, &l, &sol).unwrap();
+    let piece = read_vtu(&path);
+    let mesh = l.mesh();
+    let (n_nodes, n_elements) = (mesh.n_nodes(), mesh.n_elements());
+    assert!(mesh.is_second_order() && l.points_per_element() == 4);
+    // every node, edge nodes included, with its displacement
+    let points = piece.points.clone().cast_into::<f64>().unwrap();
+    assert_eq!(points.len(), 3 * n_nodes);
+    let (connectivity, offsets) = piece.cells.cell_verts.clone().into_xml();
+    assert_eq!(offsets, (1..=n_elements as u64).map(|e| 10 * e).collect::<Vec<_>>());
+    assert!(piece.cells.types.iter().all(|t| *t == CellType::QuadraticTetra));
+    // VTK's quadratic tetrahedron: node 4 + k at the midpoint of edge k = (0,1), (1,2), (0,2),
+    // (0,3), (1,3), (2,3) — checked on the coordinates the file holds
+    let x = |n: u64| [0, 1, 2].map(|k| points[3 * n as usize + k]);
+    for cell in connectivity.chunks(10) {
+        for (k, [a, b]) in [[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]].iter().enumerate() {
+            let (xa, xb, xm) = (x(cell[*a]), x(cell[*b]), x(cell[4 + k]));
+            assert!((0..3).all(|i| (0.5 * (xa[i] + xb[i]) - xm[i]).abs() < 1e-14), "edge {k} of {cell:?}");
+        }
+    }
+    let point = arrays(&piece.data.point);
+    let cell = arrays(&piece.data.cell);
+    let disp = &point["displacement"].1;
+    let dofs = l.dofs();
+    for n in 0..n_nodes {
+        for c in 0..3 {
+            assert_eq!(disp[3 * n + c], dofs.free(n, c).map_or(0.0, |d| sol.u[d]), "u of node {n}");
+        }
+    }
+    // cell stress: the mean over the element's four points; plastic when one point is
+    let (stress, plastic) = (&cell["stress"].1, &cell["plastic"].1);
+    for e in 0..n_elements {
+        let mean =
+            (0..4).map(|q| to_matrix(&sol.stress.sigma[4 * e + q])).fold(to_matrix(&Default::default()), |a, b| a + b)
+                / 4.0;
+        assert!((stress[6 * e] - mean[(0, 0)]).abs() <= 1e-14 * mean.abs().max().max(1e-300), "σxx of element {e}");
+        assert!((stress[6 * e + 4] - mean[(1, 2)]).abs() <= 1e-14 * mean.abs().max().max(1e-300), "σyz of element {e}");
+        let any = (0..4).any(|q| sol.stress.plastic[4 * e + q]);
+        assert_eq!(plastic[e], if any { 1.0 } else { 0.0 });
+    }
+    assert!(plastic.contains(&1.0));
 }

@@ -101,3 +101,20 @@ fn p2_keeps_its_displacement_as_nu_tends_to_one_half() {
     assert!((0.95..=1.05).contains(&p2), "p2 {p2}");
     assert!(p1 < 0.8, "p1 {p1}");
 }
+
+#[test]
+fn both_newton_backends_solve_p2_alike() {
+    // the default scene with P2 on 6×6×3 cells (the kit's), direct against multigrid
+    let l = saddle::conformance::johnson_p2().problem();
+    let solve = |linear| {
+        let newton = saddle::solvers::Newton { linear, tol: 1e-11, ..Default::default() };
+        let sol = newton.solve(&l, &mut Silent).unwrap();
+        assert!(sol.report.converged, "{linear:?}: {:?}", sol.report.stop_reason);
+        (sol.extras[0], sol.report.iterations, sol.report.counters.get("pcg_iterations").copied().unwrap_or(0.0))
+    };
+    let (u_d, it_d, _) = solve(saddle::solvers::LinearSolver::Direct);
+    let (u_a, it_a, cg) = solve(saddle::solvers::LinearSolver::Amg);
+    println!("direct: U {u_d:.9e}, {it_d} iterations; amg: U {u_a:.9e}, {it_a} iterations, {cg} CG iterations");
+    assert!((u_a - u_d).abs() <= 1e-8 * u_d.abs(), "{u_a} vs {u_d}");
+    assert!(cg > 0.0, "the multigrid backend ran CG");
+}

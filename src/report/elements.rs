@@ -39,7 +39,9 @@ pub fn p1_levels(p2: &[[usize; 3]]) -> Vec<[usize; 3]> {
 impl ElementComparison {
     /// The comparison of a P1 and a P2 study of the same scene.
     pub fn new(p1: ConvergenceStudy, p2: ConvergenceStudy) -> Self {
-        let (reference_u, reference) = match (&p2.richardson, p2.levels.last()) {
+        // an extrapolation whose order is implausible for P2 (outside 0.25 to 4) is not trusted
+        let richardson = p2.richardson.filter(|r| (0.25..=4.0).contains(&r.order));
+        let (reference_u, reference) = match (&richardson, p2.levels.last()) {
             (Some(r), _) => {
                 (r.value, format!("the Richardson extrapolation of P2's three finest levels (order {:.2})", r.order))
             }
@@ -59,7 +61,7 @@ impl ElementComparison {
     /// finest level is left out when it is the reference itself.
     pub fn time_to(&self, element: &str, accuracy: f64) -> Option<(f64, [usize; 3], usize)> {
         let (_, study) = self.studies.iter().find(|(e, _)| e == element)?;
-        let own_reference = element == "p2" && study.richardson.is_none();
+        let own_reference = element == "p2" && !self.reference.starts_with("the Richardson");
         let n = study.levels.len() - own_reference as usize;
         study.levels[..n]
             .iter()

@@ -11,7 +11,11 @@
 //!   the finest level through the transfer of P0 fields ([`transfer`]), observed rates next to
 //!   Theorem 2's guaranteed 1/2, a Richardson extrapolation of U. A scene whose mesh is not a
 //!   `box` gets no study: `convergence.csv` holds its header only and `report.md` says why;
-//! * `report.md` — both tables, the observed σ̂ rate against 1/2, each solver at its tightest
+//! * `elements.csv`, `elements.png`, `elements.svg` — P1 against P2 ([`elements`], theory §10):
+//!   the convergence study repeated with the other element on meshes with the same nodes, U of
+//!   every level against one reference, wall times, and which element reaches an accuracy of U
+//!   sooner;
+//! * `report.md` — the tables, the observed σ̂ rate against 1/2, each solver at its tightest
 //!   setting, links to the images.
 //!
 //! The plots need the cargo feature `report` (on by default; [`plot`]); without it the CSV files

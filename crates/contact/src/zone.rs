@@ -160,9 +160,22 @@ pub fn rim_rows_facing(
     for (fi, f) in mesh.boundary.iter().enumerate() {
         let [a, b, c] = f.map(|i| mesh.nodes[i]);
         let centroid = std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0);
-        if mesh.facet_nodes(fi).any(|n| !in_zone[n]) && faces(tri_normal(a, b, c), centroid) {
-            for n in mesh.facet_nodes(fi) {
-                on_rim[n] = true;
+        if !faces(tri_normal(a, b, c), centroid) {
+            continue;
+        }
+        // the triangles whose nodes are neighbours: the facet itself, or on a second-order mesh
+        // its four corner-and-midpoint triangles (a facet of P2 spans two of P1's, so its far
+        // corner is not a neighbour of the node it is measured from)
+        let (triangles, count) = match &mesh.second_order {
+            None => ([*f; 4], 1),
+            Some(so) => {
+                let [ab, bc, ca] = so.facet_edges[fi];
+                ([[f[0], ab, ca], [f[1], bc, ab], [f[2], ca, bc], [ab, bc, ca]], 4)
+            }
+        };
+        for t in &triangles[..count] {
+            if t.iter().any(|&n| !in_zone[n]) {
+                t.iter().for_each(|&n| on_rim[n] = true);
             }
         }
     }
