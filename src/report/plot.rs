@@ -444,6 +444,26 @@ pub fn convergence(
             dashed: false,
         });
     }
+    // the other element of the P1–P2 comparison: its σ̂ errors against its own finest level
+    if let Ok(c) = &report.element_comparison {
+        // (the scene's own element is `study` itself: the same levels)
+        let dofs = |s: &ConvergenceStudy| s.levels.iter().map(|l| l.dofs).collect::<Vec<_>>();
+        for (i, (name, other)) in c.studies.iter().enumerate().filter(|(_, (_, s))| dofs(s) != dofs(study)) {
+            let below = other.levels.len().saturating_sub(1);
+            series.push(Series {
+                name: format!("{name}: stress (σ, ξ), energy norm, vs its finest (element means)"),
+                color: COLORS[(4 + i) % COLORS.len()],
+                marker: Marker::Circle,
+                line: other.levels[..below]
+                    .iter()
+                    .map(|l| (l.size.h(), l.err_stress))
+                    .filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite())
+                    .collect(),
+                open: vec![],
+                dashed: true,
+            });
+        }
+    }
     // slope 1/2 through the coarsest σ̂ error (Theorem 2's guarantee)
     if let (Some(first), Some(h_min)) =
         (series[0].line.first().copied(), study.levels.iter().map(|l| l.size.h()).reduce(f64::min))
