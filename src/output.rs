@@ -171,7 +171,8 @@ impl Summary {
         let extras = l.extra_names().into_iter().zip(sol.extras.iter().copied()).collect();
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
-        let near_incompressible_fraction = crate::locking::near_incompressible_fraction(l, sol);
+        // ws.eps holds ε(u), left there by `l.energy` above
+        let near_incompressible_fraction = crate::locking::near_incompressible_fraction(l, &ws.eps);
         warnings.extend(crate::locking::locking_warning(l, near_incompressible_fraction));
         let mesh_quality = l.mesh().quality();
         if mesh_quality.max_aspect_ratio > 30.0 {

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use saddle::core::problem::tensor::to_matrix;
-use saddle::core::{Discretisation, Lagrangian, Silent};
+use saddle::core::{Discretisation, Lagrangian, Silent, Solution};
 use saddle::output::write_vtu;
 use saddle::scene::Scene;
 use serde::Deserialize;
@@ -69,14 +69,20 @@ fn arrays(attributes: &[Attribute]) -> BTreeMap<String, (ElementType, Vec<f64>)>
         .collect()
 }
 
-#[test]
-fn vtu_reads_back_with_vtkio() {
-    let (l, solver) = build(&small_johnson());
+/// Solves the scene `t` with its solver, writes its solution.vtu and reads it back.
+fn solve_write_read(t: &toml::Table) -> (Box<dyn Discretisation>, Solution, UnstructuredGridPiece) {
+    let (l, solver) = build(t);
     let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.vtu");
     write_vtu(&path, &l, &sol).unwrap();
     let piece = read_vtu(&path);
+    (l, sol, piece)
+}
+
+#[test]
+fn vtu_reads_back_with_vtkio() {
+    let (l, sol, piece) = solve_write_read(&small_johnson());
     let mesh = l.mesh();
     let (n_nodes, n_elements) = (mesh.n_nodes(), mesh.n_elements());
 
@@ -192,12 +198,7 @@ fn p2_vtu_has_quadratic_cells_and_element_means() {
     let mut d = toml::Table::new();
     d.insert("type".into(), toml::Value::String("p2".into()));
     t.insert("discretisation".into(), toml::Value::Table(d));
-    let (l, solver) = build(&t);
-    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("s.vtu");
-    write_vtu(&path, &l, &sol).unwrap();
-    let piece = read_vtu(&path);
+    let (l, sol, piece) = solve_write_read(&t);
     let mesh = l.mesh();
     let (n_nodes, n_elements) = (mesh.n_nodes(), mesh.n_elements());
     assert!(mesh.is_second_order() && l.points_per_element() == 4);
