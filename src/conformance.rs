@@ -220,6 +220,7 @@ fn base_scene(
         load: vec![],
         obstacle: Obstacles::one(Box::new(obstacle)),
         solver: None,
+        load_path: None,
         base_dir: PathBuf::new(),
     }
 }

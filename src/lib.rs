@@ -29,6 +29,7 @@ pub mod bench;
 pub mod conformance;
 pub mod locking;
 pub mod output;
+pub mod path;
 #[cfg(feature = "gmsh")]
 pub mod peer;
 pub mod report;

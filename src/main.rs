@@ -25,8 +25,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Solve a scene: prints a summary, writes DIR/summary.json and DIR/solution.vtu.
-    /// Exit status: 0 converged, 2 stopped without converging (outputs flagged), 1 error.
+    /// Solve a scene: prints a summary, writes DIR/summary.json and DIR/solution.vtu; with a
+    /// [load_path] also DIR/solution_NNNN.vtu per step, solution.pvd, load_path.csv and
+    /// load_path.{png,svg}. Exit status: 0 converged, 2 stopped without converging or a load
+    /// path stopped by a failed step (outputs flagged), 1 error.
     Run {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -210,7 +212,8 @@ fn print_summary(s: &Summary) {
         ));
         let prefix = o.name.as_ref().map_or_else(String::new, |n| format!("{n}."));
         for (q, v) in &o.quantities {
-            rows.push((format!("  {prefix}{q}"), format!("{v:.6e}")));
+            let shown = if v.is_nan() { "undetermined (null)".to_string() } else { format!("{v:.6e}") };
+            rows.push((format!("  {prefix}{q}"), shown));
         }
     }
     rows.extend([
@@ -264,11 +267,28 @@ fn run(
         );
     }
     let mut bar = Bar::new(quiet);
-    let result = run::solve_and_write(&loaded, &out, &mut bar);
+    let lines = bar.bar.clone();
+    let result = run::solve_and_write_with(&loaded, &out, &mut bar, &mut |line| {
+        if quiet {
+        } else if lines.is_hidden() {
+            eprintln!("  {line}");
+        } else {
+            lines.println(format!("  {line}"));
+        }
+    });
     bar.bar.finish_and_clear();
     let outcome = result?;
     print_summary(&outcome.summary);
-    println!("  wrote {}/summary.json and solution.vtu", outcome.out_dir.display());
+    match &outcome.summary.load_path {
+        Some(p) => println!(
+            "  wrote {}/summary.json, load_path.csv, solution.pvd and solution_NNNN.vtu ({} of {} steps{})",
+            outcome.out_dir.display(),
+            p.steps_done,
+            p.step_factors.len(),
+            if p.completed { "" } else { ", stopped" }
+        ),
+        None => println!("  wrote {}/summary.json and solution.vtu", outcome.out_dir.display()),
+    }
     Ok(if outcome.summary.converged { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
 

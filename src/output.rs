@@ -45,8 +45,11 @@ pub struct Summary {
     /// Number of plastic stress points (equal to `plastic_elements` for `p1`, one point per
     /// element).
     pub plastic_points: usize,
-    /// Largest von Mises stress sqrt(3/2)|dev σ|.
+    /// Largest von Mises stress sqrt(3/2)|dev σ| (after unloading: of the residual stresses).
     pub max_von_mises: f64,
+    /// Largest equivalent plastic strain √(2/3)|ε_p| over the stress points, ε_p = ε(u) − Aσ
+    /// (theory §11.1; Hencky's plastic strain for a one-step solve).
+    pub max_equivalent_plastic_strain: f64,
     /// Primal energy J(u, U).
     pub J: f64,
     /// Dual energy −(½[σ̂,σ̂] + λ·c).
@@ -76,8 +79,9 @@ pub struct Summary {
     /// Everything the obstacle reports (U, force, peak and mean contact pressure, ...); with
     /// several obstacles every quantity as `name.quantity`.
     pub contact: BTreeMap<String, f64>,
-    /// The extra unknowns V by name (`U`; with several obstacles `left.U`, ...).
-    pub extras: BTreeMap<String, f64>,
+    /// The extra unknowns V by name (`U`; with several obstacles `left.U`, ...); null when
+    /// undetermined (a force-controlled obstacle without load in a load step, theory §11.3).
+    pub extras: BTreeMap<String, Option<f64>>,
     /// One entry per obstacle, in the scene's order.
     pub obstacles: Vec<ObstacleSummary>,
     /// Element shape statistics (aspect ratio: 1 for a regular tetrahedron).
@@ -96,6 +100,125 @@ pub struct Summary {
     pub residual_history: Vec<f64>,
     /// Warnings from the plugins and the solver.
     pub warnings: Vec<String>,
+    /// With a `[load_path]`: one entry per step solved (theory §11); the keys above describe
+    /// the last step. Absent for a one-step solve.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub steps: Vec<StepSummary>,
+    /// With a `[load_path]`: the path as a whole (factors, whether it completed, totals, the
+    /// residual state after unloading). Absent for a one-step solve.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_path: Option<crate::path::PathSummary>,
+}
+
+/// One step of a load path in `summary.json` (theory §11): the keys of a one-step summary.
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct StepSummary {
+    /// The step's index (from 0; the number in its `solution_NNNN.vtu`).
+    pub step: usize,
+    /// The load factor.
+    pub factor: f64,
+    /// True when the solver met its tolerance.
+    pub converged: bool,
+    /// Why it stopped, or `error` when the solver failed (see `error`).
+    pub stop_reason: String,
+    /// The solver's error, when it failed.
+    pub error: Option<String>,
+    /// Outer iterations.
+    pub iterations: usize,
+    /// The recomputed relative KKT residual of the step (null after an error).
+    pub kkt_residual: Option<f64>,
+    /// The obstacle's `U` (null when undetermined or not reported).
+    pub U: Option<f64>,
+    /// The obstacle's `force`.
+    pub force: Option<f64>,
+    /// The extras by name (null when undetermined).
+    pub extras: BTreeMap<String, Option<f64>>,
+    /// Everything the obstacles report, with `imprint` (null when undetermined).
+    pub contact: BTreeMap<String, f64>,
+    /// Contact nodes.
+    pub contact_nodes: usize,
+    /// Plastic elements (a stress point of the element plastic in this step).
+    pub plastic_elements: usize,
+    /// Plastic stress points.
+    pub plastic_points: usize,
+    /// Largest von Mises stress.
+    pub max_von_mises: f64,
+    /// Largest equivalent plastic strain (accumulated along the path).
+    pub max_equivalent_plastic_strain: f64,
+    /// Primal energy of the step problem.
+    pub J: Option<f64>,
+    /// Wall time of the step: set-up, solve, summary and output.
+    pub wall_s: f64,
+    /// The step's VTU file (null when the solver failed).
+    pub file: Option<String>,
+    /// Warnings of the step.
+    pub warnings: Vec<String>,
+}
+
+impl StepSummary {
+    /// The step entry of a step's full summary.
+    pub fn new(step: usize, factor: f64, s: &Summary, file: Option<String>, wall_s: f64) -> Self {
+        Self {
+            step,
+            factor,
+            converged: s.converged,
+            stop_reason: serde_json::to_value(s.stop_reason)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default(),
+            error: None,
+            iterations: s.iterations,
+            kkt_residual: Some(s.kkt_residual),
+            U: s.U,
+            force: s.force,
+            extras: s.extras.clone(),
+            contact: s.contact.clone(),
+            contact_nodes: s.contact_nodes,
+            plastic_elements: s.plastic_elements,
+            plastic_points: s.plastic_points,
+            max_von_mises: s.max_von_mises,
+            max_equivalent_plastic_strain: s.max_equivalent_plastic_strain,
+            J: Some(s.J),
+            wall_s,
+            file,
+            warnings: s.warnings.clone(),
+        }
+    }
+
+    /// The entry of a step whose solver failed with `error`.
+    pub fn failed(step: usize, factor: f64, error: String, wall_s: f64) -> Self {
+        Self {
+            step,
+            factor,
+            converged: false,
+            stop_reason: "error".into(),
+            error: Some(error),
+            iterations: 0,
+            kkt_residual: None,
+            U: None,
+            force: None,
+            extras: BTreeMap::new(),
+            contact: BTreeMap::new(),
+            contact_nodes: 0,
+            plastic_elements: 0,
+            plastic_points: 0,
+            max_von_mises: f64::NAN,
+            max_equivalent_plastic_strain: f64::NAN,
+            J: None,
+            wall_s,
+            file: None,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The quantity `name`: a reported one (`U`, `force`, `imprint`, …), an extra, or `factor`.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        if name == "factor" {
+            return Some(self.factor);
+        }
+        self.contact.get(name).copied().or_else(|| self.extras.get(name).copied().flatten()).filter(|v| v.is_finite())
+    }
 }
 
 /// What one obstacle reports, as written in `summary.json`: its name, type, contact set, and
@@ -152,7 +275,26 @@ impl Summary {
         let kkt = l.kkt(&sol.iterate(), &mut ws);
         let j = l.energy(&sol.u, &sol.extras, &mut ws);
         // each obstacle reports from its own rows, extras and multipliers
-        let reports = l.contact_reports(&sol.extras, &sol.lambda);
+        let mut reports = l.contact_reports(&sol.extras, &sol.lambda);
+        // the imprint of each obstacle: max_i (G u)_i over its rows, the largest displacement of
+        // its candidate nodes away from it (theory §11.4); generic, from the rows
+        let parts = l.discrete_obstacles().parts();
+        let imprints: Vec<f64> = parts
+            .iter()
+            .map(|p| {
+                (0..p.rows.n_rows())
+                    .map(|i| {
+                        let (cols, vals) = p.rows.row(i);
+                        cols.iter().zip(vals).map(|(&j, a)| a * sol.u[j]).sum::<f64>()
+                    })
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect();
+        for (r, m) in reports.iter_mut().zip(&imprints) {
+            if m.is_finite() {
+                r.report.quantities.push(("imprint".into(), *m));
+            }
+        }
         let single = match reports.as_slice() {
             [r] => Some(&r.report),
             _ => None,
@@ -168,7 +310,7 @@ impl Summary {
                 })
                 .collect(),
         };
-        let extras = l.extra_names().into_iter().zip(sol.extras.iter().copied()).collect();
+        let extras = l.extra_names().into_iter().zip(sol.extras.iter().map(|v| Some(*v))).collect();
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
         // ws.eps holds ε(u), left there by `l.energy` above
@@ -202,6 +344,7 @@ impl Summary {
             plastic_elements: plastic_elements(l, sol),
             plastic_points: sol.stress.n_plastic(),
             max_von_mises: sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max),
+            max_equivalent_plastic_strain: max_equivalent_plastic_strain(l, &ws.eps, sol),
             J: j,
             dual_energy: l.dual_energy(&sol.stress, &sol.lambda),
             kkt_residual: kkt.max(),
@@ -224,6 +367,28 @@ impl Summary {
             counters: sol.report.counters.clone(),
             residual_history: sol.report.residual_history.clone(),
             warnings,
+            steps: Vec::new(),
+            load_path: None,
+        }
+    }
+
+    /// Marks the extras `names` undetermined (theory §11.3): null in `extras`, and the
+    /// obstacles' quantities of the same name (`U`) null too.
+    pub fn mark_undetermined(&mut self, names: &[String]) {
+        for n in names {
+            self.extras.insert(n.clone(), None);
+            if let Some(q) = self.contact.get_mut(n) {
+                *q = f64::NAN;
+            }
+            let (obstacle, local) = n.split_once('.').map_or((None, n.as_str()), |(o, q)| (Some(o), q));
+            for o in self.obstacles.iter_mut().filter(|o| o.name.as_deref() == obstacle) {
+                if let Some(q) = o.quantities.get_mut(local) {
+                    *q = f64::NAN;
+                }
+            }
+            if n == "U" {
+                self.U = None;
+            }
         }
     }
 
@@ -232,6 +397,21 @@ impl Summary {
         let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
         std::fs::write(path, text + "\n")
     }
+}
+
+/// The plastic strain ε_p = ε − Aσ at every stress point (theory §11.1), from the strains of
+/// the solution's displacement.
+pub fn plastic_strains(l: &dyn Discretisation, eps: &[saddle_core::Sym], sol: &Solution) -> Vec<saddle_core::Sym> {
+    let law = l.elasticity();
+    eps.iter().zip(&sol.stress.sigma).map(|(e, s)| e - law.compliance(s)).collect()
+}
+
+/// The largest √(2/3)|ε_p| (0 for an elastic problem).
+fn max_equivalent_plastic_strain(l: &dyn Discretisation, eps: &[saddle_core::Sym], sol: &Solution) -> f64 {
+    if l.plasticity().is_none() {
+        return 0.0;
+    }
+    plastic_strains(l, eps, sol).iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).fold(0.0, f64::max)
 }
 
 /// The elements with at least one plastic stress point.
@@ -245,7 +425,8 @@ pub fn plastic_elements(l: &dyn Discretisation, sol: &Solution) -> usize {
 /// nodes). Cell data, the mean over the element's stress points when it has several: `stress`
 /// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises` (of the mean stress), the
 /// hardening variables under the names the yield surface gives them (`xi` for von Mises),
-/// `plastic` (0/1: one of the element's points is plastic).
+/// `plastic` (0/1: one of the element's points is plastic), and with plasticity
+/// `plastic_strain` (tensor, ε(u) − Aσ) and `equivalent_plastic_strain` (√(2/3)|ε_p|).
 pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io::Result<()> {
     let mesh = l.mesh();
     let k = l.points_per_element();
@@ -275,6 +456,17 @@ pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io
         }
     }
     arrays.push(("cell", "plastic", 1, plastic));
+    // the plastic strain ε_p = ε(u) − Aσ (theory §11.1), element means: after unloading the
+    // residual plastic strain
+    if l.plasticity().is_some() {
+        let mut eps = vec![saddle_core::Sym::zeros(); l.n_points()];
+        l.strain(&sol.u, &mut eps);
+        let ep = plastic_strains(l, &eps, sol);
+        let mean: Vec<saddle_core::Sym> = ep.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
+        arrays.push(("cell", "plastic_strain", 6, f64s(&mut mean.iter().flat_map(to_vtk))));
+        let eq = ep.chunks(k).map(|s| s.iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).sum::<f64>() / k as f64);
+        arrays.push(("cell", "equivalent_plastic_strain", 1, f64s(&mut eq.into_iter())));
+    }
     arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));
     // VTK_TETRA (10) or VTK_QUADRATIC_TETRA (24): vertices, then the edge nodes in VTK's order
     let (per_cell, cell_type) = if mesh.is_second_order() { (10, 24u8) } else { (4, 10u8) };

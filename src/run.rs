@@ -22,6 +22,9 @@ pub enum RunError {
     /// Output could not be written.
     #[error("cannot write {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
+    /// The first step of a load path failed (a later one is recorded in the summary).
+    #[error("load path: {0}")]
+    Path(#[from] saddle_core::PathError),
 }
 
 /// The solver used when a scene names none: the paper's Uzawa method.
@@ -47,6 +50,8 @@ pub struct Loaded {
     pub solver: Box<dyn Solver>,
     /// Scene title.
     pub title: Option<String>,
+    /// The scene's `[load_path]`, if any.
+    pub load_path: Option<crate::scene::LoadPath>,
     /// Wall time of the phases so far: `read` (the scene file, and the mesh built or read) and
     /// `setup` (L assembled).
     pub timer: PhaseTimer,
@@ -72,10 +77,11 @@ pub fn load_with(
         Ok((scene, mesh))
     })?;
     let title = scene.title.clone();
+    let load_path = scene.load_path.clone();
     let override_solver = solver_override.map(solver_by_type).transpose()?;
     let (problem, solver) = timer.time("setup", || scene.assemble(mesh))?;
     let solver = override_solver.or(solver).unwrap_or_else(default_solver);
-    Ok(Loaded { problem, solver, title, timer })
+    Ok(Loaded { problem, solver, title, load_path, timer })
 }
 
 /// The result of a run.
@@ -93,6 +99,21 @@ pub struct Outcome {
 /// `setup` (from [`load`]), `solve`, `summary` (the KKT residuals and energies recomputed from
 /// the solution) and `write` (solution.vtu; summary.json is written last, after the clock).
 pub fn solve_and_write(loaded: &Loaded, out_dir: &Path, monitor: &mut dyn Monitor) -> Result<Outcome, RunError> {
+    solve_and_write_with(loaded, out_dir, monitor, &mut |_| {})
+}
+
+/// [`solve_and_write`], with a line per load step to `progress`. A scene with a `[load_path]` is
+/// solved step by step ([`crate::path::solve_and_write`]: `solution_NNNN.vtu`, `solution.pvd`,
+/// `load_path.csv`, `summary.json` with `steps`).
+pub fn solve_and_write_with(
+    loaded: &Loaded,
+    out_dir: &Path,
+    monitor: &mut dyn Monitor,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Outcome, RunError> {
+    if let Some(path) = &loaded.load_path {
+        return crate::path::solve_and_write(loaded, path, out_dir, monitor, progress);
+    }
     let mut timer = loaded.timer.clone();
     let solution = timer.time("solve", || loaded.solver.solve(&loaded.problem, monitor))?;
     let mut summary = timer.time("summary", || Summary::new(&loaded.problem, &solution, loaded.title.clone()));

@@ -31,6 +31,8 @@
 //! gap = { type = "paraboloid", R = 5.0 }
 //! [solver]                     # optional
 //! type = "uzawa"
+//! [load_path]                  # optional: load steps (Prandtl–Reuss, theory §11)
+//! factors = [0.0, 1.0, 0.0]
 //! ```
 //!
 //! Several obstacles (K = K₁ ∩ K₂ ∩ …, theory §8) are an array of tables, each with a unique
@@ -97,6 +99,10 @@ pub struct Scene {
     /// The solver; the command line supplies a default when absent.
     #[serde(default)]
     pub solver: Option<Box<dyn Solver>>,
+    /// A load path (`[load_path]`, theory §11): the scene solved in load steps, Prandtl–Reuss;
+    /// absent: one step from zero (the stationary problem).
+    #[serde(default)]
+    pub load_path: Option<LoadPath>,
     /// The folder relative file names are resolved against.
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -158,6 +164,9 @@ impl Scene {
         self.obstacle.validate("obstacle")?;
         if let Some(s) = &self.solver {
             s.validate("solver")?;
+        }
+        if let Some(p) = &self.load_path {
+            p.validate(&self.obstacle)?;
         }
         Ok(())
     }
@@ -222,6 +231,80 @@ impl Scene {
     /// The same scene with another finite element.
     pub fn with_element(&self, element: Box<dyn FiniteElement>) -> Self {
         Self { discretisation: Some(element), ..self.clone() }
+    }
+}
+
+/// `[load_path]`: every load of the scene (tractions, body forces, each obstacle's force or
+/// prescribed displacement) multiplied by each factor in turn, one load step each (theory §11):
+///
+/// ```toml
+/// [load_path]
+/// factors = [0.0, 0.5, 1.0, 0.5, 0.0]   # load, then unload
+/// substeps = 4                          # optional: equal steps between factors (default 1)
+/// plot = ["imprint", "force"]           # optional: the load_path.png axes (the default)
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LoadPath {
+    /// The load factors, in order; the first is a step of its own (0: the unloaded start).
+    pub factors: Vec<f64>,
+    /// Equal sub-steps from each factor to the next (≥ 1).
+    #[serde(default = "one")]
+    pub substeps: usize,
+    /// The quantities on the axes of `load_path.png` (x, y): any quantity the obstacles report
+    /// (`U`, `force`, `imprint` — the largest displacement of the contact zone away from the
+    /// obstacle, defined also at zero load), an extra, or `factor`. Default: imprint and force,
+    /// the load–depth loop of an indentation.
+    #[serde(default = "default_plot")]
+    pub plot: [String; 2],
+}
+
+fn one() -> usize {
+    1
+}
+
+fn default_plot() -> [String; 2] {
+    ["imprint".to_string(), "force".to_string()]
+}
+
+impl LoadPath {
+    /// The factors of the steps, sub-steps included.
+    pub fn step_factors(&self) -> Vec<f64> {
+        saddle_core::step_factors(&self.factors, self.substeps)
+    }
+
+    /// Checks the table: at least one factor, every factor finite, `substeps` ≥ 1, and every
+    /// obstacle takes every nonzero factor (a negative factor reverses the loads; a punch's force
+    /// cannot, and the error names `load_path.factors[i]` and the obstacle's field).
+    pub fn validate(&self, obstacles: &saddle_core::Obstacles) -> Result<(), SceneError> {
+        if self.factors.is_empty() {
+            return Err(ParameterError::new("load_path.factors", "[]", "give at least one load factor").into());
+        }
+        if self.substeps == 0 {
+            return Err(ParameterError::new("load_path.substeps", 0, "must be >= 1").into());
+        }
+        for (i, &f) in self.factors.iter().enumerate() {
+            if !f.is_finite() {
+                return Err(ParameterError::new(format!("load_path.factors[{i}]"), f, "must be finite").into());
+            }
+            if f != 0.0 && !obstacles.is_empty() {
+                let scaled = obstacles.scaled_load(f).map_err(|e| {
+                    ParameterError::new(
+                        format!("load_path.factors[{i}]"),
+                        f,
+                        format!("{} ({} = {}): {}", e.field, e.field, e.value, e.requirement),
+                    )
+                })?;
+                scaled.validate("obstacle").map_err(|e| {
+                    ParameterError::new(
+                        format!("load_path.factors[{i}]"),
+                        f,
+                        format!("the scaled obstacle is invalid: {} = {} {}", e.field, e.value, e.requirement),
+                    )
+                })?;
+            }
+        }
+        Ok(())
     }
 }
 

@@ -151,7 +151,13 @@ fn a_single_table_keeps_the_summary_keys_of_its_report() {
     assert!(s.U.is_some() && s.force.is_some());
     assert_eq!(s.contact_nodes, r.contact_nodes);
     assert_eq!(s.contact_radius, r.contact_radius);
-    assert_eq!(s.contact.len(), r.quantities.len());
+    // the plugin's quantities, and the generic `imprint` (theory §11.4): for the punch the
+    // largest u₃ of its candidate nodes, which under load is U at the node of deepest contact
+    assert_eq!(s.contact.len(), r.quantities.len() + 1);
+    let u3 = l.nodal_vectors(&sol.u);
+    let deepest = l.constraints().node.iter().map(|&n| u3[n][2]).fold(f64::MIN, f64::max);
+    assert_eq!(s.contact["imprint"], deepest);
+    assert!((deepest - sol.extras[0]).abs() <= 1e-9 * sol.extras[0], "the punch touches at its deepest node");
     for (q, v) in &r.quantities {
         assert_eq!(s.contact.get(q), Some(v), "{q}");
     }

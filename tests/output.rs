@@ -100,7 +100,7 @@ fn vtu_reads_back_with_vtkio() {
     let cell = arrays(&piece.data.cell);
     let names = |m: &BTreeMap<String, (ElementType, Vec<f64>)>| m.keys().cloned().collect::<Vec<_>>();
     assert_eq!(names(&point), ["contact_force", "displacement"]);
-    assert_eq!(names(&cell), ["plastic", "stress", "von_mises", "xi"]);
+    assert_eq!(names(&cell), ["equivalent_plastic_strain", "plastic", "plastic_strain", "stress", "von_mises", "xi"]);
     assert_eq!(point["displacement"].0, ElementType::Vectors, "PointData Vectors=\"displacement\"");
     // the declared types as vtkio decoded them: Float64 fields, UInt8 flags
     for a in piece.data.point.iter().chain(&piece.data.cell) {
@@ -160,6 +160,28 @@ fn vtu_reads_back_with_vtkio() {
     }
     let n_plastic = plastic.iter().filter(|p| **p == 1.0).count();
     assert!(n_plastic > 0 && n_plastic < n_elements, "{n_plastic} plastic elements");
+    // the plastic strain ε(u) − Aσ (theory §11.1), recomputed here from u and σ: zero where the
+    // element is elastic, along dev σ where it is plastic (the flow rule), √(2/3)|ε_p| its size
+    let (ep, eq) = (&cell["plastic_strain"].1, &cell["equivalent_plastic_strain"].1);
+    let mut eps = vec![saddle::core::Sym::zeros(); n_elements];
+    l.strain(&sol.u, &mut eps);
+    let largest = eq.iter().fold(0.0f64, |m, x| m.max(*x));
+    for e in 0..n_elements {
+        let p = to_matrix(&(eps[e] - l.elasticity().compliance(&sol.stress.sigma[e])));
+        let vtk_order = [p[(0, 0)], p[(1, 1)], p[(2, 2)], p[(0, 1)], p[(1, 2)], p[(0, 2)]];
+        for (k, x) in vtk_order.iter().enumerate() {
+            assert!((ep[6 * e + k] - x).abs() <= 1e-12 * largest, "ε_p of element {e}, component {k}");
+        }
+        assert!((eq[e] - (2.0f64 / 3.0).sqrt() * p.norm()).abs() <= 1e-12 * largest);
+        if plastic[e] == 0.0 {
+            assert!(eq[e] <= 1e-10 * largest, "elastic element {e} with ε_p = {}", eq[e]);
+        } else {
+            assert!(
+                eq[e] > 1e-6 * largest && p.trace().abs() <= 1e-9 * p.norm(),
+                "plastic element {e}: ε_p deviatoric"
+            );
+        }
+    }
     // the shear components are not all alike, so a swap of two of them shows
     let (xy, yz): (Vec<f64>, Vec<f64>) = stress.chunks(6).map(|s| (s[3], s[4])).unzip();
     assert_ne!(xy, yz);

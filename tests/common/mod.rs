@@ -49,6 +49,12 @@ pub fn solver(text: &str) -> Box<dyn Solver> {
 /// Runs `saddle run --quiet` on scene text written to a temporary folder; returns (exit code,
 /// stderr, whether the output folder was created).
 pub fn run_scene(text: &str) -> (i32, String, bool) {
+    let (code, stderr, dir) = run_scene_kept(text);
+    (code, stderr, dir.path().join("out").exists())
+}
+
+/// [`run_scene`], keeping the temporary folder (its output in `out/`) for the caller to read.
+pub fn run_scene_kept(text: &str) -> (i32, String, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("scene.toml");
     std::fs::write(&scene, text).unwrap();
@@ -57,7 +63,7 @@ pub fn run_scene(text: &str) -> (i32, String, bool) {
         .args(["run", scene.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
         .output()
         .unwrap();
-    (o.status.code().unwrap(), String::from_utf8_lossy(&o.stderr).into_owned(), out.exists())
+    (o.status.code().unwrap(), String::from_utf8_lossy(&o.stderr).into_owned(), dir)
 }
 
 /// `saddle run` on scene text fails with exit code 1, writes nothing, and its error holds every

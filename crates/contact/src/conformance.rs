@@ -139,8 +139,8 @@ pub fn check_all(
 }
 
 /// (e) `scaled_load` (when the plugin has it): factor 1 gives the same obstacle (the same load
-/// term and the same rows), and factor 2 doubles the load term and keeps the number of rows and
-/// of extra unknowns.
+/// term and the same rows), factor 2 doubles the load term and keeps the number of rows and
+/// of extra unknowns, and factor 0 (the ends of a load path) discretises with no load.
 pub fn check_scaled_load(k: &dyn AdmissibleDisplacements, mesh: &TetMesh, dofs: &DofMap) -> Result<(), KitFailure> {
     let (Some(one), Some(two)) = (k.scaled_load(1.0), k.scaled_load(2.0)) else { return Ok(()) };
     let rows = |k: &dyn AdmissibleDisplacements| k.discretise(mesh, dofs, "obstacle");
@@ -157,6 +157,27 @@ pub fn check_scaled_load(k: &dyn AdmissibleDisplacements, mesh: &TetMesh, dofs: 
     let doubled: Vec<f64> = k.load().iter().map(|f| 2.0 * f).collect();
     if two.load() != doubled {
         return fail("scaled_load", format!("scaled_load(2).load() = {:?}, not 2 × {:?}", two.load(), k.load()));
+    }
+    // factor 0 (the start and end of a load path, theory §11.3) discretises too, with no load
+    let Some(zero) = k.scaled_load(0.0) else {
+        return fail("scaled_load", "scaled_load(0) is None while scaled_load(1) is not".into());
+    };
+    let r0 = match rows(zero.as_ref()) {
+        Ok(r) => r,
+        Err(e) => return fail("scaled_load", format!("scaled_load(0) does not discretise: {e}")),
+    };
+    if zero.load().iter().any(|f| *f != 0.0) || (r0.n_rows(), r0.n_extras) != (r.n_rows(), r.n_extras) {
+        return fail(
+            "scaled_load",
+            format!(
+                "scaled_load(0) has load {:?}, {} rows and {} extras; expected zero load, {} and {}",
+                zero.load(),
+                r0.n_rows(),
+                r0.n_extras,
+                r.n_rows(),
+                r.n_extras
+            ),
+        );
     }
     // the rows at factor 2 may differ (a prescribed displacement moves a curved obstacle, whose
     // normals change), but not in number or in extra unknowns

@@ -206,8 +206,11 @@ impl AdmissibleDisplacements for RigidPunch {
     }
 
     /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0: G = e₃ at the node, H = −1, c = φ(x_i) (theory §3).
+    /// F = 0 (a load path at factor 0) discretises: the rows do not depend on F.
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        self.validate(path)?;
+        check::finite(path, "F", self.F)?;
+        check::non_negative(path, "F", self.F)?;
+        self.punch().validate(path)?;
         self.punch().discretise(mesh, dofs, path)
     }
 

@@ -247,7 +247,12 @@ impl AdmissibleDisplacements for RigidSphere {
     /// free dof), a zone node inside the sphere at V = 0 (`{path}.center`), and a prescribed V
     /// that puts the sphere's centre on a zone node (`{path}.V`).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        self.validate(path)?;
+        // F = 0 (a load path at factor 0) discretises: the rows do not depend on F
+        if self.F == Some(0.0) {
+            Self { F: Some(1.0), ..self.clone() }.validate(path)?
+        } else {
+            self.validate(path)?
+        }
         let zone = candidate_nodes_with(&self.zone, mesh, dofs, path, Selection::AnyFreeDof)?;
         self.check_outside(mesh, &zone.nodes, path)?;
         let d = self.d();

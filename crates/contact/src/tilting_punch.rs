@@ -211,7 +211,12 @@ impl AdmissibleDisplacements for TiltingPunch {
     /// −(x_i2 − c₂)), c_i = φ(x_i) (theory §8). Errors: the parameters, the zone (as for the
     /// rigid punch), contact nodes on one line, and `{path}.at` outside their convex hull.
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        self.validate(path)?;
+        // F = 0 (a load path at factor 0) discretises: the rows do not depend on F
+        if self.F == 0.0 {
+            Self { F: 1.0, ..self.clone() }.validate(path)?
+        } else {
+            self.validate(path)?
+        }
         let zone = candidate_nodes(&self.zone, mesh, dofs, path)?;
         self.check_hull(mesh, &zone.nodes, path)?;
         let mut rows = ConstraintRows::new(3);

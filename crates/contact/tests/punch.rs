@@ -111,10 +111,14 @@ fn parameters_name_the_field_and_the_value() {
     assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.zone.all[1].disc.radius", "-1"));
     // a negative prescribed U is a legal position (the punch pulled away)
     RigidPunchDisplacement::new(-0.01, disc(0.5), Box::new(Flat::default())).validate("obstacle").unwrap();
-    // discretise validates too
+    // discretise validates too, but takes F = 0 (a load path at factor 0, theory §11.3): the
+    // rows do not depend on F
     let m = mesh();
-    let err = k(0.0).discretise(&m, &dofs(&m), "obstacle").unwrap_err();
+    let err = k(-0.3).discretise(&m, &dofs(&m), "obstacle").unwrap_err();
     assert!(matches!(&err, SceneError::Parameter(p) if p.field == "obstacle.F"), "{err}");
+    let (zero, one) =
+        (k(0.0).discretise(&m, &dofs(&m), "obstacle").unwrap(), k(0.3).discretise(&m, &dofs(&m), "obstacle").unwrap());
+    assert_eq!(zero, one);
 }
 
 #[test]

@@ -16,6 +16,7 @@
 //! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
 //! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), **L** [`Lagrangian`], the [`Solver`] interface | `error`, `mesh` |
 //! | [`fem`] | discretisations of L: [`P1P0Lagrangian`], [`P2Lagrangian`]; loads as nodal forces | `error`, `mesh`, `problem` |
+//! | [`evolution`] | load paths (theory §11): [`LoadStep`] (L at a load factor from a [`PlasticState`]), [`Evolution`] (the steps one after another) | `problem`, `fem` |
 //!
 //! Linear algebra knows no mesh and no mechanics (the multigrid takes its near-nullspace as
 //! vectors), and the contracts name no linear-algebra type: solvers (crate `saddle-solvers`)
@@ -23,12 +24,14 @@
 //! `saddle`.
 
 pub mod error;
+pub mod evolution;
 pub mod fem;
 pub mod linalg;
 pub mod mesh;
 pub mod problem;
 
 pub use error::{MeshError, ParameterError, SceneError};
+pub use evolution::{Evolution, LoadStep, PathError, StepSolution, step_factors};
 pub use fem::loads::Load;
 pub use fem::p1p0::{P1, P1P0Lagrangian};
 pub use fem::p2::{P2, P2Lagrangian};
@@ -45,6 +48,7 @@ pub use problem::elasticity::Elasticity;
 pub use problem::lagrangian::{Iterate, KktResiduals, Lagrangian, Material, RigidBodyModes, StressField, Workspace};
 pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};
 pub use problem::pattern::SymmetricPattern;
-pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, StopReason};
+pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason};
+pub use problem::state::PlasticState;
 pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
 pub use problem::tensor::{Sym, SymOp};

@@ -38,6 +38,7 @@ use crate::residual;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField, Workspace, max_abs};
+pub use saddle_core::problem::solver::Start;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
 use serde::{Deserialize, Serialize};
@@ -132,17 +133,6 @@ pub const LINEAR_CG_MARGIN: f64 = 0.1;
 /// … but never below this relative residual, the round-off limit of CG in double precision.
 pub const CG_TOL_MIN: f64 = 1e-14;
 
-/// A starting point: displacements, extras and contact forces.
-#[derive(Clone, Debug)]
-pub struct Start {
-    /// u.
-    pub u: Vec<f64>,
-    /// V.
-    pub extras: Vec<f64>,
-    /// λ.
-    pub lambda: Vec<f64>,
-}
-
 #[typetag::serde(name = "newton")]
 impl Solver for Newton {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
@@ -161,6 +151,15 @@ impl Solver for Newton {
 
     fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         self.solve_from(l, None, monitor, &mut PhaseTimer::default(), "newton")
+    }
+
+    /// Newton from the previous step's (u, V, λ): its active set and plastic set are the
+    /// first guesses (theory §11.2).
+    fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        start.check(l, "newton")?;
+        let mut sol = self.solve_from(l, Some(start.clone()), monitor, &mut PhaseTimer::default(), "newton")?;
+        sol.report.counters.insert("warm_start".into(), 1.0);
+        Ok(sol)
     }
 }
 
@@ -441,9 +440,8 @@ impl<'a> Run<'a> {
         if self.state.elastic_phase {
             timer.time("assembly", || {
                 l.assemble(Material::Uniform(c), &mut w.k);
-                for (s, e) in w.elastic_sigma.iter_mut().zip(&w.ws.eps) {
-                    *s = c * e;
-                }
+                // C(ε − ε_p): the elastic response from the step's state (Cε without one)
+                l.elastic_stress(&w.ws.eps, &mut w.elastic_sigma);
                 l.divergence(&w.elastic_sigma, &mut w.grad);
                 for (g, f) in w.grad.iter_mut().zip(l.nodal_load()) {
                     *g -= f;
@@ -584,11 +582,23 @@ fn elastic_contact_start(
     let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.constraints().n_rows());
     let c = l.elasticity().stiffness_matrix();
     chol.factorise(&l.stiffness(Material::Uniform(&c))).in_solver(solver)?;
-    // z = K⁻¹f_u (zero without loads on u)
+    // z = K⁻¹(f_u + BᵀCε_p) (zero without loads on u and without a step's plastic strain):
+    // the elastic response from the state, σ = C(ε − ε_p), balances f_u when Kz = f_u + BᵀCε_p
     let mut z = vec![0.0; n];
     let f_u = l.nodal_load();
-    if !f_u.is_empty() && f_u.iter().any(|f| *f != 0.0) {
+    if !f_u.is_empty() {
         z.copy_from_slice(f_u);
+    }
+    if l.state().is_some() {
+        let mut s0 = vec![Sym::zeros(); l.n_points()];
+        l.elastic_stress(&vec![Sym::zeros(); l.n_points()], &mut s0);
+        let mut f0 = vec![0.0; n];
+        l.divergence(&s0, &mut f0);
+        for (zi, f) in z.iter_mut().zip(&f0) {
+            *zi -= f;
+        }
+    }
+    if z.iter().any(|f| *f != 0.0) {
         chol.solve(&mut z);
     }
     let rows = l.constraints();

@@ -114,7 +114,7 @@ use saddle_core::linalg::SparseCholesky;
 use saddle_core::problem::lagrangian::{
     Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace, max_abs, norm,
 };
-use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, Start, StopReason};
 use saddle_core::{Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -196,7 +196,19 @@ impl Solver for Penalty {
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
         let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
-        self.newton(l, sys, monitor, timer)
+        self.newton(l, sys, None, monitor, timer)
+    }
+
+    /// Newton on J_μ from the previous step's (u, V), without the elastic iteration (theory
+    /// §11.2).
+    fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        start.check(l, "penalty")?;
+        let mut timer = PhaseTimer::default();
+        monitor.phase("set-up");
+        let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
+        let mut sol = self.newton(l, sys, Some(start), monitor, timer)?;
+        sol.report.counters.insert("warm_start".into(), 1.0);
+        Ok(sol)
     }
 }
 
@@ -487,10 +499,14 @@ impl Penalty {
         &self,
         l: &dyn Lagrangian,
         sys: PenaltySystem,
+        start: Option<&Start>,
         monitor: &mut dyn Monitor,
         mut timer: PhaseTimer,
     ) -> Result<Solution, SolveError> {
         let mut run = Run::new(self, l, sys);
+        if let Some(start) = start {
+            run.warm_start(start);
+        }
         monitor.phase("iterations");
         let (end, kkt) = loop {
             run.local_law(&mut timer);
@@ -599,6 +615,8 @@ struct Run<'a> {
     plastic: bool,
     /// (1 + μ)C: the elastic tangent of J_μ.
     c_el_mu: SymOp,
+    /// Started from a previous solution (no elastic iteration).
+    warm: bool,
     state: State,
     count: Counts,
     work: Scratch,
@@ -647,6 +665,7 @@ impl<'a> Run<'a> {
             l,
             plastic: l.plasticity().is_some(),
             c_el_mu,
+            warm: false,
             sys,
             state,
             count: Counts::default(),
@@ -655,9 +674,25 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// The cold iteration is elastic: its model is exact, its step full (module docs).
+    /// The cold iteration is elastic: its model is exact, its step full (module docs). A warm
+    /// start has none.
     fn elastic(&self) -> bool {
-        self.state.it == 0
+        self.state.it == 0 && !self.warm
+    }
+
+    /// Starts from the previous step's (u, V) (theory §11.2): the gaps recomputed there, the
+    /// model's rows those that penetrate.
+    fn warm_start(&mut self, start: &Start) {
+        let rows = self.l.constraints();
+        let s = &mut self.state;
+        s.u.copy_from_slice(&start.u);
+        s.v.copy_from_slice(&start.extras);
+        rows.gap(&s.u, &s.v, &mut s.gap);
+        for (a, g) in s.model.iter_mut().zip(&s.gap) {
+            *a = *g < 0.0;
+        }
+        s.previous.copy_from_slice(&s.model);
+        self.warm = true;
     }
 
     /// Stage 1 (theory §4.3; the local law of theory §2): the pressures χ = k g⁻, the stresses
@@ -688,12 +723,14 @@ impl<'a> Run<'a> {
     fn gradient(&mut self, timer: &mut PhaseTimer) -> Result<(), SolveError> {
         let elastic = self.elastic();
         let (l, sys, s, w) = (self.l, &self.sys, &mut self.state, &mut self.work);
-        let (mu, c_el, c_el_mu) = (self.settings.mu, sys.c_el, self.c_el_mu);
+        let (mu, c_el) = (self.settings.mu, sys.c_el);
         let rows = l.constraints();
         timer.time("gradient", || {
             let eps = &w.ws.eps;
             if elastic {
-                w.sig_mu.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s = c_el_mu * e);
+                // C(ε − ε_p) + μCε: the elastic response from the step's state (theory §11.1)
+                l.elastic_stress(eps, &mut w.sig_mu);
+                w.sig_mu.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s += c_el * e * mu);
             } else {
                 let sigma = s.stress.sigma.par_iter();
                 w.sig_mu.par_iter_mut().zip(sigma).zip(eps.par_iter()).for_each(|((s, sg), e)| *s = sg + c_el * e * mu);

@@ -524,6 +524,21 @@ impl ConeProgramme {
         for (i, c) in rows.offset.iter().enumerate() {
             q[layout.lambda_col(i)] = c / s_d;
         }
+        // a load step's state (theory §11.1): the objective ½Aσ:σ + ½(q − q_n)·H⁻¹(q − q_n) +
+        // (ε_p, σ) adds the linear terms w ε_p·σ and −w q_n·H⁻¹q (scaled as P above)
+        if let Some(st) = l.state() {
+            for (t, wt) in w.iter().enumerate() {
+                let wt = wt / vol_scale;
+                for c in 0..6 {
+                    q[layout.point_col(t, c)] = wt * law.young / stress * st.plastic_strain[t][c];
+                }
+                let qn = st.q(t);
+                for (a, _) in layout.free_q.iter().enumerate() {
+                    let lin: f64 = layout.free_q.iter().enumerate().map(|(b, &k)| hinv[a * nq + b] * qn[k]).sum();
+                    q[layout.point_col(t, 6 + a)] = -wt * law.young * lin / stress;
+                }
+            }
+        }
 
         // the cone maps on the kept columns, negated (s = b − A x): (row, local column, value)
         let mut local_col = [usize::MAX; 6 + MAX_HARDENING_DIM];
@@ -595,9 +610,16 @@ impl ConeProgramme {
                 av.push(v);
             }
             let mut r0 = row0;
+            // a fixed hardening variable keeps its state value q_n (0 without a state): its
+            // column of the map moves to the offset
+            let fixed: Vec<(usize, f64)> = match l.state() {
+                Some(st) => (0..q_dim).filter(|k| !layout.free_q.contains(k)).map(|k| (k, st.q(t)[k])).collect(),
+                None => Vec::new(),
+            };
             for blk in blocks {
-                for (bi, o) in b[r0..r0 + blk.dim].iter_mut().zip(&blk.offset) {
-                    *bi = o / stress;
+                for (r, (bi, o)) in b[r0..r0 + blk.dim].iter_mut().zip(&blk.offset).enumerate() {
+                    let shift: f64 = fixed.iter().map(|&(k, qk)| blk.map[r * width + 6 + k] * qk).sum();
+                    *bi = (o + shift) / stress;
                 }
                 r0 += blk.dim;
             }
@@ -663,6 +685,12 @@ impl ConeProgramme {
             }
             for (kk, &k) in lay.free_q.iter().enumerate() {
                 stress.q[t * stride + k] = s * r.x[lay.point_col(t, 6 + kk)];
+            }
+            // fixed hardening variables stay at the state's value (theory §11.1)
+            if let Some(st) = l.state() {
+                for k in (0..lay.q_dim).filter(|k| !lay.free_q.contains(k)) {
+                    stress.q[t * stride + k] = st.q(t)[k];
+                }
             }
         }
         (u, extras, stress, lambda)

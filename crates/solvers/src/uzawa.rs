@@ -22,7 +22,7 @@ use crate::residual;
 use saddle_core::SymOp;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace};
-use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, Start, StopReason};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -98,6 +98,26 @@ impl Solver for Uzawa {
     }
 
     fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        self.iterate(l, None, monitor)
+    }
+
+    /// The iteration from the previous step's (u, V, λ) (theory §11.2).
+    fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        start.check(l, "uzawa")?;
+        let mut sol = self.iterate(l, Some(start), monitor)?;
+        sol.report.counters.insert("warm_start".into(), 1.0);
+        Ok(sol)
+    }
+}
+
+impl Uzawa {
+    /// The iteration of theory §4.1 from `start` (zero if `None`).
+    fn iterate(
+        &self,
+        l: &dyn Lagrangian,
+        start: Option<&Start>,
+        monitor: &mut dyn Monitor,
+    ) -> Result<Solution, SolveError> {
         let mut timer = PhaseTimer::default();
         let law = *l.elasticity();
         // M and its Lipschitz bound L
@@ -133,6 +153,15 @@ impl Solver for Uzawa {
         let mut v = vec![0.0; ne];
         let mut mu = vec![0.0; nr];
         let mut lambda = vec![0.0; nr];
+        if let Some(st) = start {
+            u.copy_from_slice(&st.u);
+            v.copy_from_slice(&st.extras);
+            lambda.copy_from_slice(&st.lambda);
+            // μ = ρλ: the multipliers of the projection step (λ = μ/ρ below)
+            for (m, l) in mu.iter_mut().zip(&st.lambda) {
+                *m = rho * l;
+            }
+        }
         let mut z = vec![0.0; n];
         let mut ws = Workspace::new(l);
         let mut stress = StressField::new(l.n_points(), l.hardening_dim());

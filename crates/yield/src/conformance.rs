@@ -30,7 +30,13 @@
 //! * a random *strain* is `A σ` for such a stress (its trial stress `Cε` is that stress);
 //! * random *hardening variables* are 0 with probability ¼ (the local-law state), else each
 //!   uniform in `[−2S, 2S]`, negative values included (the projection of a general point
-//!   must handle them: for von Mises ξ < −k₀ reaches the apex of the cone).
+//!   must handle them: for von Mises ξ < −k₀ reaches the apex of the cone);
+//! * a random *load-step state* (ε_p, q_n) for the step law of theory §11.1 is, by kind: 0 the
+//!   virgin state (0, 0); 1 a plastic strain ε_p = ½ A σ for a random stress σ, with q_n = 0;
+//!   2 such an ε_p with the hardening variables of the projection of a random point (admissible:
+//!   the slice of D at q_n is not empty); 3 such an ε_p with random hardening variables (general
+//!   points, which may reach the apex). The strain of a step is ε_p plus a random strain, so the
+//!   trial C(ε − ε_p) is a random stress.
 //!
 //! # Metric and tolerances
 //!
@@ -76,6 +82,13 @@ pub mod names {
     pub const CONE_MEMBERSHIP: &str = "cone_membership";
     /// (j) ψ(ε) = ε:σ − ½[σ̂, σ̂].
     pub const ENERGY_IDENTITY: &str = "energy_identity";
+    /// (k) the step law is the projection of (C(ε − ε_p), q_n), and the local law at the
+    /// virgin state.
+    pub const STEP_LAW_IS_PROJECTION: &str = "step_law_is_projection";
+    /// (l) the step law's tangent is the derivative of ε ↦ σ(ε) at a fixed state.
+    pub const STEP_TANGENT: &str = "step_tangent";
+    /// (m) ∂ψ_n/∂ε = σ of the step law.
+    pub const STEP_ENERGY_GRADIENT: &str = "step_energy_gradient";
 }
 
 /// How the kit samples and what it tolerates.
@@ -136,7 +149,7 @@ pub struct KitFailure {
     pub message: String,
 }
 
-/// Runs every check, in the order (setup, a … j), and returns the first failure.
+/// Runs every check, in the order (setup, a … m), and returns the first failure.
 pub fn check_all(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Result<(), KitFailure> {
     setup(p, cfg)?;
     projection_in_set(p, cfg)?;
@@ -149,6 +162,9 @@ pub fn check_all(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Result<(), KitF
     local_law_is_projection(p, cfg)?;
     cone_membership(p, cfg)?;
     energy_identity(p, cfg)?;
+    step_law_is_projection(p, cfg)?;
+    step_tangent(p, cfg)?;
+    step_energy_gradient(p, cfg)?;
     Ok(())
 }
 
@@ -555,6 +571,144 @@ pub fn energy_identity(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Result<()
     Ok(())
 }
 
+/// (k) The step law of theory §11.1 at random load-step states (module docs) returns
+/// P_D(C(ε − ε_p), q_n) — the same generalised stress as `project` of that trial, to
+/// `exact_tol` in the energy norm, and the same plastic flag — and at the virgin state
+/// (ε_p = 0, q_n = 0) the same as `local_law(ε)`. The flags may differ only for a trial on the
+/// boundary (within round-off).
+pub fn step_law_is_projection(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Result<(), KitFailure> {
+    let mut kit = Kit::new(p, cfg, names::STEP_LAW_IS_PROJECTION)?;
+    let zero = [0.0; MAX_HARDENING_DIM];
+    for i in 0..cfg.samples {
+        let (ep, qn) = kit.step_state(i % 4);
+        let eps = ep + kit.strain();
+        let (sigma, q, plastic) = kit.step_law(&eps, &ep, &qn, None);
+        let trial = Point { s: cfg.law.stress(&(eps - ep)), q: qn };
+        let (proj, outside) = kit.project(&trial);
+        kit.same_return(
+            i,
+            (&Point { s: sigma, q }, plastic, "step_law"),
+            (&proj, outside, "P_D(C(ε − ε_p), q_n)"),
+            &trial,
+            &format!("ε = {}, ε_p = {}, q_n = {:?}", show_sym(&eps), show_sym(&ep), kit.q(&trial)),
+        )?;
+        // the virgin state is the local law
+        let (sigma, q, plastic) = kit.step_law(&eps, &Sym::zeros(), &zero, None);
+        let (ls, lq, lplastic) = kit.local_law(&eps, None);
+        let trial = Point { s: cfg.law.stress(&eps), q: zero };
+        kit.same_return(
+            i,
+            (&Point { s: sigma, q }, plastic, "step_law at ε_p = 0, q_n = 0"),
+            (&Point { s: ls, q: lq }, lplastic, "local_law"),
+            &trial,
+            &format!("ε = {}", show_sym(&eps)),
+        )?;
+    }
+    Ok(())
+}
+
+/// (l) The tangent of the step law equals the central-difference derivative of ε ↦ σ(ε) at a
+/// fixed random state (ε_p, q_n) (step `fd_step·|ε − ε_p|`) column by column, to `fd_tol`
+/// times the largest eigenvalue of C. Points where σ(ε) is not differentiable within the stencil
+/// are skipped: those whose plastic flag changes in it; plastic points whose trial is within
+/// ten stencil widths of D in the energy norm (a trial on a kink of ∂D, e.g. hydrostatic at the
+/// apex of a state with k₀ + ξ_n = 0, where the projection is positively homogeneous and has no
+/// derivative, yet its differences do not depend on the step); and those whose differences with
+/// the step and twice the step disagree by more than half the tolerance (a face, edge or apex
+/// boundary crossed without a change of the flag). At least half the points must be checked.
+pub fn step_tangent(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Result<(), KitFailure> {
+    let mut kit = Kit::new(p, cfg, names::STEP_TANGENT)?;
+    let bound = cfg.fd_tol * cfg.law.max_eigenvalue();
+    let mut checked = 0;
+    'samples: for i in 0..cfg.samples {
+        let (ep, qn) = kit.step_state(i % 4);
+        let eps = ep + kit.strain();
+        let mut t = SymOp::from_element(f64::NAN);
+        let (sigma, q, plastic) = kit.step_law(&eps, &ep, &qn, Some(&mut t));
+        let h = kit.fd_step(&(eps - ep));
+        // the energy norm of the stencil's largest change of the trial is 2h √(max eig C)
+        let trial = Point { s: cfg.law.stress(&(eps - ep)), q: qn };
+        let moved = kit.sq(&kit.sub(&trial, &Point { s: sigma, q })).sqrt();
+        if plastic && moved <= 20.0 * h * cfg.law.max_eigenvalue().sqrt() {
+            continue;
+        }
+        let mut fd = [SymOp::zeros(); 2];
+        for (w, step) in [h, 2.0 * h].into_iter().enumerate() {
+            for k in 0..6 {
+                let e = Sym::from_fn(|j, _| if j == k { step } else { 0.0 });
+                let (sp, _, fp) = kit.step_law(&(eps + e), &ep, &qn, None);
+                let (sm, _, fm) = kit.step_law(&(eps - e), &ep, &qn, None);
+                if fp != plastic || fm != plastic {
+                    continue 'samples;
+                }
+                fd[w].set_column(k, &((sp - sm) / (2.0 * step)));
+            }
+        }
+        let spread = (0..6).map(|k| (fd[0].column(k) - fd[1].column(k)).norm()).fold(0.0, nan_max);
+        if spread > 0.5 * bound {
+            continue;
+        }
+        checked += 1;
+        let err = (0..6).map(|k| (fd[0].column(k) - t.column(k)).norm()).fold(0.0, nan_max);
+        if err.is_nan() || err > bound {
+            return kit.fail(format!(
+                "sample {i} ({}): the step law's tangent differs from the finite-difference derivative of σ(ε) by \
+                 {err:e} > {bound:e} (largest column error) at ε = {}, ε_p = {}, q_n = {:?}; tangent {:?}, finite \
+                 differences {:?}",
+                if plastic { "plastic" } else { "elastic" },
+                show_sym(&eps),
+                show_sym(&ep),
+                &qn[..kit.m],
+                t.as_slice(),
+                fd[0].as_slice()
+            ));
+        }
+    }
+    if 2 * checked < cfg.samples {
+        return kit.fail(format!(
+            "only {checked} of {} samples have a step law differentiable within the finite-difference stencil: \
+             σ(ε) is not smooth almost everywhere",
+            cfg.samples
+        ));
+    }
+    Ok(())
+}
+
+/// (m) ∂ψ_n/∂ε = σ of the step law, by central differences of `step_energy` in each Mandel
+/// component (step `fd_step·|ε − ε_p|`), to `fd_tol·(|σ| + S)`, at admissible load-step states
+/// (kinds 0–2 of the module docs: ψ_n is −∞ from hardening variables outside D with h = 0).
+pub fn step_energy_gradient(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Result<(), KitFailure> {
+    let mut kit = Kit::new(p, cfg, names::STEP_ENERGY_GRADIENT)?;
+    let law = &cfg.law;
+    let m = kit.m;
+    for i in 0..cfg.samples {
+        let (ep, qn) = kit.step_state(i % 3);
+        let eps = ep + kit.strain();
+        let (sigma, _, _) = kit.step_law(&eps, &ep, &qn, None);
+        let h = kit.fd_step(&(eps - ep));
+        let mut fd = Sym::zeros();
+        for k in 0..6 {
+            let e = Sym::from_fn(|j, _| if j == k { h } else { 0.0 });
+            fd[k] = (p.step_energy(law, &(eps + e), &ep, &qn[..m]) - p.step_energy(law, &(eps - e), &ep, &qn[..m]))
+                / (2.0 * h);
+        }
+        let err = (fd - sigma).norm();
+        let bound = cfg.fd_tol * (sigma.norm() + cfg.stress_scale);
+        if err.is_nan() || err > bound {
+            return kit.fail(format!(
+                "sample {i}: |∂ψ_n/∂ε − σ| = {err:e} > {bound:e} at ε = {}, ε_p = {}, q_n = {:?}: finite differences \
+                 {}, σ = {}",
+                show_sym(&eps),
+                show_sym(&ep),
+                &qn[..m],
+                show_sym(&fd),
+                show_sym(&sigma)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A generalised stress (σ, q); only the first `hardening_dim()` entries of q are used.
 #[derive(Clone, Copy, Debug)]
 struct Point {
@@ -703,6 +857,67 @@ impl<'a> Kit<'a> {
         (s, q, plastic)
     }
 
+    /// A load-step state (ε_p, q_n) of kind 0–3 (module docs): the virgin state; a random
+    /// plastic strain with q_n = 0; with the hardening variables of a projected random point; with
+    /// random hardening variables.
+    fn step_state(&mut self, kind: usize) -> (Sym, [f64; MAX_HARDENING_DIM]) {
+        if kind == 0 {
+            return (Sym::zeros(), [0.0; MAX_HARDENING_DIM]);
+        }
+        let ep = self.strain() * 0.5;
+        let qn = match kind {
+            1 => [0.0; MAX_HARDENING_DIM],
+            2 => {
+                let x = self.point();
+                self.project(&x).0.q
+            }
+            _ => self.hardening(),
+        };
+        (ep, qn)
+    }
+
+    fn step_law(
+        &self,
+        eps: &Sym,
+        ep: &Sym,
+        qn: &[f64; MAX_HARDENING_DIM],
+        tangent: Option<&mut SymOp>,
+    ) -> (Sym, [f64; MAX_HARDENING_DIM], bool) {
+        let mut s = Sym::from_element(f64::NAN);
+        let mut q = [f64::NAN; MAX_HARDENING_DIM];
+        let m = self.m;
+        let plastic = self.p.step_law(&self.cfg.law, eps, ep, &qn[..m], &mut s, &mut q[..m], tangent);
+        (s, q, plastic)
+    }
+
+    /// Fails unless the returns `a` and `b` (point, plastic flag, name) of the same `trial` are
+    /// the same generalised stress to `exact_tol` in the energy norm, with the same flag unless
+    /// the trial is on the boundary within that tolerance.
+    fn same_return(
+        &self,
+        i: usize,
+        (a, a_plastic, a_name): (&Point, bool, &str),
+        (b, b_plastic, b_name): (&Point, bool, &str),
+        trial: &Point,
+        at: &str,
+    ) -> Result<(), KitFailure> {
+        let d = self.sq(&self.sub(a, b)).sqrt();
+        let bound = self.cfg.exact_tol * (self.finite_norm(b) + self.norm_floor());
+        if d.is_nan() || d > bound {
+            return self.fail(format!(
+                "sample {i}: {a_name} gives {} but {b_name} = {}: energy distance {d:e} > {bound:e}; {at}",
+                self.show(a),
+                self.show(b)
+            ));
+        }
+        let moved = self.sq(&self.sub(trial, b)).sqrt();
+        if a_plastic != b_plastic && (moved.is_nan() || moved > bound) {
+            return self
+                .fail(format!("sample {i}: {a_name} says plastic = {a_plastic} but {b_name} says {b_plastic}; {at}"));
+        }
+        Ok(())
+    }
+
     fn sub(&self, a: &Point, b: &Point) -> Point {
         Point { s: a.s - b.s, q: std::array::from_fn(|k| a.q[k] - b.q[k]) }
     }
@@ -795,6 +1010,12 @@ mod tests {
         NarrowCone,
         /// (j) ψ off by a constant: gradient, tangent and convexity unaffected.
         EnergyOffset,
+        /// (k) the step law ignores q_n (projects (C(ε − ε_p), 0)), tangent consistent with it.
+        StepIgnoresHardening,
+        /// (l) the step law's tangent is C even when plastic.
+        StepElasticTangent,
+        /// (m) ψ_n forgets q_n (the energy of the step law from (ε_p, 0)).
+        StepEnergyIgnoresHardening,
     }
 
     #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -879,6 +1100,34 @@ mod tests {
                 _ => self.vm.local_law(law, eps, sigma, q, tangent),
             }
         }
+        fn step_law(
+            &self,
+            law: &Elasticity,
+            eps: &Sym,
+            plastic_strain: &Sym,
+            q_n: &[f64],
+            sigma: &mut Sym,
+            q: &mut [f64],
+            tangent: Option<&mut SymOp>,
+        ) -> bool {
+            match self.how {
+                Breakage::StepIgnoresHardening => self.vm.step_law(law, eps, plastic_strain, &[0.0], sigma, q, tangent),
+                Breakage::StepElasticTangent => {
+                    let plastic = self.vm.step_law(law, eps, plastic_strain, q_n, sigma, q, None);
+                    if let Some(t) = tangent {
+                        *t = law.stiffness_matrix();
+                    }
+                    plastic
+                }
+                _ => self.vm.step_law(law, eps, plastic_strain, q_n, sigma, q, tangent),
+            }
+        }
+        fn step_energy(&self, law: &Elasticity, eps: &Sym, plastic_strain: &Sym, q_n: &[f64]) -> f64 {
+            match self.how {
+                Breakage::StepEnergyIgnoresHardening => self.vm.step_energy(law, eps, plastic_strain, &[0.0]),
+                _ => self.vm.step_energy(law, eps, plastic_strain, q_n),
+            }
+        }
         fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
             let elastic = 0.5 * eps.dot(&law.stress(eps));
             match self.how {
@@ -907,7 +1156,7 @@ mod tests {
     #[test]
     fn kit_catches_each_breakage_in_its_own_check() {
         type Check = fn(&dyn AdmissibleStresses, &KitConfig) -> Result<(), KitFailure>;
-        let cases: [(Breakage, &str, Check); 10] = [
+        let cases: [(Breakage, &str, Check); 13] = [
             (Breakage::Overshoots, names::PROJECTION_IN_SET, projection_in_set),
             (Breakage::NotIdempotent, names::IDEMPOTENT, idempotent),
             (Breakage::WrongMetric, names::VARIATIONAL_INEQUALITY, variational_inequality),
@@ -918,6 +1167,9 @@ mod tests {
             (Breakage::LocalLawOfOtherH, names::LOCAL_LAW_IS_PROJECTION, local_law_is_projection),
             (Breakage::NarrowCone, names::CONE_MEMBERSHIP, cone_membership),
             (Breakage::EnergyOffset, names::ENERGY_IDENTITY, energy_identity),
+            (Breakage::StepIgnoresHardening, names::STEP_LAW_IS_PROJECTION, step_law_is_projection),
+            (Breakage::StepElasticTangent, names::STEP_TANGENT, step_tangent),
+            (Breakage::StepEnergyIgnoresHardening, names::STEP_ENERGY_GRADIENT, step_energy_gradient),
         ];
         let cfg = cfg();
         for (how, name, check) in cases {
@@ -942,9 +1194,91 @@ mod tests {
             (Breakage::LocalLawOfOtherH, names::LOCAL_LAW_IS_PROJECTION),
             (Breakage::NarrowCone, names::CONE_MEMBERSHIP),
             (Breakage::EnergyOffset, names::ENERGY_IDENTITY),
+            (Breakage::StepIgnoresHardening, names::STEP_LAW_IS_PROJECTION),
+            (Breakage::StepElasticTangent, names::STEP_TANGENT),
+            (Breakage::StepEnergyIgnoresHardening, names::STEP_ENERGY_GRADIENT),
         ] {
             let e = check_all(&Broken { vm: VonMises::new(1.0, 5.0), how }, &cfg).unwrap_err();
             assert_eq!(e.check, first, "{how:?}: {e}");
+        }
+    }
+
+    /// A plugin without a closed-form step law: the trait's default (`local_law` at ε − ε_p for
+    /// q_n = 0, else projection with a tangent by differences) must pass the kit too.
+    #[derive(Clone, Debug, Serialize, Deserialize)]
+    struct DefaultStep(Box<dyn AdmissibleStresses>);
+
+    #[typetag::serde(name = "conformance_test_default_step")]
+    impl AdmissibleStresses for DefaultStep {
+        fn validate(&self, path: &str) -> Result<(), ParameterError> {
+            self.0.validate(path)
+        }
+        fn hardening_dim(&self) -> usize {
+            self.0.hardening_dim()
+        }
+        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
+            self.0.hardening_inner(q, r)
+        }
+        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
+            self.0.contains(sigma, q, tol)
+        }
+        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
+            self.0.project(law, sigma, q)
+        }
+        fn local_law(
+            &self,
+            law: &Elasticity,
+            eps: &Sym,
+            sigma: &mut Sym,
+            q: &mut [f64],
+            tangent: Option<&mut SymOp>,
+        ) -> bool {
+            self.0.local_law(law, eps, sigma, q, tangent)
+        }
+        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
+            self.0.energy(law, eps)
+        }
+        fn cone(&self) -> Option<ConeDescription> {
+            self.0.cone()
+        }
+    }
+
+    #[test]
+    fn default_step_law_passes_the_kit_and_agrees_with_the_closed_forms() {
+        let cfg = cfg();
+        let plugins: [Box<dyn AdmissibleStresses>; 5] = [
+            Box::new(VonMises::new(1.0, 5.0)),
+            Box::new(VonMises::new(1.0, 0.0)),
+            Box::new(crate::VonMisesKinematic::new(1.0, 5.0, 3.0)),
+            Box::new(crate::DruckerPrager::new(1.0, 0.3, 5.0)),
+            Box::new(crate::Tresca::new(1.0, 5.0)),
+        ];
+        for p in plugins {
+            let name = p.name();
+            check_all(&DefaultStep(p.clone()), &cfg).unwrap_or_else(|e| panic!("{name} with the default: {e}"));
+            // the closed form and the default at the same states: same σ̂, tangents to the
+            // accuracy of the default's differences
+            let mut kit = Kit::new(p.as_ref(), &cfg, "test").unwrap();
+            let default = DefaultStep(p.clone());
+            let (mut plastic, mut worst) = (0, 0.0f64);
+            for i in 0..200 {
+                let (ep, qn) = kit.step_state(i % 4);
+                let eps = ep + kit.strain();
+                let (mut t1, mut t2) = (SymOp::zeros(), SymOp::zeros());
+                let (s1, q1, f1) = kit.step_law(&eps, &ep, &qn, Some(&mut t1));
+                let (mut s2, mut q2, m) = (Sym::zeros(), [0.0; MAX_HARDENING_DIM], kit.m);
+                let f2 = default.step_law(&cfg.law, &eps, &ep, &qn[..m], &mut s2, &mut q2[..m], Some(&mut t2));
+                assert_eq!(f1, f2, "{name}, sample {i}");
+                plastic += f1 as usize;
+                let scale = s1.norm() + 1.0;
+                assert!((s1 - s2).norm() <= 1e-12 * scale, "{name}, sample {i}: σ {s1} vs {s2}");
+                assert!((0..m).all(|k| (q1[k] - q2[k]).abs() <= 1e-12 * scale), "{name}, sample {i}: q");
+                worst = worst.max((t1 - t2).amax() / cfg.law.max_eigenvalue());
+            }
+            println!("{name}: {plastic}/200 plastic, largest tangent difference {worst:e} of max eig C");
+            assert!(plastic >= 50, "{name}: {plastic} plastic");
+            // the default's differences are good to ~1e-8 (Tresca: its edge regularisation 1e-8·2G)
+            assert!(worst <= 1e-7, "{name}: {worst:e}");
         }
     }
 

@@ -23,6 +23,10 @@
 //!
 //! For the local law (ξ = 0, `t₀ = k₀ ≥ 0`) the apex is reached when
 //! `v r < 2G(α T − k₀)`: hydrostatic tension beyond `k₀/α`, with little deviator.
+//!
+//! The step law of theory §11.1 projects the trial (C(ε − ε_p), ξ_n): the same returns with
+//! `t₀ = k₀ + ξ_n` (v does not depend on ξ), ξ' from the yield condition `t + αT' = k₀ + ξ'`
+//! (= ξ_n + hγ), and the same tangents, since t₀ is a constant of the step.
 
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
@@ -132,10 +136,8 @@ impl AdmissibleStresses for DruckerPrager {
         true
     }
 
-    /// σ̂ = P_D(Cε, 0) in closed form (theory §9.1) and the consistent tangent. With
-    /// `b = 2G n + 3K_b α I` and `D = 2G + v`, the smooth-return tangent is
-    /// `K_b I⊗I + 2G(t/r)(I_dev − n⊗n) + 2G n⊗n − b⊗b/D`; the apex tangent is
-    /// `(K_b h/v) I⊗I` (the derivative of the apex map; 0 for h = 0).
+    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
+    /// closed form follows.
     fn local_law(
         &self,
         law: &Elasticity,
@@ -144,27 +146,46 @@ impl AdmissibleStresses for DruckerPrager {
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
+        self.step_law(law, eps, &Sym::zeros(), &[0.0; 1], sigma, q, tangent)
+    }
+
+    /// σ̂ = P_D(C(ε − ε_p), ξ_n) in closed form (theory §11.1): the local law's smooth or apex
+    /// return with k₀ + ξ_n for k₀, ξ from the yield condition (frozen for h = 0), and the same
+    /// tangents; when α = h = 0 and k₀ + ξ_n ≤ 0 (empty slice) the trial's mean stress with
+    /// `K_b I⊗I`, as [`AdmissibleStresses::project`].
+    fn step_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        plastic_strain: &Sym,
+        q_n: &[f64],
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
         let g2 = 2.0 * law.shear_modulus();
         let kb = law.bulk_modulus();
-        let s_tr = deviator(eps) * g2;
+        let e = eps - plastic_strain;
+        let s_tr = deviator(&e) * g2;
         let r = s_tr.norm();
-        let p = kb * trace(eps);
+        let p = kb * trace(&e);
         let a = self.alpha;
-        if r + a * (3.0 * p) <= self.k0 {
+        let t0 = self.k0 + q_n[0];
+        if r + a * (3.0 * p) <= t0 {
             *sigma = s_tr + identity() * p;
-            q[0] = 0.0;
+            q[0] = q_n[0];
             if let Some(c) = tangent {
                 *c = law.stiffness_matrix();
             }
             return false;
         }
         let v = self.apex_modulus(law);
-        let t = (v * r + g2 * (self.k0 - a * (3.0 * p))) / (v + g2);
-        if t >= 0.0 {
+        let t = if v > 0.0 { (v * r + g2 * (t0 - a * (3.0 * p))) / (v + g2) } else { t0 };
+        if t > 0.0 {
             let gamma = (r - t) / g2;
             let p_new = p - 3.0 * kb * a * gamma;
             *sigma = s_tr * (t / r) + identity() * p_new;
-            q[0] = if self.h > 0.0 { t + a * (3.0 * p_new) - self.k0 } else { 0.0 };
+            q[0] = if self.h > 0.0 { t + a * (3.0 * p_new) - self.k0 } else { q_n[0] };
             if let Some(c) = tangent {
                 let n = s_tr / r;
                 let nn = n * n.transpose();
@@ -176,14 +197,21 @@ impl AdmissibleStresses for DruckerPrager {
                     - (n * i.transpose() + i * n.transpose()) * (g2 * 3.0 * kb * a / dd)
                     - i * i.transpose() * (9.0 * kb * kb * a * a / dd);
             }
-        } else {
-            // apex (t < 0 needs v > 0): γ = (αT − k₀)/v, T' = T − 9K_b α γ
-            let gamma = (a * (3.0 * p) - self.k0) / v;
+        } else if v > 0.0 {
+            // apex: γ = (αT − t₀)/v ≥ r/(2G), T' = T − 9K_b α γ
+            let gamma = (a * (3.0 * p) - t0) / v;
             let p_new = p - 3.0 * kb * a * gamma;
             *sigma = identity() * p_new;
-            q[0] = if self.h > 0.0 { a * (3.0 * p_new) - self.k0 } else { 0.0 };
+            q[0] = if self.h > 0.0 { a * (3.0 * p_new) - self.k0 } else { q_n[0] };
             if let Some(c) = tangent {
                 *c = volumetric_projector() * (3.0 * kb * self.h / v);
+            }
+        } else {
+            // α = 0, h = 0 and k₀ + ξ_n ≤ 0: the slice of D is empty; the limit h → 0
+            *sigma = identity() * p;
+            q[0] = -self.k0;
+            if let Some(c) = tangent {
+                *c = volumetric_projector() * (3.0 * kb);
             }
         }
         true
@@ -512,6 +540,67 @@ mod tests {
         let (mut s2, mut q2) = (law.stress(&eps), [0.0]);
         assert!(dp.project(&law, &mut s2, &mut q2));
         assert!((s2 - s).norm() < 1e-13 && (q2[0] - 1.4).abs() < 1e-13);
+    }
+
+    /// Load steps from a hardened state ξ_n = 0.6 (theory §11.1), the material of
+    /// `local_law_matches_returns_worked_by_hand` (2G = 80, 3K_b = 200, 9K_b = 600, k₀ = 1,
+    /// α = 0.1, h = 14, v = 20, 2G + v = 100), so t₀ = k₀ + ξ_n = 1.6; ε_p = 0.01M − 0.002 I.
+    ///
+    /// * Smooth: ε − ε_p = 0.01 I + 0.025 M, s_tr = 2M, r = 4, T = 6: f = 4 + 0.6 − 1.6 = 3,
+    ///   γ = 3/100 = 0.03, t = 4 − 2.4 = 1.6, T' = 6 − 600 · 0.1 · 0.03 = 4.2, σ = 0.8M + 1.4 I,
+    ///   ξ = t + αT' − k₀ = 1.02 = ξ_n + hγ. Tangent (a unit strain δ along I gives dT = 600δ,
+    ///   dγ = α dT/100 = 0.6δ, dt = −2G dγ): n:C_t:n = 2G v/(2G + v) = 16, m:C_t:m = 2G t/r = 32
+    ///   for deviators m ⟂ n, n:C_t:I = −48, I:C_t:I = 600 − 36 = 564.
+    /// * Apex: ε − ε_p = 0.05 I + 0.0025 M, r = 0.4, T = 30: t = (8 + 80(1.6 − 3))/100 = −1.04 < 0;
+    ///   γ = (3 − 1.6)/20 = 0.07, T' = 30 − 4.2 = 25.8, σ = 8.6 I, ξ = 1.58 (αT' = 2.58 = k₀ + ξ);
+    ///   tangent (K_b h/v) I⊗I, I:C_t:I/9 = 140/3.
+    /// * Elastic from the state: ε − ε_p = 0.01 I + 0.006 M, f = 0.96 + 0.6 − 1.6 < 0 (the local
+    ///   law, with k₀ = 1, is plastic there).
+    #[test]
+    fn step_law_from_a_hardened_state_worked_by_hand() {
+        use saddle_core::problem::stresses::step_law_by_differences;
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let dp = DruckerPrager::new(1.0, 0.1, 14.0);
+        let m = from_matrix(&Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0));
+        let i3 = identity();
+        let ep = m * 0.01 - i3 * 0.002;
+        let near = |a: f64, b: f64| (a - b).abs() <= 1e-12;
+        let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
+        let (mut s2, mut q2, mut c2) = (Sym::zeros(), [0.0], SymOp::zeros());
+
+        let eps = ep + i3 * 0.01 + m * 0.025;
+        assert!(dp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!((s - (m * 0.8 + i3 * 1.4)).norm() < 1e-13 && near(q[0], 1.02), "σ = {s}, ξ = {}", q[0]);
+        let (n, cross) = (m * 0.5, Sym::new(1.0, 1.0, -2.0, 0.0, 0.0, 0.0) / 6.0f64.sqrt());
+        assert!(near(n.dot(&(c * n)), 16.0) && near(cross.dot(&(c * cross)), 32.0));
+        assert!(near(n.dot(&(c * i3)), -48.0) && near(i3.dot(&(c * i3)), 564.0), "{c}");
+        step_law_by_differences(&dp, &law, &eps, &ep, &[0.6], &mut s2, &mut q2, Some(&mut c2));
+        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c2}");
+        let (mut s3, mut q3) = (law.stress(&(eps - ep)), [0.6]);
+        assert!(dp.project(&law, &mut s3, &mut q3) && (s3 - s).norm() < 1e-13 && near(q3[0], 1.02));
+
+        let eps = ep + i3 * 0.05 + m * 0.0025;
+        assert!(dp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!((s - i3 * 8.6).norm() < 1e-13 && near(q[0], 1.58), "σ = {s}, ξ = {}", q[0]);
+        assert!(near(i3.dot(&(c * i3)) / 9.0, 140.0 / 3.0) && (c * m).norm() < 1e-12);
+        step_law_by_differences(&dp, &law, &eps, &ep, &[0.6], &mut s2, &mut q2, Some(&mut c2));
+        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "apex: closed form {c}, by differences {c2}");
+
+        let eps = ep + i3 * 0.01 + m * 0.006;
+        assert!(!dp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!(s == law.stress(&(eps - ep)) && q[0] == 0.6 && c == law.stiffness_matrix());
+        assert!(dp.local_law(&law, &(eps - ep), &mut s, &mut q, None));
+
+        // h = 0: ξ frozen at ξ_n, on the boundary k₀ + ξ_n; the zero state is the local law
+        let pp = DruckerPrager::new(1.0, 0.1, 0.0);
+        let eps = ep + i3 * 0.01 + m * 0.025;
+        assert!(pp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!(q[0] == 0.6 && near(deviator(&s).norm() + 0.1 * trace(&s), 1.6));
+        step_law_by_differences(&pp, &law, &eps, &ep, &[0.6], &mut s2, &mut q2, Some(&mut c2));
+        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "h = 0: closed form {c}, by differences {c2}");
+        dp.step_law(&law, &eps, &Sym::zeros(), &[0.0], &mut s, &mut q, Some(&mut c));
+        dp.local_law(&law, &eps, &mut s2, &mut q2, Some(&mut c2));
+        assert!((s - s2).norm() < 1e-13 && near(q[0], q2[0]) && (c - c2).norm() < 1e-12);
     }
 
     #[test]

@@ -94,9 +94,12 @@
 //! The kit checks (theory §2) that the projection lies in D, is idempotent, satisfies the
 //! variational inequality and is non-expansive in the energy metric; that ∂ψ/∂ε = σ and the
 //! tangent is the derivative of σ(ε) (finite differences); that ψ is convex, equals
-//! ε:σ − ½[σ̂, σ̂], and that the local law is the projection of (Cε, 0); and that the cone
-//! description, if any, describes D. Also give `energy` a closed form where one is known, and
-//! `warnings` for legal but delicate parameters.
+//! ε:σ − ½[σ̂, σ̂], and that the local law is the projection of (Cε, 0); that the cone
+//! description, if any, describes D; and that the step law of a load step (theory §11.1) is the
+//! projection of (C(ε − ε_p), q_n), with its tangent and ∂ψ_n/∂ε = σ checked by finite
+//! differences. A plugin with hardening variables should override `step_law` with its closed
+//! form (the default differentiates projections numerically). Also give `energy` a closed form
+//! where one is known, and `warnings` for legal but delicate parameters.
 //!
 //! A binary reads plugins by name only if this crate is linked into it: refer to it somewhere
 //! (e.g. `use saddle_yield as _;`), or the `von_mises` / `elastic` names are unknown.

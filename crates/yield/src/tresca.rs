@@ -55,12 +55,17 @@
 //!
 //! ψ(ε) = ½Cε:ε − ½ dist²((Cε, 0), D) (Moreau), and dist² = γᵀMγ = γ·Δ, so
 //! `ψ = ½Cε:ε − ½ Σ_k γ_k Δ_k`.
+//!
+//! The step law of theory §11.1 is the same return of the trial (C(ε − ε_p), ξ_n): t₀ = σ₀ + ξ_n
+//! moves the faces, and the tangent formula is unchanged (it depends on the active normals, M
+//! and the returned principal values only). Only ξ_n < −σ₀ (never an admissible state) reaches
+//! the apex, where σ is the trial's mean stress and the tangent is `K_b I⊗I`.
 
 use nalgebra::{Matrix3, Vector3};
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
 use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription};
-use saddle_core::problem::tensor::{SQRT2, Sym, SymOp, from_matrix, identity, to_matrix, trace};
+use saddle_core::problem::tensor::{SQRT2, Sym, SymOp, from_matrix, identity, to_matrix, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
 /// Tresca yield with linear isotropic hardening (theory §9.2): `D = {σ₁ − σ₃ ≤ σ₀ + ξ}`,
@@ -356,8 +361,8 @@ impl AdmissibleStresses for Tresca {
         true
     }
 
-    /// σ̂ = P_D(Cε, 0) and its tangent: C when elastic; on a face or an edge the spectral
-    /// formula of the module docs (on an edge θ = 0 for the merged pair).
+    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
+    /// closed form follows.
     fn local_law(
         &self,
         law: &Elasticity,
@@ -366,24 +371,49 @@ impl AdmissibleStresses for Tresca {
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
-        let trial = law.stress(eps);
+        self.step_law(law, eps, &Sym::zeros(), &[0.0; 1], sigma, q, tangent)
+    }
+
+    /// σ̂ = P_D(C(ε − ε_p), ξ_n) (theory §11.1): the local law's return of the trial
+    /// C(ε − ε_p) with ξ_n (frozen for h = 0), and its tangent, which depends only on the
+    /// return's geometry; at the apex (only from ξ_n < −σ₀) σ is the trial's mean stress and the
+    /// tangent `K_b I⊗I`.
+    fn step_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        plastic_strain: &Sym,
+        q_n: &[f64],
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
+        let trial = law.stress(&(eps - plastic_strain));
         let p = principal(&trial);
-        let r = self.principal_return(2.0 * law.shear_modulus(), &p.values, 0.0);
-        q[0] = 0.0;
-        if r.kind == TrescaReturn::Elastic {
-            *sigma = trial;
-            if let Some(t) = tangent {
-                *t = law.stiffness_matrix();
+        let r = self.principal_return(2.0 * law.shear_modulus(), &p.values, q_n[0]);
+        match r.kind {
+            TrescaReturn::Elastic => {
+                *sigma = trial;
+                q[0] = q_n[0];
+                if let Some(t) = tangent {
+                    *t = law.stiffness_matrix();
+                }
+                return false;
             }
-            return false;
+            TrescaReturn::Apex => {
+                *sigma = identity() * (trace(&trial) / 3.0);
+                if let Some(t) = tangent {
+                    *t = volumetric_projector() * (3.0 * law.bulk_modulus());
+                }
+            }
+            _ => {
+                *sigma = Self::rebuild(&trial, &p, &r.sigma);
+                if let Some(t) = tangent {
+                    *t = self.tangent(law, &p, &r);
+                }
+            }
         }
-        *sigma = Self::rebuild(&trial, &p, &r.sigma);
-        if self.h > 0.0 {
-            q[0] = r.xi;
-        }
-        if let Some(t) = tangent {
-            *t = self.tangent(law, &p, &r);
-        }
+        q[0] = if self.h > 0.0 || r.kind == TrescaReturn::Apex { r.xi } else { q_n[0] };
         true
     }
 
@@ -558,9 +588,10 @@ mod tests {
     #[derive(Clone, Debug, Default, Serialize, Deserialize)]
     struct Counting {
         t: Option<Tresca>,
-        /// Returns of the local law (row 0) and of projections of general points (row 1).
+        /// Returns of the local law (row 0), of projections of general points (row 1) and of
+        /// the step law (row 2).
         #[serde(skip)]
-        counts: Arc<Mutex<[[usize; 4]; 2]>>,
+        counts: Arc<Mutex<[[usize; 4]; 3]>>,
     }
 
     impl Counting {
@@ -594,6 +625,19 @@ mod tests {
             self.count(0, self.t().return_kind(law, eps));
             self.t().local_law(law, eps, s, q, t)
         }
+        fn step_law(
+            &self,
+            law: &Elasticity,
+            eps: &Sym,
+            ep: &Sym,
+            q_n: &[f64],
+            s: &mut Sym,
+            q: &mut [f64],
+            t: Option<&mut SymOp>,
+        ) -> bool {
+            self.count(2, self.t().projection_kind(law, &law.stress(&(eps - ep)), q_n));
+            self.t().step_law(law, eps, ep, q_n, s, q, t)
+        }
         fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
             self.t().energy(law, eps)
         }
@@ -607,14 +651,17 @@ mod tests {
             if let Err(e) = conformance::check_all(&c, &cfg) {
                 panic!("σ₀ = {sigma0}, h = {h}: {e}");
             }
-            let [law_counts, proj_counts] = *c.counts.lock().unwrap();
+            let [law_counts, proj_counts, step_counts] = *c.counts.lock().unwrap();
             println!(
-                "σ₀ = {sigma0}, h = {h}: kit's local law elastic/face/edge/apex {law_counts:?}, projections {proj_counts:?}"
+                "σ₀ = {sigma0}, h = {h}: kit's local law elastic/face/edge/apex {law_counts:?}, projections \
+                 {proj_counts:?}, step law {step_counts:?}"
             );
             let [elastic, face, edge, apex] = law_counts;
             assert!(elastic >= 100 && face >= 100 && edge >= 100 && apex == 0, "local law: {law_counts:?}");
             let [elastic, face, edge, apex] = proj_counts;
             assert!(elastic >= 100 && face >= 100 && edge >= 100 && apex >= 10, "projections: {proj_counts:?}");
+            let [elastic, face, edge, _] = step_counts;
+            assert!(elastic >= 100 && face >= 100 && edge >= 100, "step law: {step_counts:?}");
         }
         for seed in 0..4 {
             let cfg = KitConfig::new(law(), 1.0).with_seed(seed);
@@ -742,6 +789,71 @@ mod tests {
         conformance::check_all(&Broken { t: Tresca::new(1.0, 0.0), how: Breakage::EdgeWithFaceHardening }, &cfg)
             .unwrap();
         conformance::check_all(&Tresca::new(1.0, 5.0), &cfg).unwrap();
+    }
+
+    /// Load steps from the state the face return of
+    /// `face_and_edge_returns_match_points_worked_by_hand` leaves (theory §11.1): E = 100,
+    /// ν = 1/4 (2G = 80), σ₀ = 4, h = 40, plastic strain ε_p = γ n_a = (0.03, 0, −0.03) and
+    /// ξ_n = hγ = 1.2, so t₀ = 5.2. Principal trial stresses C(ε − ε_p), all turned by the 3-4-5
+    /// rotation:
+    ///
+    /// * (6, 1, −4): Δ = 10 − 5.2 = 4.8, γ = 4.8/(4G + h) = 0.024, 2Gγ = 1.92 ≤ 5: face,
+    ///   σ = (4.08, 1, −2.08), ξ = 1.2 + 40 · 0.024 = 2.16 (σ₁ − σ₃ = 6.16 = σ₀ + ξ);
+    /// * (6, 4.5, −4): the face would give 2Gγ = 1.92 > s₁ − s₂ = 1.5: edge σ₁ = σ₂ with
+    ///   Δ_a = 4.8, Δ_b = 3.3, γ_a + γ_b = 8.1/320 = 0.0253125; σ₃ = −4 + 2.025 = −1.975,
+    ///   σ₁ = σ₂ = 5.25 − 1.0125 = 4.2375, ξ = 1.2 + 1.0125 = 2.2125 (σ₁ − σ₃ = 6.2125);
+    /// * (5, 1, −0.1): s₁ − s₃ = 5.1 ≤ 5.2, elastic (the local law, t₀ = 4, is plastic);
+    /// * h = 0, (6, 1, −4): ξ stays 1.2, γ = 4.8/4G = 0.03, σ = (3.6, 1, −1.6);
+    /// * ξ_n = −7 (not admissible): h max(s₁ − m, m − s₃) + 2G t₀ = 200 − 240 ≤ 0, the apex
+    ///   σ = I (the mean stress 1), ξ = −σ₀ = −4, tangent K_b I⊗I.
+    #[test]
+    fn step_law_from_a_hardened_state_worked_by_hand() {
+        use saddle_core::problem::stresses::step_law_by_differences;
+        let law = hand_law();
+        let t = Tresca::new(4.0, 40.0);
+        let near = |a: f64, b: f64| (a - b).abs() <= 1e-13;
+        let same = |a: &Sym, b: &Sym| (a - b).amax() <= 1e-13;
+        let ep = turned([0.03, 0.0, -0.03]);
+        // ε with the principal trial stresses `trial` from the state
+        let strain = |trial: [f64; 3]| ep + law.compliance(&turned(trial));
+        let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
+        let (mut s2, mut q2, mut c2) = (Sym::zeros(), [0.0], SymOp::zeros());
+        for (trial, expected, xi, kind) in [
+            ([6.0, 1.0, -4.0], [4.08, 1.0, -2.08], 2.16, TrescaReturn::Face),
+            ([6.0, 4.5, -4.0], [4.2375, 4.2375, -1.975], 2.2125, TrescaReturn::Edge),
+        ] {
+            let eps = strain(trial);
+            assert_eq!(t.projection_kind(&law, &turned(trial), &[1.2]), kind);
+            assert!(t.step_law(&law, &eps, &ep, &[1.2], &mut s, &mut q, Some(&mut c)), "{kind:?}");
+            assert!(same(&s, &turned(expected)), "{kind:?}: σ = {}", to_matrix(&s));
+            assert!(near(q[0], xi), "{kind:?}: ξ = {}, by hand {xi}", q[0]);
+            // the projection of the trial, and the tangent by differences of the projection
+            let (mut s3, mut q3) = (law.stress(&(eps - ep)), [1.2]);
+            assert!(t.project(&law, &mut s3, &mut q3) && same(&s3, &s) && near(q3[0], xi));
+            step_law_by_differences(&t, &law, &eps, &ep, &[1.2], &mut s2, &mut q2, Some(&mut c2));
+            assert!((c2 - c).norm() <= 1e-6 * c.norm(), "{kind:?}: closed form {c}, by differences {c2}");
+        }
+        // hardened: elastic from the state, plastic for the local law at the same ε − ε_p
+        let eps = strain([5.0, 1.0, -0.1]);
+        assert!(!t.step_law(&law, &eps, &ep, &[1.2], &mut s, &mut q, Some(&mut c)));
+        assert!(same(&s, &turned([5.0, 1.0, -0.1])) && q[0] == 1.2 && c == law.stiffness_matrix());
+        assert!(t.local_law(&law, &(eps - ep), &mut s, &mut q, None));
+        // h = 0: ξ frozen
+        let pp = Tresca::new(4.0, 0.0);
+        let eps = strain([6.0, 1.0, -4.0]);
+        assert!(pp.step_law(&law, &eps, &ep, &[1.2], &mut s, &mut q, Some(&mut c)));
+        assert!(same(&s, &turned([3.6, 1.0, -1.6])) && q[0] == 1.2, "σ = {}, ξ = {}", to_matrix(&s), q[0]);
+        step_law_by_differences(&pp, &law, &eps, &ep, &[1.2], &mut s2, &mut q2, Some(&mut c2));
+        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "h = 0: closed form {c}, by differences {c2}");
+        // the apex from ξ_n = −7
+        assert!(t.step_law(&law, &eps, &ep, &[-7.0], &mut s, &mut q, Some(&mut c)));
+        assert!(same(&s, &identity()) && q[0] == -4.0, "σ = {}, ξ = {}", to_matrix(&s), q[0]);
+        assert!((c - volumetric_projector() * 200.0).amax() <= 1e-12, "{c}");
+        // the zero state is the local law
+        let eps = turned([0.06, 0.035, -0.065]);
+        t.step_law(&law, &eps, &Sym::zeros(), &[0.0], &mut s, &mut q, Some(&mut c));
+        t.local_law(&law, &eps, &mut s2, &mut q2, Some(&mut c2));
+        assert!(same(&s, &s2) && near(q[0], q2[0]) && (c - c2).amax() <= 1e-12);
     }
 
     #[test]

@@ -15,6 +15,11 @@
 //!
 //! For ξ = 0 (the local law) `t₀ = k₀ ≥ 0`, the apex is never reached and
 //! `t = (h r + 2G k₀)/(h + 2G)` is exactly theory §2.
+//!
+//! The step law of theory §11.1 projects the trial (C(ε − ε_p), ξ_n) of a load step: the same
+//! return with `t₀ = k₀ + ξ_n` and `r = 2G|dev(ε − ε_p)|`, so its tangent is the local law's
+//! with that t. The apex needs `ξ_n < −k₀`, which admissible states never have; there σ is the
+//! trial's mean stress and the tangent is `K_b I⊗I`.
 
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
@@ -123,8 +128,8 @@ impl AdmissibleStresses for VonMises {
         true
     }
 
-    /// theory §2 in closed form: σ̂ = P_D(Cε, 0) and the consistent tangent
-    /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + h/(h+2G) n⊗n]` when plastic, C when elastic.
+    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
+    /// closed form follows.
     fn local_law(
         &self,
         law: &Elasticity,
@@ -133,22 +138,50 @@ impl AdmissibleStresses for VonMises {
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
+        self.step_law(law, eps, &Sym::zeros(), &[0.0; 1], sigma, q, tangent)
+    }
+
+    /// theory §11.1 in closed form: σ̂ = P_D(C(ε − ε_p), ξ_n), the radial return of the module
+    /// docs with `t₀ = k₀ + ξ_n`, and the consistent tangent
+    /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + h/(h+2G) n⊗n]` when on the cone (h = 0: ξ frozen, no
+    /// n⊗n term), `K_b I⊗I` at the apex, C when elastic.
+    fn step_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        plastic_strain: &Sym,
+        q_n: &[f64],
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
         let g2 = 2.0 * law.shear_modulus();
         let kb = law.bulk_modulus();
-        let s_tr = deviator(eps) * g2;
+        let e = eps - plastic_strain;
+        let s_tr = deviator(&e) * g2;
         let r = s_tr.norm();
-        let p = kb * trace(eps);
-        if r <= self.k0 {
+        let p = kb * trace(&e);
+        let t0 = self.k0 + q_n[0];
+        if r <= t0 {
             *sigma = s_tr + identity() * p;
-            q[0] = 0.0;
+            q[0] = q_n[0];
             if let Some(c) = tangent {
                 *c = law.stiffness_matrix();
             }
             return false;
         }
-        let t = (self.h * r + g2 * self.k0) / (self.h + g2);
+        let t = if self.h > 0.0 { (g2 * t0 + self.h * r) / (g2 + self.h) } else { t0 };
+        if t <= 0.0 {
+            // apex: 2G t₀ + h r ≤ 0 (h = 0: k₀ + ξ_n ≤ 0), only from ξ_n < −k₀
+            *sigma = identity() * p;
+            q[0] = -self.k0;
+            if let Some(c) = tangent {
+                *c = volumetric_projector() * (3.0 * kb);
+            }
+            return true;
+        }
         *sigma = s_tr * (t / r) + identity() * p;
-        q[0] = t - self.k0;
+        q[0] = if self.h > 0.0 { t - self.k0 } else { q_n[0] };
         if let Some(c) = tangent {
             let n = s_tr / r;
             let nn = n * n.transpose();
@@ -423,6 +456,77 @@ mod tests {
         assert_eq!(c, law.stiffness_matrix());
     }
 
+    /// A load step from a hardened state worked by hand (theory §11.1). E = 100, ν = 1/4
+    /// (2G = 80, 3K_b = 200), k₀ = 1, h = 20, M = [[1,0,0],[0,−1,1],[0,1,0]] (tr M = 0, |M| = 2):
+    ///
+    /// * state ε_p = 0.0125 M, ξ_n = h|ε_p| = 20 · 0.025 = 0.5, so t₀ = k₀ + ξ_n = 1.5;
+    /// * ε = 0.01 I + 0.05 M: ε − ε_p = 0.01 I + 0.0375 M, s_tr = 80 · 0.0375 M = 3M, r = 6,
+    ///   tr σ = 200 · 0.03 = 6;
+    /// * t = (2G t₀ + h r)/(2G + h) = (120 + 120)/100 = 2.4, ξ = t − k₀ = 1.4,
+    ///   σ = 3M · 2.4/6 + 2I = 1.2M + 2I = [[3.2, 0, 0], [0, 0.8, 1.2], [0, 1.2, 2]];
+    /// * the new plastic strain ε − Aσ = 0.05M − 1.2M/80 = 0.035M, and h|0.035M| = 1.4 = ξ;
+    /// * tangent: along n = M/2 2G h/(2G + h) = 16, across 2G t/r = 32, on I 3K_b = 200.
+    ///
+    /// From the same state the trial s_tr = 0.72M (r = 1.44 ∈ (k₀, k₀ + ξ_n]) is elastic, though
+    /// the local law at that strain is plastic. With h = 0 ξ stays 0.5: |s| = t₀ = 1.5,
+    /// σ = 0.75M + 2I, tangent 0 along n and 2G t₀/r = 20 across. With ξ_n = −3 (not admissible)
+    /// 2G t₀ + h r = −160 + 120 ≤ 0: the apex σ = 2I, ξ = −k₀ = −1, tangent K_b I⊗I.
+    #[test]
+    fn step_law_from_a_hardened_state_worked_by_hand() {
+        use nalgebra::Matrix3;
+        use saddle_core::problem::stresses::step_law_by_differences;
+        use saddle_core::problem::tensor::{from_matrix, to_matrix};
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let vm = VonMises::new(1.0, 20.0);
+        let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
+        let (m, i3) = (from_matrix(&mm), identity());
+        let n = m * 0.5;
+        let cross = Sym::new(1.0, 1.0, -2.0, 0.0, 0.0, 0.0) / 6.0f64.sqrt(); // deviatoric, ⟂ M
+        let tol = 1e-13;
+        let near = |a: f64, b: f64| (a - b).abs() <= tol;
+        let ep = m * 0.0125;
+        let eps = i3 * 0.01 + m * 0.05;
+        let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
+
+        assert!(vm.step_law(&law, &eps, &ep, &[0.5], &mut s, &mut q, Some(&mut c)), "r = 6 > t₀ = 1.5");
+        let expected = Matrix3::new(3.2, 0.0, 0.0, 0.0, 0.8, 1.2, 0.0, 1.2, 2.0);
+        assert!((to_matrix(&s) - expected).abs().max() <= tol, "σ = {}, by hand {expected}", to_matrix(&s));
+        assert!(near(q[0], 1.4), "ξ = {}, by hand 1.4", q[0]);
+        let new_ep = eps - law.compliance(&s);
+        assert!((new_ep - m * 0.035).norm() <= tol && near(20.0 * new_ep.norm(), q[0]), "ε_p' = {new_ep}");
+        assert!(near(n.dot(&(c * n)), 16.0) && near(cross.dot(&(c * cross)), 32.0) && near(n.dot(&(c * cross)), 0.0));
+        assert!(near(i3.dot(&(c * i3)) / 3.0, 200.0));
+        // the projection of the trial, and the tangent by differences of the projection
+        let (mut s2, mut q2) = (law.stress(&(eps - ep)), [0.5]);
+        assert!(vm.project(&law, &mut s2, &mut q2) && (s2 - s).norm() <= tol && near(q2[0], 1.4));
+        let (mut s3, mut q3, mut c3) = (Sym::zeros(), [0.0], SymOp::zeros());
+        step_law_by_differences(&vm, &law, &eps, &ep, &[0.5], &mut s3, &mut q3, Some(&mut c3));
+        assert!((c3 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c3}");
+
+        // hardened: elastic from the state, plastic for the local law at the same ε − ε_p
+        let small = ep + i3 * 0.01 + m * 0.009;
+        assert!(!vm.step_law(&law, &small, &ep, &[0.5], &mut s, &mut q, Some(&mut c)));
+        assert!((s - (m * 0.72 + i3 * 2.0)).norm() <= tol && q[0] == 0.5 && c == law.stiffness_matrix());
+        assert!(vm.local_law(&law, &(small - ep), &mut s, &mut q, None), "r = 1.44 > k₀ = 1");
+
+        // h = 0: ξ frozen at ξ_n, radial return to t₀
+        let pp = VonMises::new(1.0, 0.0);
+        assert!(pp.step_law(&law, &eps, &ep, &[0.5], &mut s, &mut q, Some(&mut c)));
+        assert!((s - (m * 0.75 + i3 * 2.0)).norm() <= tol && q[0] == 0.5, "σ = {s}, ξ = {}", q[0]);
+        assert!(near(n.dot(&(c * n)), 0.0) && near(cross.dot(&(c * cross)), 20.0));
+
+        // apex from ξ_n = −3
+        assert!(vm.step_law(&law, &eps, &ep, &[-3.0], &mut s, &mut q, Some(&mut c)));
+        assert!((s - i3 * 2.0).norm() <= tol && q[0] == -1.0, "σ = {s}, ξ = {}", q[0]);
+        assert!((c - volumetric_projector() * 200.0).norm() <= 1e-12, "{c}");
+
+        // the zero state is the local law
+        let (mut s4, mut q4, mut c4) = (Sym::zeros(), [0.0], SymOp::zeros());
+        vm.step_law(&law, &eps, &Sym::zeros(), &[0.0], &mut s, &mut q, Some(&mut c));
+        vm.local_law(&law, &eps, &mut s4, &mut q4, Some(&mut c4));
+        assert!((s - s4).norm() <= tol && near(q[0], q4[0]) && (c - c4).norm() <= 1e-12);
+    }
+
     #[test]
     fn cone_block_measures_the_deviator() {
         let vm = VonMises::new(1.5, 5.0);
@@ -501,6 +605,10 @@ mod tests {
                 panic!("k0 = {k0}, h = {h}: {e}");
             }
         }
+        // h = 0 with a k₀ for which (2G k₀)/2G ≠ k₀ in floating point: ξ must stay exactly 0
+        let k0 = 7.387156424190203;
+        let cfg = KitConfig::new(law(), k0).with_samples(150);
+        conformance::check_all(&VonMises::new(k0, 0.0), &cfg).unwrap();
         // another elasticity, nearly incompressible, and a high-strength scale
         let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
         conformance::check_all(&VonMises::new(300.0, 1e3), &cfg).unwrap();

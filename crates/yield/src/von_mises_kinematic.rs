@@ -30,6 +30,16 @@
 //! return of theory §2.2 with hardening modulus h + c, with `ξ = hλ`, `χ = cλn`, so
 //! `ξ + |χ| = (h + c)λ` is the isotropic ξ. Hence the tangent and ψ are those of [`VonMises`]
 //! with h + c (theory §9.3).
+//!
+//! **Step law.** A load step (theory §11.1) projects the trial (C(ε − ε_p), ξ_n, χ_n): the
+//! relative trial is `a = s_tr − χ_n` with `s_tr = 2G dev(ε − ε_p)`, so a reversed load yields
+//! once `|s_tr − χ_n| = k₀ + ξ_n` (the Bauschinger effect), earlier than the isotropic law.
+//! Differentiating `s' = s_tr − 2Gλn` with `dλ = dr/(2G + c + h)`, `dr = n:ds_tr` and
+//! `dn = (I_dev − n⊗n) ds_tr / r` gives the tangent
+//! `K_b I⊗I + 2G[(1 − 2Gλ/r)(I_dev − n⊗n) + (h + c)/(2G + c + h) n⊗n]`; for χ_n = 0 it is the
+//! local law's, `1 − 2Gλ/r = |s'|/r`. Where t does not move with r (h = 0, or the apex, where
+//! t = 0) the same formula holds with h = 0: at the apex `s' = (c s_tr + 2Gχ_n)/(2G + c)` and
+//! the deviatoric tangent is `2G c/(2G + c) I_dev`.
 
 use crate::VonMises;
 use saddle_core::error::{ParameterError, check};
@@ -152,11 +162,8 @@ impl AdmissibleStresses for VonMisesKinematic {
         true
     }
 
-    /// Theory §9.3 in closed form: from (Cε, 0, 0), `λ = (r − k₀)/(2G + h + c)`,
-    /// `s = s_tr − 2Gλn`, `ξ = hλ`, `χ = cλn`, and the consistent tangent of the isotropic
-    /// return with modulus h + c,
-    /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + (h + c)/(h + c + 2G) n⊗n]` with t = |s| = r − 2Gλ,
-    /// when plastic; C when elastic.
+    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
+    /// closed form follows.
     fn local_law(
         &self,
         law: &Elasticity,
@@ -165,32 +172,59 @@ impl AdmissibleStresses for VonMisesKinematic {
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
+        self.step_law(law, eps, &Sym::zeros(), &[0.0; 6], sigma, q, tangent)
+    }
+
+    /// Theory §11.1 in closed form: σ̂ = P_D(C(ε − ε_p), ξ_n, χ_n), the return of the relative
+    /// trial `a = s_tr − χ_n` (module docs), and the consistent tangent
+    /// `K_b I⊗I + 2G[(1 − 2Gλ/r)(I_dev − n⊗n) + (h + c)/(2G + c + h) n⊗n]` when plastic, with
+    /// h → 0 where t does not move with r (h = 0, or the apex: there `2G c/(2G + c) I_dev`); C
+    /// when elastic.
+    fn step_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        plastic_strain: &Sym,
+        q_n: &[f64],
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
+    ) -> bool {
         let g2 = 2.0 * law.shear_modulus();
         let kb = law.bulk_modulus();
-        let s_tr = deviator(eps) * g2;
-        let r = s_tr.norm();
-        let p = kb * trace(eps);
-        if r <= self.k0 {
+        let e = eps - plastic_strain;
+        let s_tr = deviator(&e) * g2;
+        let p = kb * trace(&e);
+        let chi = Self::back_stress(q_n);
+        let a = s_tr - chi;
+        let r = a.norm();
+        let t0 = self.k0 + q_n[0];
+        if r <= t0 {
             *sigma = s_tr + identity() * p;
-            q[..6].fill(0.0);
+            q[..6].copy_from_slice(&q_n[..6]);
             if let Some(c) = tangent {
                 *c = law.stiffness_matrix();
             }
             return false;
         }
-        let hc = self.total();
-        let lambda = (r - self.k0) / (g2 + hc);
-        let n = s_tr / r;
-        let t = r - g2 * lambda;
-        *sigma = n * t + identity() * p;
-        q[0] = self.h * lambda;
-        let x = Self::coordinates(&(n * (self.c * lambda)));
+        let gc = g2 + self.c;
+        let t = if self.h > 0.0 { (gc * t0 + self.h * r) / (gc + self.h) } else { t0 };
+        // apex: (2G + c) t₀ + h r ≤ 0 (h = 0: k₀ + ξ_n ≤ 0); s' − χ' = 0, ξ' = −k₀
+        let apex = t <= 0.0;
+        let t = t.max(0.0);
+        let lambda = (r - t) / gc;
+        let n = a / r;
+        *sigma = s_tr - n * (g2 * lambda) + identity() * p;
+        let x = Self::coordinates(&(chi + n * (self.c * lambda)));
         q[1..6].copy_from_slice(&x);
+        q[0] = if self.h > 0.0 || apex { t - self.k0 } else { q_n[0] };
         if let Some(c) = tangent {
+            // t moves with r only on the cone with h > 0: dλ = dr/(2G + c + h_eff)
+            let h_eff = if apex { 0.0 } else { self.h };
             let nn = n * n.transpose();
             *c = volumetric_projector() * (3.0 * kb)
-                + (deviatoric_projector() - nn) * (g2 * t / r)
-                + nn * (g2 * hc / (hc + g2));
+                + (deviatoric_projector() - nn) * (g2 * (1.0 - g2 * lambda / r))
+                + nn * (g2 * (h_eff + self.c) / (gc + h_eff));
         }
         true
     }
@@ -321,6 +355,94 @@ mod tests {
         let small = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.005));
         assert!(!p.local_law(&law, &small, &mut s, &mut q, Some(&mut ct)));
         assert!(q == [0.0; 6] && ct == law.stiffness_matrix() && s == law.stress(&small));
+    }
+
+    /// Reverse loading after the forward step of `kinematic_local_law_matches_a_point_worked_by_hand`
+    /// (theory §11.1, §9.3): E = 100, ν = 1/4 (2G = 80, 3K_b = 200), k₀ = 1, h = 8, c = 12,
+    /// M = [[1,0,0],[0,−1,1],[0,1,0]] (|M| = 2). The state is ε_p = 0.015M, ξ_n = 0.24,
+    /// χ_n = 0.18M (k₀ + ξ_n = 1.24). A trial ε = ε_p + 0.01 I + (β/2G) M has s_tr = βM and
+    /// relative trial a = (β − 0.18)M, |a| = 2|β − 0.18|:
+    ///
+    /// * reverse yield exactly at the Bauschinger point |a| = 1.24, β = −0.44, where
+    ///   |s_tr| = 0.88 is below the initial yield radius k₀ = 1; the isotropic law with the same
+    ///   hardening (h = 20, ξ_n = ξ + |χ| = 0.6) is still elastic there and yields at β = −0.8;
+    /// * β = −0.82 (ε = 0.01 I + 0.00475 M): r = 2, n = −M/2, λ = (r − t₀)/(2G + c + h) =
+    ///   0.76/100 = 0.0076, s' = s_tr − 2Gλn = −0.82M + 0.304M = −0.516M, χ' = χ_n + cλn =
+    ///   0.18M − 0.0456M = 0.1344M, ξ' = ξ_n + hλ = 0.3008, and |s' − χ'| = 1.3008 = k₀ + ξ';
+    /// * the new plastic strain ε − Aσ = 0.00475M + 0.00645M = 0.0112M: χ' = c ε_p' (Prager)
+    ///   and ξ' = h(0.03 + 0.0076), h times the accumulated plastic strain;
+    /// * tangent: along n 2G(h + c)/(2G + c + h) = 16, across n 2G(1 − 2Gλ/r) = 80 · 0.696 =
+    ///   55.68 (the isotropic law would give 2G|s'|/r), on I 3K_b = 200.
+    #[test]
+    fn kinematic_step_law_reverse_yields_at_the_bauschinger_point() {
+        use nalgebra::Matrix3;
+        use saddle_core::problem::stresses::step_law_by_differences;
+        use saddle_core::problem::tensor::from_matrix;
+        let law = Elasticity::new(100.0, 0.25).unwrap();
+        let p = VonMisesKinematic::new(1.0, 8.0, 12.0);
+        let m = from_matrix(&Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0));
+        let i3 = identity();
+        let tol = 1e-13;
+        let near = |a: f64, b: f64| (a - b).abs() <= tol;
+        // the forward step from the virgin state
+        let (mut s, mut qn) = (Sym::zeros(), [0.0; 6]);
+        let eps1 = i3 * 0.01 + m * 0.025;
+        assert!(p.step_law(&law, &eps1, &Sym::zeros(), &[0.0; 6], &mut s, &mut qn, None));
+        let ep = eps1 - law.compliance(&s);
+        assert!((ep - m * 0.015).norm() <= tol && near(qn[0], 0.24));
+        assert!((VonMisesKinematic::back_stress(&qn) - m * 0.18).norm() <= tol);
+        let reverse = |beta: f64| ep + i3 * 0.01 + m * (beta / 80.0);
+
+        // the Bauschinger point: elastic just before, plastic just beyond
+        let (mut q, mut c) = ([0.0; 6], SymOp::zeros());
+        let before = reverse(-0.44 * (1.0 - 1e-9));
+        assert!(!p.step_law(&law, &before, &ep, &qn, &mut s, &mut q, Some(&mut c)));
+        assert!(s == law.stress(&(before - ep)) && q == qn && c == law.stiffness_matrix());
+        assert!(p.step_law(&law, &reverse(-0.44 * (1.0 + 1e-9)), &ep, &qn, &mut s, &mut q, None));
+        // isotropic hardening to the same size: elastic until |s_tr| = 1.6
+        let iso = VonMises::new(1.0, 20.0);
+        let mut qi = [0.0];
+        assert!(!iso.step_law(&law, &reverse(-0.44 * (1.0 + 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
+        assert!(!iso.step_law(&law, &reverse(-0.8 * (1.0 - 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
+        assert!(iso.step_law(&law, &reverse(-0.8 * (1.0 + 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
+
+        // β = −0.82
+        let eps = reverse(-0.82);
+        assert!((eps - (i3 * 0.01 + m * 0.00475)).norm() <= 1e-16);
+        assert!(p.step_law(&law, &eps, &ep, &qn, &mut s, &mut q, Some(&mut c)));
+        assert!((s - (m * -0.516 + i3 * 2.0)).norm() <= tol, "σ = {s}");
+        let chi = VonMisesKinematic::back_stress(&q);
+        assert!((chi - m * 0.1344).norm() <= tol && near(q[0], 0.3008), "χ = {chi}, ξ = {}", q[0]);
+        assert!(near((deviator(&s) - chi).norm(), 1.3008));
+        let new_ep = eps - law.compliance(&s);
+        assert!((new_ep - m * 0.0112).norm() <= tol && (chi - new_ep * 12.0).norm() <= tol);
+        let (n, cross) = (m * -0.5, Sym::new(1.0, 1.0, -2.0, 0.0, 0.0, 0.0) / 6.0f64.sqrt());
+        assert!(near(n.dot(&(c * n)), 16.0), "along n: {}", n.dot(&(c * n)));
+        assert!(near(cross.dot(&(c * cross)), 55.68), "across n: {}", cross.dot(&(c * cross)));
+        assert!(near(n.dot(&(c * cross)), 0.0) && near(i3.dot(&(c * i3)) / 3.0, 200.0));
+        // the projection of the trial, and the tangent by differences of the projection
+        let (mut s2, mut q2) = (law.stress(&(eps - ep)), qn);
+        assert!(p.project(&law, &mut s2, &mut q2));
+        assert!((s2 - s).norm() <= tol && q2.iter().zip(&q).all(|(a, b)| near(*a, *b)));
+        let (mut s3, mut q3, mut c3) = (Sym::zeros(), [0.0; 6], SymOp::zeros());
+        step_law_by_differences(&p, &law, &eps, &ep, &qn, &mut s3, &mut q3, Some(&mut c3));
+        assert!((c3 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c3}");
+
+        // h = 0 freezes ξ; from ξ_n = −1.5 (t₀ < 0, not admissible) the apex
+        // s' = χ' = (c s_tr + 2Gχ_n)/(2G + c) with the deviatoric tangent 2G c/(2G + c)
+        let pk = VonMisesKinematic::new(1.0, 0.0, 12.0);
+        assert!(pk.step_law(&law, &eps, &ep, &qn, &mut s, &mut q, Some(&mut c)));
+        assert!(q[0] == 0.24 && near((deviator(&s) - VonMisesKinematic::back_stress(&q)).norm(), 1.24));
+        let mut q_apex = qn;
+        q_apex[0] = -1.5;
+        assert!(pk.step_law(&law, &eps, &ep, &q_apex, &mut s, &mut q, Some(&mut c)));
+        let apex = m * ((12.0 * -0.82 + 80.0 * 0.18) / 92.0);
+        assert!((s - (apex + i3 * 2.0)).norm() <= tol && (VonMisesKinematic::back_stress(&q) - apex).norm() <= tol);
+        assert_eq!(q[0], -1.0);
+        let want = volumetric_projector() * 200.0 + deviatoric_projector() * (80.0 * 12.0 / 92.0);
+        assert!((c - want).norm() <= 1e-12, "{c}");
+        step_law_by_differences(&pk, &law, &eps, &ep, &q_apex, &mut s3, &mut q3, Some(&mut c3));
+        assert!((c3 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c3}");
     }
 
     /// Theory §9.3: from the zero state the local law with (h, c) is the isotropic law with

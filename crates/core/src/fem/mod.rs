@@ -145,6 +145,12 @@ impl Lagrangian for Box<dyn Discretisation> {
     fn nodal_load(&self) -> &[f64] {
         (**self).nodal_load()
     }
+    fn state(&self) -> Option<&crate::problem::state::PlasticState> {
+        (**self).state()
+    }
+    fn state_force_norm(&self) -> f64 {
+        (**self).state_force_norm()
+    }
 }
 
 impl Discretisation for Box<dyn Discretisation> {

@@ -11,6 +11,7 @@
 use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::pattern::SymmetricPattern;
+use crate::problem::state::PlasticState;
 use crate::problem::stresses::{AdmissibleStresses, energy_inner};
 use crate::problem::tensor::{Sym, SymOp};
 use rayon::prelude::*;
@@ -121,8 +122,9 @@ pub struct Iterate<'a> {
 /// The KKT residuals of theory §3 (form 2), each relative and dimensionless.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct KktResiduals {
-    /// ‖Bᵀσ(u) − f_u − Gᵀλ‖ / max(‖Bᵀσ(u)‖, ‖Gᵀλ + f_u‖): internal forces against contact
-    /// forces and loads.
+    /// ‖Bᵀσ(u) − f_u − Gᵀλ‖ / max(‖Bᵀσ(u)‖, ‖Gᵀλ + f_u‖, ‖BᵀCε_p‖): internal forces against
+    /// contact forces and loads (and, in a load step, the forces locked in by the plastic
+    /// strain ε_p, theory §11.2).
     pub equilibrium: f64,
     /// ‖f + Hᵀλ‖ / max(‖f‖, ‖Hᵀλ‖): the load on the extra unknowns (Σλ = F for the punch).
     pub load_balance: f64,
@@ -267,14 +269,45 @@ pub trait Lagrangian: Sync {
         v
     }
 
+    /// The state of the previous load step, ε_p and q_n per point (theory §11.1); `None` for
+    /// the stationary problem, whose state is zero. Only the step layer
+    /// ([`crate::evolution::LoadStep`]) returns one.
+    fn state(&self) -> Option<&PlasticState> {
+        None
+    }
+
+    /// ‖BᵀCε_p‖: the size of the internal forces the step's plastic strain holds locked in (0
+    /// for the stationary problem). The equilibrium residual is measured against it too, so
+    /// that a step whose answer is zero stress (an unloaded, stress-free body with a plastic
+    /// strain) has a scale (theory §11.2). Computed on every call; [`crate::evolution::LoadStep`]
+    /// keeps it.
+    fn state_force_norm(&self) -> f64 {
+        self.state().map_or(0.0, |st| locked_in_force(self, st))
+    }
+
+    /// The elastic trial stresses C(ε_T − ε_p,T) (Cε_T for the stationary problem): the
+    /// stresses of the elastic response from the step's state, for elastic starts (theory §11.1).
+    fn elastic_stress(&self, eps: &[Sym], out: &mut [Sym]) {
+        let c = self.elasticity().stiffness_matrix();
+        match self.state() {
+            None => out.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s = c * e),
+            Some(st) => out
+                .par_iter_mut()
+                .zip(eps.par_iter())
+                .zip(st.plastic_strain.par_iter())
+                .for_each(|((s, e), p)| *s = c * (e - p)),
+        }
+    }
+
     /// The local law at every point: σ̂_T = P_D(Cε_T, 0) and, if asked, the consistent
-    /// tangents (theory §2). Returns how many points were plastic and at how many P's return
-    /// mapping ran (none for an elastic problem: σ = Cε, no call of P at all).
+    /// tangents (theory §2); from a step's state σ̂_T = P_D(C(ε_T − ε_p), q_n) (theory §11.1).
+    /// Returns how many points were plastic and at how many P's return mapping ran (none for an
+    /// elastic problem: σ = Cε, no call of P at all).
     fn local_law(&self, eps: &[Sym], out: &mut StressField, tangents: Option<&mut [SymOp]>) -> LocalLaw {
         let law = *self.elasticity();
         let Some(p) = self.plasticity() else {
             let c = law.stiffness_matrix();
-            out.sigma.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s = c * e);
+            self.elastic_stress(eps, &mut out.sigma);
             out.plastic.par_iter_mut().for_each(|f| *f = false);
             if let Some(t) = tangents {
                 t.par_iter_mut().for_each(|t| *t = c);
@@ -282,24 +315,30 @@ pub trait Lagrangian: Sync {
             return LocalLaw::default();
         };
         let (m, stride) = (out.q_dim, out.stride());
+        let state = self.state();
         let points = out
             .sigma
             .par_iter_mut()
             .zip(out.q.par_chunks_mut(stride))
             .zip(out.plastic.par_iter_mut())
-            .zip(eps.par_iter());
+            .zip(eps.par_iter())
+            .enumerate();
         // each point counts its own return mapping, where it runs
+        let law_at = |i: usize, e: &Sym, s: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>| match state {
+            None => p.local_law(&law, e, s, q, t),
+            Some(st) => p.step_law(&law, e, &st.plastic_strain[i], st.q(i), s, q, t),
+        };
         let (plastic, projected) = match tangents {
             None => points
-                .map(|(((s, q), pl), e)| {
-                    *pl = p.local_law(&law, e, s, &mut q[..m], None);
+                .map(|(i, (((s, q), pl), e))| {
+                    *pl = law_at(i, e, s, &mut q[..m], None);
                     (*pl as usize, 1)
                 })
                 .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
             Some(t) => points
                 .zip(t.par_iter_mut())
-                .map(|((((s, q), pl), e), t)| {
-                    *pl = p.local_law(&law, e, s, &mut q[..m], Some(t));
+                .map(|((i, (((s, q), pl), e)), t)| {
+                    *pl = law_at(i, e, s, &mut q[..m], Some(t));
                     (*pl as usize, 1)
                 })
                 .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
@@ -307,13 +346,25 @@ pub trait Lagrangian: Sync {
         LocalLaw { plastic, projected }
     }
 
-    /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (theory §2).
+    /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (theory §2); from a step's state
+    /// Σ_T w_T ψ_n(ε_T) (theory §11.1).
     fn energy_of_strain(&self, eps: &[Sym]) -> f64 {
         let law = *self.elasticity();
         let w = self.weights();
-        match self.plasticity() {
-            None => eps.par_iter().zip(w.par_iter()).map(|(e, w)| 0.5 * w * e.dot(&law.stress(e))).sum(),
-            Some(p) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| w * p.energy(&law, e)).sum(),
+        match (self.plasticity(), self.state()) {
+            (None, None) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| 0.5 * w * e.dot(&law.stress(e))).sum(),
+            (Some(p), None) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| w * p.energy(&law, e)).sum(),
+            (None, Some(st)) => (eps, &st.plastic_strain[..], w)
+                .into_par_iter()
+                .map(|(e, ep, w)| {
+                    let x = e - ep;
+                    0.5 * w * x.dot(&law.stress(&x))
+                })
+                .sum(),
+            (Some(p), Some(st)) => (0..eps.len())
+                .into_par_iter()
+                .map(|i| w[i] * p.step_energy(&law, &eps[i], &st.plastic_strain[i], st.q(i)))
+                .sum(),
         }
     }
 
@@ -325,25 +376,42 @@ pub trait Lagrangian: Sync {
             - self.load().iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
     }
 
-    /// ½[σ̂, σ̂] = ½ Σ_T |T| (Aσ_T:σ_T + q_T·H⁻¹q_T).
+    /// ½[σ̂, σ̂] = ½ Σ_T |T| (Aσ_T:σ_T + q_T·H⁻¹q_T); from a step's state the hardening part is
+    /// centred at q_n: ½ Σ_T |T| (Aσ_T:σ_T + (q_T − q_n)·H⁻¹(q_T − q_n)) (theory §11.1).
     fn stress_energy(&self, stress: &StressField) -> f64 {
         let law = *self.elasticity();
         let p = self.plasticity();
         let w = self.weights();
+        let state = self.state();
         (0..stress.len())
             .into_par_iter()
             .map(|i| {
                 let (s, q) = (&stress.sigma[i], stress.q(i));
-                0.5 * w[i] * energy_inner(p, &law, s, q, s, q)
+                match state {
+                    None => 0.5 * w[i] * energy_inner(p, &law, s, q, s, q),
+                    Some(st) => {
+                        let qn = st.q(i);
+                        let dq: [f64; crate::problem::stresses::MAX_HARDENING_DIM] =
+                            std::array::from_fn(|k| if k < q.len() { q[k] - qn[k] } else { 0.0 });
+                        let dq = &dq[..q.len()];
+                        0.5 * w[i] * energy_inner(p, &law, s, dq, s, dq)
+                    }
+                }
             })
             .sum()
     }
 
-    /// The dual energy −(½[σ̂, σ̂] + λ·c) (theory §3 form 3). For a dual-feasible pair it is a
-    /// lower bound of J, with equality at the solution: J − dual is the duality gap.
+    /// The dual energy −(½[σ̂, σ̂] + λ·c) (theory §3 form 3); from a step's state
+    /// −(½[σ̂, σ̂]_n + (ε_p, σ) + λ·c) with the centred ½[σ̂, σ̂]_n of
+    /// [`Lagrangian::stress_energy`] (theory §11.1). For a dual-feasible pair it is a lower bound
+    /// of J, with equality at the solution: J − dual is the duality gap.
     fn dual_energy(&self, stress: &StressField, lambda: &[f64]) -> f64 {
         let c = &self.constraints().offset;
-        -(self.stress_energy(stress) + lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>())
+        let prestrain: f64 = self.state().map_or(0.0, |st| {
+            let w = self.weights();
+            (0..stress.len()).into_par_iter().map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum()
+        });
+        -(self.stress_energy(stress) + prestrain + lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>())
     }
 
     /// The KKT residuals of an iterate (theory §3 form 2), recomputed from scratch: σ(u) by the
@@ -372,8 +440,8 @@ pub trait Lagrangian: Sync {
             }
             ws.gu.iter().zip(fu).map(|(a, b)| (a + b) * (a + b)).sum::<f64>().sqrt()
         };
-        // ‖Bᵀσ − f_u − Gᵀλ‖ / max(‖Bᵀσ‖, ‖Gᵀλ + f_u‖)
-        let equilibrium = relative(norm_diff(&ws.force, &ws.gu), internal.max(external));
+        // ‖Bᵀσ − f_u − Gᵀλ‖ / max(‖Bᵀσ‖, ‖Gᵀλ + f_u‖, ‖BᵀCε_p‖)
+        let equilibrium = relative(norm_diff(&ws.force, &ws.gu), internal.max(external).max(self.state_force_norm()));
         let f = self.load();
         let load_sum: Vec<f64> = f.iter().zip(&ws.gv).map(|(a, b)| a + b).collect();
         let load_balance = relative(norm(&load_sum), norm(f).max(norm(&ws.gv)));
@@ -404,6 +472,16 @@ pub trait Lagrangian: Sync {
         let constitutive = relative(num.sqrt(), den.sqrt());
         KktResiduals { equilibrium, load_balance, complementarity, constitutive }
     }
+}
+
+/// ‖BᵀCε_p‖ of L's operators and the plastic strain of `state` (theory §11.2): the internal
+/// forces that ε_p alone locks in, the scale of a step's equilibrium residual.
+pub fn locked_in_force(l: &(impl Lagrangian + ?Sized), state: &PlasticState) -> f64 {
+    let c = l.elasticity().stiffness_matrix();
+    let s0: Vec<Sym> = state.plastic_strain.iter().map(|p| c * p).collect();
+    let mut f = vec![0.0; l.n_dofs()];
+    l.divergence(&s0, &mut f);
+    norm(&f)
 }
 
 /// num/den, with 0/0 = 0 and x/0 = 1 for x ≠ 0 (an entirely wrong answer); NaN stays NaN.

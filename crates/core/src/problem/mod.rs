@@ -7,6 +7,7 @@
 //!   concatenated, each obstacle reporting on its own part;
 //! * [`lagrangian`] — **L**, the discrete saddle problem every solver consumes (theory §3), with
 //!   the energies and KKT residuals of any iterate;
+//! * [`state`] — the plastic state a load step starts from (theory §11);
 //! * [`solver`] — the solver interface: [`solver::Solver`], [`solver::Solution`], the report;
 //! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
 //! * [`pattern`] — the sparsity pattern of assembled matrices, as plain data.
@@ -17,5 +18,6 @@ pub mod lagrangian;
 pub mod obstacles;
 pub mod pattern;
 pub mod solver;
+pub mod state;
 pub mod stresses;
 pub mod tensor;

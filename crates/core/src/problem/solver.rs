@@ -135,6 +135,60 @@ pub trait Solver: Debug + Send + Sync + dyn_clone::DynClone {
     fn tolerance(&self) -> f64;
     /// Solves the discrete problem.
     fn solve(&self, problem: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError>;
+
+    /// Solves the discrete problem from `start`, the previous load step's solution (theory §11.2:
+    /// a warm start). A solver that can use a start reports the counter `warm_start` = 1; the
+    /// default ignores it and solves from its own start (an interior point method has no use
+    /// for one).
+    fn solve_warm(
+        &self,
+        problem: &dyn Lagrangian,
+        start: &Start,
+        monitor: &mut dyn Monitor,
+    ) -> Result<Solution, SolveError> {
+        let _ = start;
+        self.solve(problem, monitor)
+    }
+}
+
+/// A starting point of a solve: displacements, extras and contact forces (theory §11.2).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Start {
+    /// u.
+    pub u: Vec<f64>,
+    /// V.
+    pub extras: Vec<f64>,
+    /// λ.
+    pub lambda: Vec<f64>,
+}
+
+impl Start {
+    /// The start at a solution.
+    pub fn from_solution(sol: &Solution) -> Self {
+        Self { u: sol.u.clone(), extras: sol.extras.clone(), lambda: sol.lambda.clone() }
+    }
+
+    /// Checks the sizes against `problem`; an error names the solver `solver`.
+    pub fn check(&self, problem: &dyn Lagrangian, solver: &str) -> Result<(), SolveError> {
+        let want = (problem.n_dofs(), problem.n_extras(), problem.constraints().n_rows());
+        let got = (self.u.len(), self.extras.len(), self.lambda.len());
+        if want != got {
+            return Err(SolveError::Unsupported {
+                solver: solver.to_string(),
+                message: format!(
+                    "the start has {} dofs, {} extras and {} multipliers; the problem {}, {} and {}",
+                    got.0, got.1, got.2, want.0, want.1, want.2
+                ),
+            });
+        }
+        if let Some(x) = self.u.iter().chain(&self.extras).chain(&self.lambda).find(|x| !x.is_finite()) {
+            return Err(SolveError::Unsupported {
+                solver: solver.to_string(),
+                message: format!("the start holds a non-finite value ({x})"),
+            });
+        }
+        Ok(())
+    }
 }
 
 dyn_clone::clone_trait_object!(Solver);

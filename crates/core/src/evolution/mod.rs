@@ -1,0 +1,23 @@
+//! Load paths: the Prandtl–Reuss evolution in load steps (theory §11).
+//!
+//! Backward Euler in the load turns every step into the saddle problem of theory §3 with the
+//! local law shifted by the previous step's state: σ̂ = P_D(C(ε − ε_p), q_n) ([`PlasticState`],
+//! [`crate::AdmissibleStresses::step_law`]). So a step is L itself with a state and the step's
+//! loads ([`LoadStep`]), and every solver runs it unchanged, warm-started from the previous step
+//! ([`crate::Solver::solve_warm`]). One step from the zero state is the stationary (Hencky)
+//! problem.
+//!
+//! * [`step`] — [`LoadStep`]: L at a load factor with a state;
+//! * [`reduced`] — [`Reduced`]: L without the rows and extras of obstacles that carry no load
+//!   (a force-controlled obstacle at zero force leaves its extras undetermined, theory §11.3);
+//! * [`path`] — [`Evolution`]: the steps of a load path one after another, the state carried.
+//!
+//! [`PlasticState`]: crate::PlasticState
+
+pub mod path;
+pub mod reduced;
+pub mod step;
+
+pub use path::{Evolution, PathError, StepSolution, step_factors};
+pub use reduced::Reduced;
+pub use step::LoadStep;

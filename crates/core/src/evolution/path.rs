@@ -1,0 +1,276 @@
+//! The steps of a load path one after another (theory §11.2): each step is solved from the
+//! state the previous one left, warm-started from its solution, and leaves its own state.
+
+use crate::error::SceneError;
+use crate::evolution::reduced::Reduced;
+use crate::evolution::step::LoadStep;
+use crate::fem::Discretisation;
+use crate::problem::lagrangian::{Lagrangian, StressField};
+use crate::problem::obstacles::OBSTACLE_PATH;
+use crate::problem::solver::{Monitor, Solution, SolveError, Solver, Start};
+use crate::problem::state::PlasticState;
+use crate::problem::tensor::Sym;
+use thiserror::Error;
+
+/// The factors of a load path's steps: the first factor, then `substeps` equal steps from each
+/// factor to the next (theory §11.2). `substeps` = 1 gives the factors themselves.
+pub fn step_factors(factors: &[f64], substeps: usize) -> Vec<f64> {
+    let n = substeps.max(1);
+    let mut out: Vec<f64> = factors.first().copied().into_iter().collect();
+    for w in factors.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        out.extend((1..=n).map(|k| if k == n { b } else { a + (b - a) * k as f64 / n as f64 }));
+    }
+    out
+}
+
+/// Why a step of a load path could not be solved.
+#[derive(Debug, Error)]
+pub enum PathError {
+    /// The step's problem could not be set up (an obstacle rejects its scaled load).
+    #[error("step {step} (load factor {factor}): {source}")]
+    Scene {
+        /// The step's index.
+        step: usize,
+        /// Its load factor.
+        factor: f64,
+        /// Why.
+        source: SceneError,
+    },
+    /// The solver failed on the step.
+    #[error("step {step} (load factor {factor}): {source}")]
+    Solve {
+        /// The step's index.
+        step: usize,
+        /// Its load factor.
+        factor: f64,
+        /// The solver's error.
+        source: SolveError,
+    },
+}
+
+/// A solved step: its problem (L at the factor, from the state before it) and its solution in
+/// the problem's numbering.
+#[derive(Debug)]
+pub struct StepSolution<'a> {
+    /// The step's index (from 0).
+    pub index: usize,
+    /// L of the step.
+    pub problem: LoadStep<'a>,
+    /// The solution: every row's multiplier (0 on the rows of an unloaded obstacle) and every
+    /// extra (an undetermined one holds the position where its obstacle just touches).
+    pub solution: Solution,
+    /// The extras that are undetermined in this step (indices into the extras): those of
+    /// obstacles that carry no load (theory §11.3).
+    pub undetermined: Vec<usize>,
+    /// What the user should know about the step (undetermined extras).
+    pub warnings: Vec<String>,
+}
+
+impl StepSolution<'_> {
+    /// True when the solver met its tolerance: the path may go on from this step.
+    pub fn converged(&self) -> bool {
+        self.solution.report.converged
+    }
+}
+
+/// A load path under way (theory §11.2): the discretisation, the state the next step starts
+/// from, and the last solution (the next step's warm start).
+#[derive(Debug)]
+pub struct Evolution<'a> {
+    base: &'a dyn Discretisation,
+    state: PlasticState,
+    start: Option<Start>,
+    steps: usize,
+}
+
+impl<'a> Evolution<'a> {
+    /// A path of `base` from the zero state (the first step is the stationary problem).
+    pub fn new(base: &'a dyn Discretisation) -> Self {
+        Self { base, state: PlasticState::zero(base.n_points(), base.hardening_dim()), start: None, steps: 0 }
+    }
+
+    /// The state the next step starts from.
+    pub fn state(&self) -> &PlasticState {
+        &self.state
+    }
+
+    /// Steps solved so far (converged or not).
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Solves the next step, at load factor `factor`, with `solver` warm-started from the last
+    /// solution. A converged step's state becomes the next step's; a step that did not converge
+    /// is returned flagged and leaves the state as it was (the path should stop there).
+    pub fn step(
+        &mut self,
+        factor: f64,
+        solver: &dyn Solver,
+        monitor: &mut dyn Monitor,
+    ) -> Result<StepSolution<'a>, PathError> {
+        let index = self.steps;
+        self.steps += 1;
+        let problem = LoadStep::new(self.base, factor, self.state.clone()).map_err(|source| PathError::Scene {
+            step: index,
+            factor,
+            source,
+        })?;
+        let unloaded = unloaded_obstacles(&problem);
+        let fail = |source| PathError::Solve { step: index, factor, source };
+        let start = self.start.as_ref().filter(|s| s.check(&problem, solver.name()).is_ok());
+        let (solution, undetermined, warnings) = if unloaded.is_empty() {
+            let sol = match start {
+                Some(s) => solver.solve_warm(&problem, s, monitor),
+                None => solver.solve(&problem, monitor),
+            }
+            .map_err(fail)?;
+            (sol, Vec::new(), Vec::new())
+        } else {
+            let (rows_kept, extras_kept) = kept(&problem, &unloaded);
+            let reduced = Reduced::new(&problem, rows_kept, extras_kept);
+            let sol = match start {
+                Some(s) => {
+                    let s = Start {
+                        u: s.u.clone(),
+                        extras: reduced.restrict_extras(&s.extras),
+                        lambda: reduced.restrict_rows(&s.lambda),
+                    };
+                    solver.solve_warm(&reduced, &s, monitor)
+                }
+                None => solver.solve(&reduced, monitor),
+            }
+            .map_err(fail)?;
+            let previous = self.start.as_ref().map(|s| s.extras.clone());
+            expand(&problem, &reduced, &unloaded, sol, previous, factor)
+        };
+        if solution.report.converged {
+            self.state = state_after(&problem, &solution.u);
+            self.start = Some(Start::from_solution(&solution));
+        }
+        Ok(StepSolution { index, problem, solution, undetermined, warnings })
+    }
+}
+
+/// The state a step leaves at displacement `u` (theory §11.1): ε_p = ε(u) − Aσ with σ̂ the
+/// step's local law at ε(u) (so that the next step's trial C(ε − ε_p) is σ + C(ε − ε(u))).
+fn state_after(problem: &LoadStep<'_>, u: &[f64]) -> PlasticState {
+    let mut eps = vec![Sym::zeros(); problem.n_points()];
+    problem.strain(u, &mut eps);
+    let mut stress = StressField::new(problem.n_points(), problem.hardening_dim());
+    problem.local_law(&eps, &mut stress, None);
+    PlasticState::from_solution(problem.elasticity(), &eps, &stress)
+}
+
+/// An obstacle without load in a step: its index, and the extra whose column of H has one
+/// strict sign over its rows (theory §11.3).
+#[derive(Clone, Copy, Debug)]
+struct Unloaded {
+    obstacle: usize,
+    /// The extra (index into all extras) that moves the obstacle off or onto the body.
+    extra: usize,
+}
+
+/// The obstacles with extras whose loads are all zero and with a column of H of one strict
+/// sign: their multipliers vanish (Hᵀλ = 0, λ ≥ 0) and their extras are undetermined.
+fn unloaded_obstacles(problem: &LoadStep<'_>) -> Vec<Unloaded> {
+    let rows = problem.constraints();
+    let load = problem.load();
+    let parts = problem.discrete_obstacles().parts();
+    parts
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| !p.extra_range.is_empty() && !p.row_range.is_empty())
+        .filter(|(_, p)| load[p.extra_range.clone()].iter().all(|f| *f == 0.0))
+        .filter_map(|(o, p)| {
+            let one_signed = |k: usize| {
+                let h = p.row_range.clone().map(|i| rows.extra_row(i)[k]);
+                h.clone().all(|x| x < 0.0) || h.clone().all(|x| x > 0.0)
+            };
+            p.extra_range.clone().find(|&k| one_signed(k)).map(|extra| Unloaded { obstacle: o, extra })
+        })
+        .collect()
+}
+
+/// The rows and extras that stay in the step: all but those of the unloaded obstacles.
+fn kept(problem: &LoadStep<'_>, unloaded: &[Unloaded]) -> (Vec<usize>, Vec<usize>) {
+    let parts = problem.discrete_obstacles().parts();
+    let out_rows = |i: usize| unloaded.iter().any(|u| parts[u.obstacle].row_range.contains(&i));
+    let out_extras = |k: usize| unloaded.iter().any(|u| parts[u.obstacle].extra_range.contains(&k));
+    let rows = (0..problem.constraints().n_rows()).filter(|&i| !out_rows(i)).collect();
+    let extras = (0..problem.n_extras()).filter(|&k| !out_extras(k)).collect();
+    (rows, extras)
+}
+
+/// The reduced solution in the step's numbering: zero multipliers on the rows left out, and
+/// each unloaded obstacle placed where it just touches the body (its other extras as they
+/// were): an admissible position with λ = 0, so the full problem's KKT conditions hold.
+fn expand(
+    problem: &LoadStep<'_>,
+    reduced: &Reduced<'_, LoadStep<'_>>,
+    unloaded: &[Unloaded],
+    sol: Solution,
+    previous: Option<Vec<f64>>,
+    factor: f64,
+) -> (Solution, Vec<usize>, Vec<String>) {
+    let rows = problem.constraints();
+    let mut lambda = vec![0.0; rows.n_rows()];
+    for (j, &i) in reduced.rows_kept().iter().enumerate() {
+        lambda[i] = sol.lambda[j];
+    }
+    let mut extras =
+        previous.filter(|p| p.len() == problem.n_extras()).unwrap_or_else(|| vec![0.0; problem.n_extras()]);
+    for (j, &k) in reduced.extras_kept().iter().enumerate() {
+        extras[k] = sol.extras[j];
+    }
+    let parts = problem.discrete_obstacles().parts();
+    let names = problem.extra_names();
+    let mut undetermined = Vec::new();
+    let mut warnings = Vec::new();
+    let mut gap = vec![0.0; rows.n_rows()];
+    rows.gap(&sol.u, &extras, &mut gap);
+    for un in unloaded {
+        let p = &parts[un.obstacle];
+        // g_i + H_ik t ≥ 0 on the obstacle's rows; the t at which the first row closes
+        let t = p
+            .row_range
+            .clone()
+            .map(|i| -gap[i] / rows.extra_row(i)[un.extra])
+            .fold(None, |m: Option<f64>, x| {
+                Some(match m {
+                    None => x,
+                    // H < 0: t ≤ −g/H for every row (the least); H > 0: t ≥ −g/H (the largest)
+                    Some(m) if rows.extra_row(p.row_range.start)[un.extra] < 0.0 => m.min(x),
+                    Some(m) => m.max(x),
+                })
+            })
+            .unwrap_or(0.0);
+        extras[un.extra] += t;
+        undetermined.extend(p.extra_range.clone());
+        let path = problem.obstacles().path(OBSTACLE_PATH, un.obstacle);
+        let which: Vec<&str> = p.extra_range.clone().map(|k| names[k].as_str()).collect();
+        warnings.push(format!(
+            "{path}: carries no load at load factor {factor}: {} undetermined (any position out of contact is \
+             admissible; reported as null) and its contact rows are left out of the step",
+            if which.len() == 1 {
+                format!("its extra {} is", which[0])
+            } else {
+                format!("its extras {} are", which.join(", "))
+            }
+        ));
+    }
+    (Solution { u: sol.u, extras, stress: sol.stress, lambda, report: sol.report }, undetermined, warnings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::step_factors;
+
+    #[test]
+    fn sub_steps_divide_each_interval_equally() {
+        assert_eq!(step_factors(&[0.0, 1.0, 0.0], 1), vec![0.0, 1.0, 0.0]);
+        assert_eq!(step_factors(&[0.0, 1.0, 0.0], 4), vec![0.0, 0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25, 0.0]);
+        assert_eq!(step_factors(&[0.5], 3), vec![0.5]);
+        assert!(step_factors(&[], 3).is_empty());
+    }
+}
