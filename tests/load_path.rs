@@ -93,9 +93,16 @@ fn homogeneous_compression_loaded_and_unloaded_matches_the_closed_form_for_every
                 let exact = Sym::new(0.0, 0.0, -f, 0.0, 0.0, 0.0);
                 assert!((s - exact).norm() <= 1e-8 * 2.0, "{name}, step {k}, element {i}: σ = {s:?}, exact {exact:?}");
             }
+            // strong duality of the step problem (theory §11.1): J_n(u) equals the dual energy
+            // −(½Aσ:σ + ½|q − q_n|²_H + (ε_p, σ) + λ·c) at the solution
+            let mut ws = Workspace::new(&step.problem);
+            let j = step.problem.energy(&sol.u, &sol.extras, &mut ws);
+            let dual = step.problem.dual_energy(&sol.stress, &sol.lambda);
+            // the work of the largest load, F·U, is the problem's energy scale (J → 0 unloaded)
+            let scale = j.abs().max(2.0 * (2.0 / c.e - p[2]));
+            assert!((j - dual).abs() <= 1e-8 * scale, "{name}, step {k}: J = {j:e}, dual {dual:e}");
             // the plastic strain: none before F = 2, p after; ξ likewise
             let p_now = if k == 0 { Sym::zeros() } else { p };
-            let mut ws = Workspace::new(&step.problem);
             step.problem.strain(&sol.u, &mut ws.eps);
             for (i, e) in ws.eps.iter().enumerate() {
                 let elastic = l.elasticity().compliance(&sol.stress.sigma[i]);

@@ -44,7 +44,7 @@ impl<'a> LowerCsc<'a> {
     }
 }
 
-/// Σ_k val_k x[idx_k] in double precision, in four independent partial sums: one chain of
+/// Σ_k val_k x\[idx_k\] in double precision, in four independent partial sums: one chain of
 /// additions would wait on each addition's latency (the products of the iterative path ran at
 /// a quarter of the machine's speed).
 #[inline]
