@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use saddle::core::problem::tensor::{deviator, trace};
-use saddle::core::{Discretisation, Evolution, Lagrangian, Silent, Sym, Workspace};
+use saddle::core::{Discretisation, Evolution, Lagrangian, Silent, Sym, Workspace, step_factors};
 
 /// Every solver, tight enough that the closed forms hold to 1e-8.
 const SOLVERS: [&str; 4] = [
@@ -524,4 +524,39 @@ fn indentation_unloads_elastically_and_hencky_differs_from_prandtl_reuss() {
     let rel = (hencky - pr) / pr;
     println!("U at F: Hencky {hencky:.6e}, Prandtl–Reuss (8 steps) {pr:.6e}: {:+.3} %", 100.0 * rel);
     assert!(rel.abs() > 1e-6 && rel.abs() < 1e-2, "Hencky and Prandtl–Reuss: {rel:e}");
+}
+
+/// Newton's warm solves along a path reuse the linear set-up of the previous step (the
+/// multigrid hierarchy or the symbolic analysis) when pattern, elastic stiffness and rows are
+/// unchanged, and rebuild it when the rows change (the unloaded steps drop the punch's rows):
+/// the answers are those of fresh solvers, and the counters say which steps reused it.
+#[test]
+fn newton_reuses_its_set_up_along_a_path_with_the_same_answers() {
+    let mut t = example("indentation.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([8, 8, 4]).unwrap());
+    let (l, _) = build(&t);
+    let factors = step_factors(&[0.0, 1.0, 0.0], 3);
+    for linear in ["direct", "amg"] {
+        let text = format!("type = \"newton\"\nlinear = \"{linear}\"\ntol = 1e-11");
+        let kept = solver(&text);
+        let (mut a, mut b) = (Evolution::new(&l), Evolution::new(&l));
+        for (k, &f) in factors.iter().enumerate() {
+            let x = a.step(f, kept.as_ref(), &mut Silent).unwrap();
+            // a solver of its own for every step: nothing kept
+            let y = b.step(f, solver(&text).as_ref(), &mut Silent).unwrap();
+            assert!(x.converged() && y.converged(), "{linear}, step {k}");
+            let reused = x.solution.report.counters.get("setup_reused").copied().unwrap_or(0.0);
+            // steps 2..5 follow a step with the same rows; 0 is cold, 1 follows the unloaded
+            // step 0 (no rows), 6 is unloaded again
+            let expect = (2..factors.len() - 1).contains(&k);
+            assert_eq!(reused == 1.0, expect, "{linear}, step {k}: setup_reused = {reused}");
+            assert_eq!(y.solution.report.counters.get("setup_reused").copied().unwrap_or(0.0), 0.0);
+            if expect {
+                assert_eq!(x.solution.report.counters["symbolic_analyses"], 0.0, "{linear}: no analysis when reused");
+            }
+            let scale = y.solution.u.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+            let d = x.solution.u.iter().zip(&y.solution.u).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+            assert!(d <= 1e-9 * scale, "{linear}, step {k}: kept and fresh set-ups differ by {d:e} of {scale:e}");
+        }
+    }
 }

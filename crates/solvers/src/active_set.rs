@@ -305,6 +305,18 @@ impl ActiveSetSystem {
         }
     }
 
+    /// Zeroes the counts (analyses, factorisations, solves, CG iterations) for a new solve on
+    /// a kept set-up.
+    pub fn reset_counts(&mut self) {
+        self.symbolic_analyses = 0;
+        self.factorisations = 0;
+        self.solves = 0;
+        if let LinearBackend::Amg(it) = &mut self.backend {
+            it.iterations = 0;
+            it.unconverged = 0;
+        }
+    }
+
     /// The Cholesky factor of the direct backend, if that is the one in use.
     pub fn direct(&mut self) -> Option<&mut SparseCholesky> {
         match &mut self.backend {

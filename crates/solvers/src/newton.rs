@@ -12,6 +12,9 @@
 //!    (dependent rows, or the AMG backend), the elastic problem is solved by full active-set
 //!    steps with the elastic tangent from every candidate row active until the active set
 //!    settles (the *elastic phase*);
+//!    A warm start from the previous load step (`Solver::solve_warm`, theory §11.2) takes the
+//!    linear backend's set-up that step kept ([`SetupCache`]) when the problem's pattern,
+//!    elastic stiffness and rows are the same, and starts from the step's (u, V, λ);
 //! 1. **local law** (`Run::local_law`): the local law with its consistent tangent at every
 //!    element (theory §2.5) and the KKT residual of the iterate (theory §3.4);
 //! 2. **convergence** (`Newton::stop`): stop on the relative KKT residual (theory §4.5);
@@ -43,6 +46,7 @@ use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, So
 use saddle_core::{Material, Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
 
 /// `type = "newton"`: semismooth Newton with a primal–dual active set (theory §4.2).
 ///
@@ -80,6 +84,85 @@ pub struct Newton {
     /// `strength_threshold`, `smoother_degree`, `smoother_range`, `eigen_steps`, `coarse_size`,
     /// `max_levels`; defaults those of [`AmgParams`]).
     pub amg: AmgParams,
+    /// The linear system's set-up kept between the warm-started solves of a load path
+    /// ([`SetupCache`]); not a setting.
+    #[serde(skip)]
+    pub setup_cache: SetupCache,
+}
+
+/// The set-up of Newton's linear systems — the backend chosen, the symbolic analysis or the
+/// multigrid hierarchy of the elastic stiffness, the rows' coordinates and stiffnesses — kept
+/// between the warm-started solves of a load path (theory §11.2), whose steps share L's
+/// operators and rows and differ only in loads and state. It is reused only when the next
+/// problem has the same pattern, the same elastic stiffness (compared by a hash of its values)
+/// and the same rows G, H; otherwise it is rebuilt. On the 45k-dof indentation the set-up is
+/// ≈ 0.27 s of a warm step's ≈ 0.5 s solve. Clones of a Newton share the cache.
+#[derive(Clone, Default)]
+pub struct SetupCache(Arc<Mutex<Option<CachedSetup>>>);
+
+impl std::fmt::Debug for SetupCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let held = self.0.lock().map(|c| c.is_some()).unwrap_or(false);
+        write!(f, "SetupCache({})", if held { "held" } else { "empty" })
+    }
+}
+
+impl SetupCache {
+    /// The kept set-up, if it was built for `key` (it leaves the cache either way).
+    fn take(&self, key: &SetupKey) -> Option<CachedSetup> {
+        let mut held = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        held.take().filter(|c| &c.key == key)
+    }
+
+    /// Keeps `setup` for the next warm solve.
+    fn keep(&self, setup: CachedSetup) {
+        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = Some(setup);
+    }
+}
+
+/// A kept set-up and what it was built for.
+struct CachedSetup {
+    key: SetupKey,
+    system: ActiveSetSystem,
+    row_stiffness: Vec<f64>,
+    cost_estimates: Option<(f64, f64)>,
+}
+
+/// What a set-up depends on: the dofs, the pattern, the elastic stiffness's values, the rows.
+#[derive(Clone, Debug, PartialEq)]
+struct SetupKey {
+    n_dofs: usize,
+    pattern: u64,
+    stiffness: u64,
+    rows: (Vec<usize>, Vec<usize>, Vec<u64>, Vec<u64>),
+}
+
+impl SetupKey {
+    /// The key of `l`, from its assembled elastic stiffness `k_el`.
+    fn new(l: &dyn Lagrangian, k_el: &[f64]) -> Self {
+        use std::hash::{Hash, Hasher};
+        let hash = |f: &mut dyn FnMut(&mut std::collections::hash_map::DefaultHasher)| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            f(&mut h);
+            h.finish()
+        };
+        let p = l.pattern();
+        let rows = l.constraints();
+        Self {
+            n_dofs: l.n_dofs(),
+            pattern: hash(&mut |h| {
+                p.col_ptr().hash(h);
+                p.row_idx().hash(h);
+            }),
+            stiffness: hash(&mut |h| k_el.iter().for_each(|v| v.to_bits().hash(h))),
+            rows: (
+                rows.row_ptr.clone(),
+                rows.col.clone(),
+                rows.val.iter().map(|v| v.to_bits()).collect(),
+                rows.extra.iter().map(|v| v.to_bits()).collect(),
+            ),
+        }
+    }
 }
 
 impl Default for Newton {
@@ -93,6 +176,7 @@ impl Default for Newton {
             cg_forcing: 1e-2,
             cg_max_iter: 2000,
             amg: AmgParams::default(),
+            setup_cache: SetupCache::default(),
         }
     }
 }
@@ -157,7 +241,7 @@ impl Solver for Newton {
     /// first guesses (theory §11.2).
     fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         start.check(l, "newton")?;
-        let mut sol = self.solve_from(l, Some(start.clone()), monitor, &mut PhaseTimer::default(), "newton")?;
+        let mut sol = self.iterate(l, Some(start.clone()), true, monitor, &mut PhaseTimer::default(), "newton")?;
         sol.report.counters.insert("warm_start".into(), 1.0);
         Ok(sol)
     }
@@ -174,7 +258,21 @@ impl Newton {
         timer: &mut PhaseTimer,
         name: &str,
     ) -> Result<Solution, SolveError> {
-        let mut run = Run::set_up(self, l, start, name, monitor, timer)?;
+        self.iterate(l, start, false, monitor, timer, name)
+    }
+
+    /// The iteration of [`Newton::solve_from`]; with `reuse` the set-up is taken from and kept
+    /// in the [`SetupCache`].
+    fn iterate(
+        &self,
+        l: &dyn Lagrangian,
+        start: Option<Start>,
+        reuse: bool,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+        name: &str,
+    ) -> Result<Solution, SolveError> {
+        let mut run = Run::set_up(self, l, start, reuse, name, monitor, timer)?;
         monitor.phase("iterations");
         let (stop, kkt) = loop {
             let kkt = run.local_law(timer);
@@ -251,6 +349,8 @@ struct Counts {
     elastic_phase_steps: usize,
     /// Triangular solve pairs of the exact elastic start (0 without it).
     elastic_contact_solves: usize,
+    /// The set-up was the previous warm solve's (a load path).
+    setup_reused: bool,
 }
 
 /// Scratch of the stages, allocated once per solve.
@@ -282,6 +382,8 @@ struct Run<'a> {
     c_elastic: SymOp,
     /// c_i of the active-set test (theory §4.2 step 2): the elastic stiffness at row i's dof.
     row_stiffness: Vec<f64>,
+    /// With a warm start: what the set-up was built for; `finish` keeps it in the cache.
+    key: Option<SetupKey>,
     /// No start was given and no exact elastic start was found: every candidate row starts
     /// active.
     cold: bool,
@@ -300,35 +402,38 @@ impl<'a> Run<'a> {
         settings: &'a Newton,
         l: &'a dyn Lagrangian,
         start: Option<Start>,
+        reuse: bool,
         name: &'a str,
         monitor: &mut dyn Monitor,
         timer: &mut PhaseTimer,
     ) -> Result<Self, SolveError> {
         let nr = l.constraints().n_rows();
-        let nu = l.elasticity().poisson;
-        let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs, nu);
         monitor.phase("analysis");
-        let multigrid = |timer: &mut PhaseTimer| {
-            timer.time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))
-        };
         let mut count = Counts::default();
-        let mut system = match linear {
-            LinearSolver::Amg => multigrid(timer)?,
-            LinearSolver::Direct => timer.time("analysis", || ActiveSetSystem::new(l, name))?,
-            LinearSolver::Auto => {
-                // the cost rule: the symbolic analysis gives the factor's fill and flops
-                let mut direct = timer.time("analysis", || ActiveSetSystem::new(l, name))?;
-                let chol = direct.direct().expect("the direct backend");
-                let (cheaper, d, a) = direct_is_cheaper(chol, nr, l.pattern().nnz(), nu);
-                count.cost_estimates = Some((d, a));
-                // without nodal dofs (no rigid-body modes) there is no multigrid: stay direct
-                if cheaper || l.rigid_body_modes().is_none() {
-                    direct
-                } else {
-                    let mut amg = multigrid(timer)?;
-                    amg.symbolic_analyses += direct.symbolic_analyses;
-                    amg
-                }
+        let c_elastic = l.elasticity().stiffness_matrix();
+        // a warm start may take the set-up the previous step kept (a load path, theory §11.2)
+        let (key, k_el, kept) = if reuse {
+            let k_el = timer.time("assembly", || l.stiffness(Material::Uniform(&c_elastic)));
+            let key = SetupKey::new(l, &k_el);
+            let kept = settings.setup_cache.take(&key);
+            (Some(key), Some(k_el), kept)
+        } else {
+            (None, None, None)
+        };
+        count.setup_reused = kept.is_some();
+        let (mut system, row_stiffness) = match kept {
+            Some(mut kept) => {
+                kept.system.reset_counts();
+                count.cost_estimates = kept.cost_estimates;
+                (kept.system, kept.row_stiffness)
+            }
+            None => {
+                let system = Self::backend(settings, l, name, &mut count, timer)?;
+                // PDAS compares forces with gaps through each row's elastic stiffness
+                // (force/length)
+                let k_el = k_el.unwrap_or_else(|| l.stiffness(Material::Uniform(&c_elastic)));
+                let row_stiffness = system.basis().row_stiffness(l.pattern(), &k_el);
+                (system, row_stiffness)
             }
         };
         // (with the iterative backend the Delassus columns would cost a CG solve per row: the
@@ -372,10 +477,56 @@ impl<'a> Run<'a> {
             g_trial: vec![0.0; nr],
             elastic_sigma: vec![Sym::zeros(); if elastic_phase { np } else { 0 }],
         };
-        let c_elastic = l.elasticity().stiffness_matrix();
-        // PDAS compares forces with gaps through each row's elastic stiffness (force/length)
-        let row_stiffness = system.basis().row_stiffness(l.pattern(), &l.stiffness(Material::Uniform(&c_elastic)));
-        Ok(Self { settings, l, name, system, c_elastic, row_stiffness, cold, state, count, work, history: Vec::new() })
+        Ok(Self {
+            settings,
+            l,
+            name,
+            system,
+            c_elastic,
+            row_stiffness,
+            key,
+            cold,
+            state,
+            count,
+            work,
+            history: Vec::new(),
+        })
+    }
+
+    /// The linear backend for `l` (theory §4.2): the multigrid, the symbolic analysis, or the
+    /// cheaper of the two by the cost rule of `auto` (its estimates go to `count`).
+    fn backend(
+        settings: &Newton,
+        l: &dyn Lagrangian,
+        name: &str,
+        count: &mut Counts,
+        timer: &mut PhaseTimer,
+    ) -> Result<ActiveSetSystem, SolveError> {
+        let nr = l.constraints().n_rows();
+        let nu = l.elasticity().poisson;
+        let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs, nu);
+        let multigrid = |timer: &mut PhaseTimer| {
+            timer.time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))
+        };
+        Ok(match linear {
+            LinearSolver::Amg => multigrid(timer)?,
+            LinearSolver::Direct => timer.time("analysis", || ActiveSetSystem::new(l, name))?,
+            LinearSolver::Auto => {
+                // the cost rule: the symbolic analysis gives the factor's fill and flops
+                let mut direct = timer.time("analysis", || ActiveSetSystem::new(l, name))?;
+                let chol = direct.direct().expect("the direct backend");
+                let (cheaper, d, a) = direct_is_cheaper(chol, nr, l.pattern().nnz(), nu);
+                count.cost_estimates = Some((d, a));
+                // without nodal dofs (no rigid-body modes) there is no multigrid: stay direct
+                if cheaper || l.rigid_body_modes().is_none() {
+                    direct
+                } else {
+                    let mut amg = multigrid(timer)?;
+                    amg.symbolic_analyses += direct.symbolic_analyses;
+                    amg
+                }
+            }
+        })
     }
 
     /// Stage 1 (theory §4.2 step 1): the local law with consistent tangents at every point
@@ -542,6 +693,7 @@ impl<'a> Run<'a> {
         put("return_mappings", c.return_mappings);
         put("elastic_phase_steps", c.elastic_phase_steps);
         put("contact_rows_active", self.state.active.iter().filter(|a| **a).count());
+        put("setup_reused", c.setup_reused as usize);
         put("stiffness_nonzeros", self.l.pattern().nnz());
         if let Some(chol) = sys.direct() {
             counters.insert("factor_nonzeros".into(), chol.nnz_l() as f64);
@@ -550,6 +702,15 @@ impl<'a> Run<'a> {
         if let Some((direct, amg)) = c.cost_estimates {
             counters.insert("auto_direct_cost".into(), direct);
             counters.insert("auto_amg_cost".into(), amg);
+        }
+        if let Some(key) = self.key.take() {
+            let cost_estimates = self.count.cost_estimates;
+            self.settings.setup_cache.keep(CachedSetup {
+                key,
+                system: self.system,
+                row_stiffness: self.row_stiffness,
+                cost_estimates,
+            });
         }
         let State { u, v, lambda, stress, it, .. } = self.state;
         let report = SolveReport {
