@@ -84,6 +84,7 @@ pub fn solve_and_write(
         let p = p.to_path_buf();
         move |source| RunError::Io { path: p, source }
     };
+    let created = !out_dir.exists();
     std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let mut timer = loaded.timer.clone();
     let factors = path.step_factors();
@@ -106,6 +107,10 @@ pub fn solve_and_write(
                 steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
                 failure = Some((k, why));
                 if last.is_none() {
+                    // nothing was written: leave no empty folder behind (as a failed one-step run)
+                    if created {
+                        let _ = std::fs::remove_dir(out_dir);
+                    }
                     return Err(RunError::Path(e));
                 }
                 break;

@@ -570,3 +570,24 @@ fn newton_reuses_its_set_up_along_a_path_with_the_same_answers() {
         }
     }
 }
+
+/// A solver that fails on the first step (SOCP cannot take Tresca, which has no cone
+/// description) leaves nothing to summarise: exit 1 with the step and the solver's reason, and
+/// nothing written.
+#[test]
+fn a_solver_error_on_the_first_step_is_an_error_naming_the_step() {
+    let mut t = example("indentation.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([4, 4, 2]).unwrap());
+    let mut y = toml::Table::new();
+    y.insert("type".into(), "tresca".into());
+    y.insert("sigma0".into(), 1.2.into());
+    y.insert("h".into(), 5.0.into());
+    t.insert("yield".into(), toml::Value::Table(y));
+    let mut s = toml::Table::new();
+    s.insert("type".into(), "socp".into());
+    t.insert("solver".into(), toml::Value::Table(s));
+    let (code, stderr, dir) = run_scene_kept(&toml::to_string(&t).unwrap());
+    assert_eq!(code, 1, "{stderr}");
+    assert!(stderr.contains("step 0") && stderr.contains("tresca"), "{stderr}");
+    assert!(!dir.path().join("out").exists(), "nothing written, no empty folder");
+}
