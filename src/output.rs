@@ -281,14 +281,7 @@ impl Summary {
         let parts = l.discrete_obstacles().parts();
         let imprints: Vec<f64> = parts
             .iter()
-            .map(|p| {
-                (0..p.rows.n_rows())
-                    .map(|i| {
-                        let (cols, vals) = p.rows.row(i);
-                        cols.iter().zip(vals).map(|(&j, a)| a * sol.u[j]).sum::<f64>()
-                    })
-                    .fold(f64::NEG_INFINITY, f64::max)
-            })
+            .map(|p| (0..p.rows.n_rows()).map(|i| p.rows.row_times(i, &sol.u)).fold(f64::NEG_INFINITY, f64::max))
             .collect();
         for (r, m) in reports.iter_mut().zip(&imprints) {
             if m.is_finite() {

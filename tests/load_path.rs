@@ -309,12 +309,7 @@ fn every_yield_surface_loads_holds_and_unloads() {
                 let sol = &step.solution;
                 // the imprint: the largest u₃ of the punch's candidate nodes (its rows' G u)
                 let rows = step.problem.constraints();
-                let m = (0..rows.n_rows())
-                    .map(|i| {
-                        let (c, v) = rows.row(i);
-                        c.iter().zip(v).map(|(&j, a)| a * sol.u[j]).sum::<f64>()
-                    })
-                    .fold(f64::MIN, f64::max);
+                let m = (0..rows.n_rows()).map(|i| rows.row_times(i, &sol.u)).fold(f64::MIN, f64::max);
                 imprint.push(m);
                 if k == 1 {
                     // holding the load: the step from the loaded state is the loaded state

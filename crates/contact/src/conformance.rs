@@ -342,12 +342,7 @@ impl<'a> Ctx<'a> {
 
     /// G du + H dv.
     fn linear(&self, du: &[f64], dv: &[f64]) -> Vec<f64> {
-        (0..self.rows.n_rows())
-            .map(|i| {
-                let (cols, vals) = self.rows.row(i);
-                cols.iter().zip(vals).map(|(&j, a)| a * du[j]).sum::<f64>() + dot(self.rows.extra_row(i), dv)
-            })
-            .collect()
+        (0..self.rows.n_rows()).map(|i| self.rows.row_times(i, du) + dot(self.rows.extra_row(i), dv)).collect()
     }
 
     fn where_(&self, i: usize) -> String {

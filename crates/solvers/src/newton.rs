@@ -40,7 +40,9 @@ use crate::linear::InSolver;
 use crate::residual;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
-use saddle_core::problem::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField, Workspace, max_abs};
+use saddle_core::problem::lagrangian::{
+    Iterate, KktResiduals, Lagrangian, StressField, Workspace, locked_in_forces, max_abs,
+};
 pub use saddle_core::problem::solver::Start;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
@@ -750,13 +752,11 @@ fn elastic_contact_start(
     if !f_u.is_empty() {
         z.copy_from_slice(f_u);
     }
-    if l.state().is_some() {
-        let mut s0 = vec![Sym::zeros(); l.n_points()];
-        l.elastic_stress(&vec![Sym::zeros(); l.n_points()], &mut s0);
+    if let Some(st) = l.state() {
         let mut f0 = vec![0.0; n];
-        l.divergence(&s0, &mut f0);
+        locked_in_forces(l, st, &mut f0);
         for (zi, f) in z.iter_mut().zip(&f0) {
-            *zi -= f;
+            *zi += f;
         }
     }
     if z.iter().any(|f| *f != 0.0) {

@@ -117,30 +117,25 @@ impl<'a> Evolution<'a> {
             source,
         })?;
         let unloaded = unloaded_obstacles(&problem);
-        let fail = |source| PathError::Solve { step: index, factor, source };
         let start = self.start.as_ref().filter(|s| s.check(&problem, solver.name()).is_ok());
-        let (solution, undetermined, warnings) = if unloaded.is_empty() {
-            let sol = match start {
-                Some(s) => solver.solve_warm(&problem, s, monitor),
-                None => solver.solve(&problem, monitor),
+        let mut solve = |l: &dyn Lagrangian, start: Option<&Start>| {
+            match start {
+                Some(s) => solver.solve_warm(l, s, monitor),
+                None => solver.solve(l, monitor),
             }
-            .map_err(fail)?;
-            (sol, Vec::new(), Vec::new())
+            .map_err(|source| PathError::Solve { step: index, factor, source })
+        };
+        let (solution, undetermined, warnings) = if unloaded.is_empty() {
+            (solve(&problem, start)?, Vec::new(), Vec::new())
         } else {
             let (rows_kept, extras_kept) = kept(&problem, &unloaded);
             let reduced = Reduced::new(&problem, rows_kept, extras_kept);
-            let sol = match start {
-                Some(s) => {
-                    let s = Start {
-                        u: s.u.clone(),
-                        extras: reduced.restrict_extras(&s.extras),
-                        lambda: reduced.restrict_rows(&s.lambda),
-                    };
-                    solver.solve_warm(&reduced, &s, monitor)
-                }
-                None => solver.solve(&reduced, monitor),
-            }
-            .map_err(fail)?;
+            let restricted = start.map(|s| Start {
+                u: s.u.clone(),
+                extras: reduced.restrict_extras(&s.extras),
+                lambda: reduced.restrict_rows(&s.lambda),
+            });
+            let sol = solve(&reduced, restricted.as_ref())?;
             let previous = self.start.as_ref().map(|s| s.extras.clone());
             expand(&problem, &reduced, &unloaded, sol, previous, factor)
         };
@@ -231,20 +226,14 @@ fn expand(
     rows.gap(&sol.u, &extras, &mut gap);
     for un in unloaded {
         let p = &parts[un.obstacle];
-        // g_i + H_ik t ≥ 0 on the obstacle's rows; the t at which the first row closes
-        let t = p
-            .row_range
-            .clone()
-            .map(|i| -gap[i] / rows.extra_row(i)[un.extra])
-            .fold(None, |m: Option<f64>, x| {
-                Some(match m {
-                    None => x,
-                    // H < 0: t ≤ −g/H for every row (the least); H > 0: t ≥ −g/H (the largest)
-                    Some(m) if rows.extra_row(p.row_range.start)[un.extra] < 0.0 => m.min(x),
-                    Some(m) => m.max(x),
-                })
-            })
-            .unwrap_or(0.0);
+        // g_i + H_ik t ≥ 0 on the obstacle's rows; the t at which the first row closes: the
+        // least −g/H when H < 0 (t ≤ −g/H for every row), the largest when H > 0
+        let bounds = p.row_range.clone().map(|i| -gap[i] / rows.extra_row(i)[un.extra]);
+        let t = if rows.extra_row(p.row_range.start)[un.extra] < 0.0 {
+            bounds.fold(f64::INFINITY, f64::min)
+        } else {
+            bounds.fold(f64::NEG_INFINITY, f64::max)
+        };
         extras[un.extra] += t;
         undetermined.extend(p.extra_range.clone());
         let path = problem.obstacles().path(OBSTACLE_PATH, un.obstacle);

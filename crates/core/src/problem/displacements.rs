@@ -67,13 +67,18 @@ impl ConstraintRows {
         &self.extra[i * self.n_extras..(i + 1) * self.n_extras]
     }
 
+    /// (G u)_i: row i's part in u, the displacement of its node along the row's normal, away
+    /// from the obstacle.
+    pub fn row_times(&self, i: usize, u: &[f64]) -> f64 {
+        let (cols, vals) = self.row(i);
+        cols.iter().zip(vals).map(|(&j, a)| a * u[j]).sum()
+    }
+
     /// g = G u + H V + c.
     pub fn gap(&self, u: &[f64], v: &[f64], g: &mut [f64]) {
         for (i, gi) in g.iter_mut().enumerate() {
-            let (cols, vals) = self.row(i);
-            let gu: f64 = cols.iter().zip(vals).map(|(&j, a)| a * u[j]).sum();
             let gv: f64 = self.extra_row(i).iter().zip(v).map(|(h, x)| h * x).sum();
-            *gi = gu + gv + self.offset[i];
+            *gi = self.row_times(i, u) + gv + self.offset[i];
         }
     }
 

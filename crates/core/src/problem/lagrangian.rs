@@ -474,13 +474,18 @@ pub trait Lagrangian: Sync {
     }
 }
 
-/// ‖BᵀCε_p‖ of L's operators and the plastic strain of `state` (theory §11.2): the internal
-/// forces that ε_p alone locks in, the scale of a step's equilibrium residual.
-pub fn locked_in_force(l: &(impl Lagrangian + ?Sized), state: &PlasticState) -> f64 {
+/// f = BᵀCε_p of L's operators and the plastic strain of `state` (theory §11.2): the internal
+/// forces that ε_p alone locks in (the load of an elastic start from the state).
+pub fn locked_in_forces(l: &(impl Lagrangian + ?Sized), state: &PlasticState, f: &mut [f64]) {
     let c = l.elasticity().stiffness_matrix();
     let s0: Vec<Sym> = state.plastic_strain.iter().map(|p| c * p).collect();
+    l.divergence(&s0, f);
+}
+
+/// ‖BᵀCε_p‖ ([`locked_in_forces`]): the scale of a step's equilibrium residual.
+pub fn locked_in_force(l: &(impl Lagrangian + ?Sized), state: &PlasticState) -> f64 {
     let mut f = vec![0.0; l.n_dofs()];
-    l.divergence(&s0, &mut f);
+    locked_in_forces(l, state, &mut f);
     norm(&f)
 }
 
