@@ -368,18 +368,21 @@ impl Summary {
     /// Marks the extras `names` undetermined (theory §11.3): null in `extras`, and the
     /// obstacles' quantities of the same name (`U`) null too.
     pub fn mark_undetermined(&mut self, names: &[String]) {
+        // with one obstacle `contact`, `U` and `force` hold its report under the plain names,
+        // also when it is named (extras `punch.U`); with several `contact` holds `name.quantity`
+        let single = self.obstacles.len() == 1;
         for n in names {
             self.extras.insert(n.clone(), None);
-            if let Some(q) = self.contact.get_mut(n) {
+            let (obstacle, local) = n.split_once('.').map_or((None, n.as_str()), |(o, q)| (Some(o), q));
+            if let Some(q) = self.contact.get_mut(if single { local } else { n.as_str() }) {
                 *q = f64::NAN;
             }
-            let (obstacle, local) = n.split_once('.').map_or((None, n.as_str()), |(o, q)| (Some(o), q));
             for o in self.obstacles.iter_mut().filter(|o| o.name.as_deref() == obstacle) {
                 if let Some(q) = o.quantities.get_mut(local) {
                     *q = f64::NAN;
                 }
             }
-            if n == "U" {
+            if single && local == "U" {
                 self.U = None;
             }
         }

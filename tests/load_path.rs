@@ -444,6 +444,27 @@ fn saddle_run_writes_a_load_path() {
     assert!(out.join("load_path.png").exists() && out.join("load_path.svg").exists());
 }
 
+/// A single obstacle with a name (extras `punch.U`): its undetermined U at zero load is null
+/// under every key that shows it — `extras`, the top-level `U`, `contact` (plain names with one
+/// obstacle) and its `obstacles` entry.
+#[test]
+fn a_named_obstacles_undetermined_extra_is_null_everywhere() {
+    let mut t = example("indentation.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([4, 4, 2]).unwrap());
+    set(&mut t, "obstacle.name", toml::Value::String("punch".into()));
+    set(&mut t, "load_path.substeps", toml::Value::Integer(1));
+    let (code, stderr, dir) = run_scene_kept(&toml::to_string(&t).unwrap());
+    assert_eq!(code, 0, "{stderr}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    let loaded = &s["steps"][1];
+    assert!(loaded["extras"]["punch.U"].as_f64().unwrap() > 0.0 && loaded["U"].as_f64().unwrap() > 0.0);
+    for v in [&s["extras"]["punch.U"], &s["U"], &s["contact"]["U"], &s["obstacles"][0]["U"]] {
+        assert!(v.is_null(), "an undetermined U shows as {v}");
+    }
+    assert!(s["contact"]["imprint"].as_f64().is_some(), "the imprint stays determined");
+}
+
 /// A step that does not converge stops the path: the steps before it stay written, the failed
 /// one is marked in summary.json and load_path.csv, no later step is solved, exit status 2.
 #[test]
