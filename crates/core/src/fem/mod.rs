@@ -3,6 +3,49 @@
 //! stresses at four points per element; theory §10), and [`loads`], tractions and body forces
 //! turned into consistent nodal forces.
 
+/// The accessors of [`Lagrangian`] (`lagrangian`) or of [`Discretisation`] (`discretisation`)
+/// that read an element's [`topology::NodalParts`] in its field `parts`: one definition for
+/// every nodal element.
+macro_rules! nodal_parts_accessors {
+    (lagrangian) => {
+        fn n_dofs(&self) -> usize {
+            self.parts.dofs.n_free
+        }
+        fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+            Some(self.parts.rigid_body_modes())
+        }
+        fn elasticity(&self) -> &Elasticity {
+            &self.parts.law
+        }
+        fn stresses(&self) -> Option<&dyn AdmissibleStresses> {
+            self.parts.stresses.as_deref()
+        }
+        fn constraints(&self) -> &ConstraintRows {
+            self.parts.obstacles.rows()
+        }
+        fn load(&self) -> &[f64] {
+            self.parts.obstacles.load()
+        }
+        fn nodal_load(&self) -> &[f64] {
+            &self.parts.nodal_load
+        }
+        fn pattern(&self) -> &SymmetricPattern {
+            &self.parts.pattern
+        }
+    };
+    (discretisation) => {
+        fn mesh(&self) -> &TetMesh {
+            &self.parts.mesh
+        }
+        fn dofs(&self) -> &DofMap {
+            &self.parts.dofs
+        }
+        fn discrete_obstacles(&self) -> &DiscreteObstacles {
+            &self.parts.obstacles
+        }
+    };
+}
+
 pub mod loads;
 pub mod p1p0;
 pub mod p2;

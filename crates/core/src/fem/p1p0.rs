@@ -8,9 +8,9 @@
 //! the values; the sparsity pattern is built once).
 
 use super::Discretisation;
-use super::topology::{assemble_columns, node_element_adjacency, stiffness_pattern};
+use super::topology::{NodalParts, assemble_columns, element_topology};
 use crate::error::SceneError;
-use crate::fem::loads::{Load, nodal_loads};
+use crate::fem::loads::Load;
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::problem::displacements::ConstraintRows;
@@ -18,9 +18,8 @@ use crate::problem::elasticity::Elasticity;
 use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
 use crate::problem::obstacles::{DiscreteObstacles, Obstacles};
 use crate::problem::pattern::SymmetricPattern;
-use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
+use crate::problem::stresses::AdmissibleStresses;
 use crate::problem::tensor::{SQRT2, Sym};
-use nalgebra::Matrix3;
 use rayon::prelude::*;
 
 /// The P1–P0 element as a scene's choice: `[discretisation] type = "p1"` (the default).
@@ -46,25 +45,10 @@ impl super::FiniteElement for P1 {
 /// L for P1 displacements and P0 generalised stresses on a tetrahedral mesh.
 #[derive(Debug)]
 pub struct P1P0Lagrangian {
-    mesh: TetMesh,
-    dofs: DofMap,
-    law: Elasticity,
-    stresses: Option<Box<dyn AdmissibleStresses>>,
-    /// K = K₁ ∩ K₂ ∩ …: the concatenated rows and load, each obstacle's own part.
-    obstacles: DiscreteObstacles,
-    /// Consistent nodal forces of tractions and body forces (empty: none).
-    nodal_load: Vec<f64>,
+    /// Mesh, dofs, material, P, K, loads, gradients, adjacency, pattern.
+    parts: NodalParts,
     /// |T|.
     weights: Vec<f64>,
-    /// Gradients of the barycentric coordinates of each element.
-    grads: Vec<[[f64; 3]; 4]>,
-    /// Node → (element, local vertex) adjacency, CSR.
-    adj_ptr: Vec<usize>,
-    adj: Vec<(u32, u8)>,
-    /// Free dof → node and component.
-    dof_node: Vec<u32>,
-    dof_comp: Vec<u8>,
-    pattern: SymmetricPattern,
 }
 
 impl P1P0Lagrangian {
@@ -82,59 +66,32 @@ impl P1P0Lagrangian {
         stresses: Option<Box<dyn AdmissibleStresses>>,
         obstacles: impl Into<Obstacles>,
     ) -> Result<Self, SceneError> {
-        if let Some(p) = &stresses {
-            assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
-        }
         // the vertices of a second-order mesh: P1 has no edge nodes
         let mesh = if mesh.is_second_order() { mesh.first_order() } else { mesh };
-        let dofs = DofMap::new(&mesh, dirichlet)?;
-        let (grads, weights): (Vec<_>, Vec<_>) =
-            (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
-        let (adj_ptr, adj) = node_element_adjacency(mesh.n_nodes(), &mesh.tets);
-        let (dof_node, dof_comp) = dofs.owners();
-        let pattern = stiffness_pattern(&mesh.tets, &dofs, &adj_ptr, &adj);
-        let obstacles = obstacles.into().discretise(&mesh, &dofs, crate::problem::obstacles::OBSTACLE_PATH)?;
-        Ok(Self {
-            mesh,
-            dofs,
-            law,
-            stresses,
-            obstacles,
-            nodal_load: Vec::new(),
-            weights,
-            grads,
-            adj_ptr,
-            adj,
-            dof_node,
-            dof_comp,
-            pattern,
-        })
+        let (parts, weights) = NodalParts::new(mesh, dirichlet, law, stresses, obstacles.into(), |m, d| {
+            element_topology(&m.tets, m.n_nodes(), d)
+        })?;
+        Ok(Self { parts, weights })
     }
 
     /// The same problem with tractions and body forces (theory §3 with loads on u).
     pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
-        let f = nodal_loads(&self.mesh, &self.dofs, loads)?;
-        self.nodal_load = if loads.is_empty() { Vec::new() } else { f };
+        self.parts.set_loads(loads)?;
         Ok(self)
-    }
-
-    #[inline]
-    fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
-        self.dofs.dof[n].map(|d| if d == FIXED { 0.0 } else { u[d as usize] })
     }
 
     /// Column j of Σ_T |T| B_Tᵀ C_T B_T (rows ≥ j), gathered from the elements around its node.
     fn assemble_column(&self, j: usize, col: &mut [f64], material: &Material<'_>) {
         col.iter_mut().for_each(|v| *v = 0.0);
-        let cp = self.pattern.col_ptr();
-        let rows = &self.pattern.row_idx()[cp[j]..cp[j + 1]];
-        let (b, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
-        for &(e, lb) in &self.adj[self.adj_ptr[b]..self.adj_ptr[b + 1]] {
+        let cp = self.parts.pattern.col_ptr();
+        let rows = &self.parts.pattern.row_idx()[cp[j]..cp[j + 1]];
+        let (b, c) = (self.parts.dof_node[j] as usize, self.parts.dof_comp[j] as usize);
+        for &(e, lb) in &self.parts.adj[self.parts.adj_ptr[b]..self.parts.adj_ptr[b + 1]] {
             let e = e as usize;
-            let g = &self.grads[e];
+            let g = &self.parts.grads[e];
             let cb = material.at(e) * strain_of_unit(&g[lb as usize], c) * self.weights[e];
-            for (a, &na) in self.mesh.tets[e].iter().enumerate() {
-                let da = self.dofs.dof[na];
+            for (a, &na) in self.parts.mesh.tets[e].iter().enumerate() {
+                let da = self.parts.dofs.dof[na];
                 // the free dofs of node a that are ≥ j are consecutive rows of the column
                 let Some(first) = (0..3).find(|&k| da[k] != FIXED && da[k] as usize >= j) else { continue };
                 let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
@@ -172,33 +129,8 @@ pub(super) fn strain_of_unit_dot(g: &[f64; 3], c: usize, v: &Sym) -> f64 {
     }
 }
 
-/// Gradients of the barycentric coordinates and the volume of element e.
-pub(super) fn element_gradients(mesh: &TetMesh, e: usize) -> ([[f64; 3]; 4], f64) {
-    let x = mesh.tets[e].map(|n| mesh.nodes[n]);
-    let jac = Matrix3::from_fn(|i, k| x[k + 1][i] - x[0][i]);
-    let inv = jac.try_inverse().expect("validated mesh has no degenerate element");
-    let mut g = [[0.0; 3]; 4];
-    for a in 1..4 {
-        for i in 0..3 {
-            g[a][i] = inv[(a - 1, i)];
-            g[0][i] -= inv[(a - 1, i)];
-        }
-    }
-    (g, jac.determinant() / 6.0)
-}
-
 impl Discretisation for P1P0Lagrangian {
-    fn mesh(&self) -> &TetMesh {
-        &self.mesh
-    }
-
-    fn dofs(&self) -> &DofMap {
-        &self.dofs
-    }
-
-    fn discrete_obstacles(&self) -> &DiscreteObstacles {
-        &self.obstacles
-    }
+    nodal_parts_accessors!(discretisation);
 
     fn name(&self) -> &'static str {
         "p1"
@@ -206,37 +138,10 @@ impl Discretisation for P1P0Lagrangian {
 }
 
 impl Lagrangian for P1P0Lagrangian {
-    fn n_dofs(&self) -> usize {
-        self.dofs.n_free
-    }
-
-    /// The rigid-body motions at the P1 nodes of the free dofs.
-    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
-        Some(RigidBodyModes::new(self.dof_node.clone(), &self.dof_comp, &self.mesh.nodes))
-    }
+    nodal_parts_accessors!(lagrangian);
 
     fn n_points(&self) -> usize {
-        self.mesh.n_elements()
-    }
-
-    fn elasticity(&self) -> &Elasticity {
-        &self.law
-    }
-
-    fn stresses(&self) -> Option<&dyn AdmissibleStresses> {
-        self.stresses.as_deref()
-    }
-
-    fn constraints(&self) -> &ConstraintRows {
-        self.obstacles.rows()
-    }
-
-    fn load(&self) -> &[f64] {
-        self.obstacles.load()
-    }
-
-    fn nodal_load(&self) -> &[f64] {
-        &self.nodal_load
+        self.parts.mesh.n_elements()
     }
 
     fn weights(&self) -> &[f64] {
@@ -245,11 +150,11 @@ impl Lagrangian for P1P0Lagrangian {
 
     fn strain(&self, u: &[f64], eps: &mut [Sym]) {
         eps.par_iter_mut().enumerate().for_each(|(e, out)| {
-            let g = &self.grads[e];
+            let g = &self.parts.grads[e];
             // ∇u = Σ_a u_a ⊗ ∇λ_a
             let mut m = [[0.0; 3]; 3];
-            for (a, &n) in self.mesh.tets[e].iter().enumerate() {
-                let ua = self.nodal(u, n);
+            for (a, &n) in self.parts.mesh.tets[e].iter().enumerate() {
+                let ua = self.parts.nodal(u, n);
                 for i in 0..3 {
                     for k in 0..3 {
                         m[i][k] += ua[i] * g[a][k];
@@ -270,24 +175,24 @@ impl Lagrangian for P1P0Lagrangian {
 
     fn divergence(&self, sigma: &[Sym], f: &mut [f64]) {
         f.par_iter_mut().enumerate().for_each(|(j, fj)| {
-            let (n, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
-            *fj = self.adj[self.adj_ptr[n]..self.adj_ptr[n + 1]]
+            let (n, c) = (self.parts.dof_node[j] as usize, self.parts.dof_comp[j] as usize);
+            *fj = self.parts.adj[self.parts.adj_ptr[n]..self.parts.adj_ptr[n + 1]]
                 .iter()
                 .map(|&(e, a)| {
                     self.weights[e as usize]
-                        * strain_of_unit_dot(&self.grads[e as usize][a as usize], c, &sigma[e as usize])
+                        * strain_of_unit_dot(&self.parts.grads[e as usize][a as usize], c, &sigma[e as usize])
                 })
                 .sum();
         });
     }
 
     fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)> {
-        let mut out = Vec::with_capacity(self.mesh.n_elements() * 36);
-        for (e, t) in self.mesh.tets.iter().enumerate() {
+        let mut out = Vec::with_capacity(self.parts.mesh.n_elements() * 36);
+        for (e, t) in self.parts.mesh.tets.iter().enumerate() {
             for (a, &n) in t.iter().enumerate() {
                 for c in 0..3 {
-                    let Some(j) = self.dofs.free(n, c) else { continue };
-                    let col = strain_of_unit(&self.grads[e][a], c);
+                    let Some(j) = self.parts.dofs.free(n, c) else { continue };
+                    let col = strain_of_unit(&self.parts.grads[e][a], c);
                     out.extend((0..6).filter(|&k| col[k] != 0.0).map(|k| (e, k, j, col[k])));
                 }
             }
@@ -295,14 +200,10 @@ impl Lagrangian for P1P0Lagrangian {
         out
     }
 
-    fn pattern(&self) -> &SymmetricPattern {
-        &self.pattern
-    }
-
     fn assemble(&self, material: Material<'_>, values: &mut [f64]) {
-        assert_eq!(values.len(), self.pattern.nnz());
+        assert_eq!(values.len(), self.parts.pattern.nnz());
         let column = |j: usize, col: &mut [f64]| self.assemble_column(j, col, &material);
-        assemble_columns(&self.pattern, 0, self.dofs.n_free, values, 128, &column);
+        assemble_columns(&self.parts.pattern, 0, self.parts.dofs.n_free, values, 128, &column);
     }
 }
 
@@ -311,6 +212,7 @@ mod tests {
     use super::*;
     use crate::mesh::box_mesh::BoxMesh;
     use crate::mesh::region::Region;
+    use nalgebra::Matrix3;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     fn problem() -> P1P0Lagrangian {
@@ -329,10 +231,10 @@ mod tests {
         let l = P1P0Lagrangian::new(mesh, &[], Elasticity::new(1.0, 0.2).unwrap(), None, None).unwrap();
         let grad = Matrix3::new(0.1, 0.2, -0.3, 0.05, -0.4, 0.7, 0.3, 0.0, 0.25);
         let mut u = vec![0.0; l.n_dofs()];
-        for (n, x) in l.mesh.nodes.iter().enumerate() {
+        for (n, x) in l.parts.mesh.nodes.iter().enumerate() {
             let v = grad * nalgebra::Vector3::from(*x);
             for c in 0..3 {
-                u[l.dofs.free(n, c).unwrap()] = v[c];
+                u[l.parts.dofs.free(n, c).unwrap()] = v[c];
             }
         }
         let mut eps = vec![Sym::zeros(); l.n_points()];
@@ -375,12 +277,12 @@ mod tests {
     fn assembled_stiffness_matches_the_operator() {
         // K u = Bᵀ (C B u) for a random u: assembly against the matrix-free operator
         let l = problem();
-        let c = l.law.stiffness_matrix();
+        let c = l.parts.law.stiffness_matrix();
         let values = l.stiffness(Material::Uniform(&c));
         let mut rng = StdRng::seed_from_u64(3);
         let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut ku = vec![0.0; l.n_dofs()];
-        l.pattern.matvec(&values, &u, &mut ku);
+        l.parts.pattern.matvec(&values, &u, &mut ku);
         let mut eps = vec![Sym::zeros(); l.n_points()];
         l.strain(&u, &mut eps);
         let sigma: Vec<Sym> = eps.iter().map(|e| c * e).collect();

@@ -15,10 +15,10 @@
 //! over matrix columns.
 
 use super::Discretisation;
-use super::p1p0::{element_gradients, strain_of_unit, strain_of_unit_dot};
-use super::topology::{assemble_columns, node_element_adjacency, stiffness_pattern};
+use super::p1p0::{strain_of_unit, strain_of_unit_dot};
+use super::topology::{NodalParts, assemble_columns, element_topology};
 use crate::error::SceneError;
-use crate::fem::loads::{Load, nodal_loads};
+use crate::fem::loads::Load;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::mesh::{TET_EDGES, TetMesh};
 use crate::problem::displacements::ConstraintRows;
@@ -26,7 +26,7 @@ use crate::problem::elasticity::Elasticity;
 use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
 use crate::problem::obstacles::{DiscreteObstacles, Obstacles};
 use crate::problem::pattern::SymmetricPattern;
-use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
+use crate::problem::stresses::AdmissibleStresses;
 use crate::problem::tensor::{SQRT2, Sym};
 use rayon::prelude::*;
 
@@ -81,24 +81,12 @@ impl super::FiniteElement for P2 {
 /// L for P2 displacements with the B̄ strain and stresses at four points per element.
 #[derive(Debug)]
 pub struct P2Lagrangian {
-    mesh: TetMesh,
-    dofs: DofMap,
-    law: Elasticity,
-    stresses: Option<Box<dyn AdmissibleStresses>>,
-    obstacles: DiscreteObstacles,
-    nodal_load: Vec<f64>,
+    /// Mesh (second order), dofs, material, P, K, loads, gradients, adjacency, pattern.
+    parts: NodalParts,
     /// |T|/4 at each of the four points of every element.
     weights: Vec<f64>,
-    /// Gradients of the barycentric coordinates of each element.
-    grads: Vec<[[f64; 3]; 4]>,
     /// The ten nodes of each element: vertices, then edge nodes in the order of [`TET_EDGES`].
     nodes: Vec<[usize; NODES]>,
-    /// Node → (element, local node 0..10) adjacency, CSR.
-    adj_ptr: Vec<usize>,
-    adj: Vec<(u32, u8)>,
-    dof_node: Vec<u32>,
-    dof_comp: Vec<u8>,
-    pattern: SymmetricPattern,
     /// Whether the volumetric strain is the element mean (B̄; the default) or pointwise (plain
     /// P2, which locks as ν → ½).
     mean_dilatation: bool,
@@ -150,14 +138,7 @@ impl P2Lagrangian {
         stresses: Option<Box<dyn AdmissibleStresses>>,
         obstacles: impl Into<Obstacles>,
     ) -> Result<Self, SceneError> {
-        if let Some(p) = &stresses {
-            assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
-        }
         let mesh = if mesh.is_second_order() { mesh } else { mesh.second_order() };
-        let dofs = DofMap::new(&mesh, dirichlet)?;
-        let (grads, volumes): (Vec<_>, Vec<_>) =
-            (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
-        let weights = volumes.iter().flat_map(|v| [v / POINTS as f64; POINTS]).collect();
         let so = mesh.second_order.as_ref().expect("second order");
         let nodes: Vec<[usize; NODES]> = mesh
             .tets
@@ -165,27 +146,11 @@ impl P2Lagrangian {
             .zip(&so.tet_edges)
             .map(|(t, ed)| std::array::from_fn(|a| if a < 4 { t[a] } else { ed[a - 4] }))
             .collect();
-        let (adj_ptr, adj) = node_element_adjacency(mesh.n_nodes(), &nodes);
-        let (dof_node, dof_comp) = dofs.owners();
-        let pattern = stiffness_pattern(&nodes, &dofs, &adj_ptr, &adj);
-        let obstacles = obstacles.into().discretise(&mesh, &dofs, crate::problem::obstacles::OBSTACLE_PATH)?;
-        Ok(Self {
-            mesh,
-            dofs,
-            law,
-            stresses,
-            obstacles,
-            nodal_load: Vec::new(),
-            weights,
-            grads,
-            nodes,
-            adj_ptr,
-            adj,
-            dof_node,
-            dof_comp,
-            pattern,
-            mean_dilatation: true,
-        })
+        let (parts, volumes) = NodalParts::new(mesh, dirichlet, law, stresses, obstacles.into(), |m, d| {
+            element_topology(&nodes, m.n_nodes(), d)
+        })?;
+        let weights = volumes.iter().flat_map(|v| [v / POINTS as f64; POINTS]).collect();
+        Ok(Self { parts, weights, nodes, mean_dilatation: true })
     }
 
     /// The same problem with the volumetric strain pointwise (`false`: plain P2, which locks as
@@ -197,27 +162,21 @@ impl P2Lagrangian {
 
     /// The same problem with tractions and body forces (consistent P2 nodal forces).
     pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
-        let f = nodal_loads(&self.mesh, &self.dofs, loads)?;
-        self.nodal_load = if loads.is_empty() { Vec::new() } else { f };
+        self.parts.set_loads(loads)?;
         Ok(self)
-    }
-
-    #[inline]
-    fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
-        self.dofs.dof[n].map(|d| if d == FIXED { 0.0 } else { u[d as usize] })
     }
 
     /// Column j of Σ_T Σ_q w_q B̄_qᵀ C_q B̄_q (rows ≥ j), gathered from the elements around its
     /// node.
     fn assemble_column(&self, j: usize, col: &mut [f64], material: &Material<'_>) {
         col.iter_mut().for_each(|v| *v = 0.0);
-        let cp = self.pattern.col_ptr();
-        let rows = &self.pattern.row_idx()[cp[j]..cp[j + 1]];
-        let (b, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
+        let cp = self.parts.pattern.col_ptr();
+        let rows = &self.parts.pattern.row_idx()[cp[j]..cp[j + 1]];
+        let (b, c) = (self.parts.dof_node[j] as usize, self.parts.dof_comp[j] as usize);
         let md = self.mean_dilatation;
-        for &(e, lb) in &self.adj[self.adj_ptr[b]..self.adj_ptr[b + 1]] {
+        for &(e, lb) in &self.parts.adj[self.parts.adj_ptr[b]..self.parts.adj_ptr[b + 1]] {
             let e = e as usize;
-            let g = &self.grads[e];
+            let g = &self.parts.grads[e];
             // C B̄ of the column at each point, weighted, and its trace
             let mut cb = [Sym::zeros(); POINTS];
             let mut tr = [0.0; POINTS];
@@ -231,7 +190,7 @@ impl P2Lagrangian {
                 tr[q] = cb[q][0] + cb[q][1] + cb[q][2];
             }
             for a in 0..NODES {
-                let da = self.dofs.dof[self.nodes[e][a]];
+                let da = self.parts.dofs.dof[self.nodes[e][a]];
                 let Some(first) = (0..3).find(|&k| da[k] != FIXED && da[k] as usize >= j) else { continue };
                 let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
                 let ga: [[f64; 3]; POINTS] = std::array::from_fn(|q| shape_gradient(g, a, q));
@@ -255,17 +214,7 @@ impl P2Lagrangian {
 }
 
 impl Discretisation for P2Lagrangian {
-    fn mesh(&self) -> &TetMesh {
-        &self.mesh
-    }
-
-    fn dofs(&self) -> &DofMap {
-        &self.dofs
-    }
-
-    fn discrete_obstacles(&self) -> &DiscreteObstacles {
-        &self.obstacles
-    }
+    nodal_parts_accessors!(discretisation);
 
     fn name(&self) -> &'static str {
         "p2"
@@ -282,37 +231,10 @@ impl Discretisation for P2Lagrangian {
 }
 
 impl Lagrangian for P2Lagrangian {
-    fn n_dofs(&self) -> usize {
-        self.dofs.n_free
-    }
-
-    /// The rigid-body motions at the nodes (vertices and edge nodes) of the free dofs.
-    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
-        Some(RigidBodyModes::new(self.dof_node.clone(), &self.dof_comp, &self.mesh.nodes))
-    }
+    nodal_parts_accessors!(lagrangian);
 
     fn n_points(&self) -> usize {
-        POINTS * self.mesh.n_elements()
-    }
-
-    fn elasticity(&self) -> &Elasticity {
-        &self.law
-    }
-
-    fn stresses(&self) -> Option<&dyn AdmissibleStresses> {
-        self.stresses.as_deref()
-    }
-
-    fn constraints(&self) -> &ConstraintRows {
-        self.obstacles.rows()
-    }
-
-    fn load(&self) -> &[f64] {
-        self.obstacles.load()
-    }
-
-    fn nodal_load(&self) -> &[f64] {
-        &self.nodal_load
+        POINTS * self.parts.mesh.n_elements()
     }
 
     fn weights(&self) -> &[f64] {
@@ -322,11 +244,11 @@ impl Lagrangian for P2Lagrangian {
     fn strain(&self, u: &[f64], eps: &mut [Sym]) {
         let md = self.mean_dilatation;
         eps.par_chunks_mut(POINTS).enumerate().for_each(|(e, out)| {
-            let g = &self.grads[e];
+            let g = &self.parts.grads[e];
             // ∇u at each point = Σ_a u_a ⊗ ∇N_a(x_q)
             let mut m = [[[0.0; 3]; 3]; POINTS];
             for (a, &n) in self.nodes[e].iter().enumerate() {
-                let ua = self.nodal(u, n);
+                let ua = self.parts.nodal(u, n);
                 if ua == [0.0; 3] {
                     continue;
                 }
@@ -359,12 +281,12 @@ impl Lagrangian for P2Lagrangian {
     fn divergence(&self, sigma: &[Sym], f: &mut [f64]) {
         let md = self.mean_dilatation;
         f.par_iter_mut().enumerate().for_each(|(j, fj)| {
-            let (n, c) = (self.dof_node[j] as usize, self.dof_comp[j] as usize);
-            *fj = self.adj[self.adj_ptr[n]..self.adj_ptr[n + 1]]
+            let (n, c) = (self.parts.dof_node[j] as usize, self.parts.dof_comp[j] as usize);
+            *fj = self.parts.adj[self.parts.adj_ptr[n]..self.parts.adj_ptr[n + 1]]
                 .iter()
                 .map(|&(e, a)| {
                     let (e, a) = (e as usize, a as usize);
-                    let g = &self.grads[e];
+                    let g = &self.parts.grads[e];
                     (0..POINTS)
                         .map(|q| {
                             let p = POINTS * e + q;
@@ -384,8 +306,8 @@ impl Lagrangian for P2Lagrangian {
             for q in 0..POINTS {
                 for (a, &n) in t.iter().enumerate() {
                     for c in 0..3 {
-                        let Some(j) = self.dofs.free(n, c) else { continue };
-                        let (ga, delta) = column(&self.grads[e], a, c, q, self.mean_dilatation);
+                        let Some(j) = self.parts.dofs.free(n, c) else { continue };
+                        let (ga, delta) = column(&self.parts.grads[e], a, c, q, self.mean_dilatation);
                         let mut col = strain_of_unit(&ga, c);
                         for k in 0..3 {
                             col[k] += delta;
@@ -398,14 +320,10 @@ impl Lagrangian for P2Lagrangian {
         out
     }
 
-    fn pattern(&self) -> &SymmetricPattern {
-        &self.pattern
-    }
-
     fn assemble(&self, material: Material<'_>, values: &mut [f64]) {
-        assert_eq!(values.len(), self.pattern.nnz());
+        assert_eq!(values.len(), self.parts.pattern.nnz());
         let column = |j: usize, col: &mut [f64]| self.assemble_column(j, col, &material);
-        assemble_columns(&self.pattern, 0, self.dofs.n_free, values, 64, &column);
+        assemble_columns(&self.parts.pattern, 0, self.parts.dofs.n_free, values, 64, &column);
     }
 }
 
@@ -432,7 +350,7 @@ mod tests {
     /// u(x) with components quadratic in x: u_i = G_ij x_j + ½ H_ijk x_j x_k.
     fn quadratic_field(l: &P2Lagrangian, grad: &Matrix3<f64>, hess: &[[[f64; 3]; 3]; 3]) -> Vec<f64> {
         let mut u = vec![0.0; l.n_dofs()];
-        for (n, x) in l.mesh.nodes.iter().enumerate() {
+        for (n, x) in l.parts.mesh.nodes.iter().enumerate() {
             for i in 0..3 {
                 let mut v = 0.0;
                 for j in 0..3 {
@@ -441,7 +359,7 @@ mod tests {
                         v += 0.5 * hess[i][j][k] * x[j] * x[k];
                     }
                 }
-                u[l.dofs.free(n, i).unwrap()] = v;
+                u[l.parts.dofs.free(n, i).unwrap()] = v;
             }
         }
         u
@@ -449,7 +367,7 @@ mod tests {
 
     /// The Gauss points of element e.
     fn points(l: &P2Lagrangian, e: usize) -> [[f64; 3]; POINTS] {
-        let x = l.mesh.tets[e].map(|n| l.mesh.nodes[n]);
+        let x = l.parts.mesh.tets[e].map(|n| l.parts.mesh.nodes[n]);
         std::array::from_fn(|q| std::array::from_fn(|k| (0..4).map(|i| if i == q { A } else { B } * x[i][k]).sum()))
     }
 
@@ -476,7 +394,7 @@ mod tests {
                 crate::problem::tensor::from_matrix(&g)
             };
             let mut worst: f64 = 0.0;
-            for e in 0..l.mesh.n_elements() {
+            for e in 0..l.parts.mesh.n_elements() {
                 let xs = points(&l, e);
                 let exact_q: Vec<Sym> = xs.iter().map(exact).collect();
                 let mean_tr: f64 = exact_q.iter().map(|s| s[0] + s[1] + s[2]).sum::<f64>() / 4.0;
@@ -522,12 +440,12 @@ mod tests {
     fn assembled_stiffness_matches_the_operator_and_the_energy() {
         for md in [false, true] {
             let l = problem(md);
-            let c = l.law.stiffness_matrix();
+            let c = l.parts.law.stiffness_matrix();
             let values = l.stiffness(Material::Uniform(&c));
             let mut rng = StdRng::seed_from_u64(3);
             let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
             let mut ku = vec![0.0; l.n_dofs()];
-            l.pattern.matvec(&values, &u, &mut ku);
+            l.parts.pattern.matvec(&values, &u, &mut ku);
             let mut eps = vec![Sym::zeros(); l.n_points()];
             l.strain(&u, &mut eps);
             let sigma: Vec<Sym> = eps.iter().map(|e| c * e).collect();
