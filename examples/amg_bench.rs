@@ -11,10 +11,10 @@
 //! memory is the process's high-water mark (VmHWM), so run `amg` and `direct` separately to
 //! compare memory.
 
+use saddle::core::Material;
 use saddle::core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
 use saddle::core::mesh::dofs::FIXED;
-use saddle::core::problem::lagrangian::RIGID_BODY_MODES;
-use saddle::core::{Lagrangian, Material};
+use saddle::core::problem::operators::RIGID_BODY_MODES;
 use saddle::scene::Scene;
 use std::time::Instant;
 
@@ -49,23 +49,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let t = Instant::now();
     let (l, _) = scene.into_problem()?;
-    let p = l.pattern();
+    let p = l.element.pattern();
     let lower = LowerCsc::new(p.n(), p.col_ptr(), p.row_idx());
-    let c = l.elasticity().stiffness_matrix();
-    let values = l.stiffness(Material::Uniform(&c));
-    let n = l.n_dofs();
+    let c = l.lagrangian().data.elasticity.stiffness_matrix();
+    let values = l.element.stiffness(Material::Uniform(&c));
+    let n = l.element.n_dofs();
     let mut b = vec![0.0; n];
-    for d in &l.dofs().dof {
+    for d in &l.element.dofs().dof {
         if d[2] != FIXED {
             b[d[2] as usize] = -1.0;
         }
     }
-    println!("{path}: {n} dofs, {} nnz (lower), assembly {:.2} s", l.pattern().nnz(), t.elapsed().as_secs_f64());
+    println!(
+        "{path}: {n} dofs, {} nnz (lower), assembly {:.2} s",
+        l.element.pattern().nnz(),
+        t.elapsed().as_secs_f64()
+    );
 
     let amg_solution = if mode == "amg" || mode == "both" {
         let t = Instant::now();
         let a = Csr::from_symmetric_lower(lower, &values);
-        let modes = l.rigid_body_modes().ok_or("no rigid-body modes")?;
+        let modes = l.element.rigid_body_modes().ok_or("no rigid-body modes")?;
         let near_null = NearNullSpace::new(modes.node, modes.modes, RIGID_BODY_MODES)?;
         let t_csr = t.elapsed().as_secs_f64();
         let t = Instant::now();

@@ -9,7 +9,7 @@
 //! cargo run --release --example indentation_study -- 16 16 8   # other cell counts
 //! ```
 
-use saddle::core::{Discretisation, Evolution, Lagrangian, Silent, step_factors};
+use saddle::core::{Evolution, Silent, step_factors};
 use saddle::output::Summary;
 use saddle::scene::Scene;
 use std::path::Path;
@@ -39,7 +39,7 @@ fn main() {
     }
     let (l, solver) = scene.into_problem().expect("the scene assembles");
     let solver = solver.expect("the scene names newton");
-    println!("{} dofs, {} elements, solver {}", l.n_dofs(), l.mesh().n_elements(), solver.name());
+    println!("{} dofs, {} elements, solver {}", l.element.n_dofs(), l.element.mesh().n_elements(), solver.name());
     let mut runs = Vec::new();
     for n in STEPS {
         let started = Instant::now();
@@ -51,7 +51,7 @@ fn main() {
             let step = path.step(f, solver.as_ref(), &mut Silent).expect("the step solves");
             assert!(step.converged(), "{n} steps, step {k}: {:?}", step.solution.report.stop_reason);
             iterations += step.solution.report.iterations;
-            let s = Summary::new(&step.problem, &step.solution, None);
+            let s = Summary::new(step.problem.view(), &step.solution, None);
             if k == n {
                 u_loaded = step.solution.extras[0];
                 imprint_loaded = s.contact["imprint"];

@@ -32,11 +32,11 @@ fn main() {
         for (k, scene) in [&punch, &sphere_scene].into_iter().enumerate() {
             let t = Instant::now();
             let (l, _) = scene.clone().into_problem().expect("problem");
-            let sol = newton.solve(&l, &mut Silent).expect("solve");
+            let sol = newton.solve(&l.lagrangian(), &mut Silent).expect("solve");
             times[k].push(t.elapsed().as_secs_f64());
             assert!(sol.report.converged);
             iterations[k] = sol.report.iterations;
-            dofs = saddle::core::Lagrangian::n_dofs(&l);
+            dofs = l.element.n_dofs();
             eprintln!("run {run}: {} {:.2} s, {} iterations", ["punch", "sphere"][k], times[k][run], iterations[k]);
         }
     }

@@ -18,11 +18,12 @@
 //! a row acting on all three dofs of its node (the normals are not an axis): Newton and the
 //! penalty solve such rows in the coordinates of `saddle_solvers::row_basis`.
 
+use saddle::core::{P1P0Element, kkt};
 use saddle_contact::{conformance, zone};
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::{
-    AdmissibleDisplacements, BoxMesh, ConstraintRows, ContactReport, Dirichlet, Discretisation, DofMap, Elasticity,
-    Lagrangian, P1P0Lagrangian, Region, SceneError, Silent, Solver, TetMesh, contact_set,
+    AdmissibleDisplacements, BoxMesh, ConstraintRows, ContactReport, Dirichlet, DiscreteProblem, DofMap, Elasticity,
+    Region, SceneError, Silent, Solver, TetMesh, contact_set,
 };
 use saddle_solvers::{Newton, Penalty, Uzawa};
 use saddle_yield::VonMises;
@@ -179,12 +180,12 @@ pub fn run(cells: [usize; 3]) -> Vec<Outcome> {
         conformance::check_all(&cone, &mesh, &dofs, seed, 1e-3).unwrap_or_else(|e| panic!("K kit: {e}"));
     }
     // 2. L: elasticity, von Mises, the cone
-    let l = P1P0Lagrangian::new(
-        mesh,
-        &dirichlet,
+    let l = DiscreteProblem::new(
+        Box::new(P1P0Element::new(mesh, &dirichlet).unwrap()),
         Elasticity::new(100.0, 0.3).expect("E, ν"),
-        Some(Box::new(VonMises::new(1.0, 5.0))),
+        Some(Box::new(VonMises::new(1.0, 5.0).unwrap())),
         Some(Box::new(cone.clone()) as Box<dyn AdmissibleDisplacements>),
+        &[],
     )
     .expect("problem");
     // 3. every solver
@@ -196,10 +197,10 @@ pub fn run(cells: [usize; 3]) -> Vec<Outcome> {
         .iter()
         .map(|s| {
             let t = Instant::now();
-            let sol = s.solve(&l, &mut Silent).unwrap_or_else(|e| panic!("{}: {e}", s.name()));
+            let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("{}: {e}", s.name()));
             let seconds = t.elapsed().as_secs_f64();
-            let report = cone.report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda);
-            let mut ws = saddle_core::Workspace::new(&l);
+            let report = cone.report(l.element.mesh(), l.lagrangian().data.rows, &sol.extras, &sol.lambda);
+            let mut ws = saddle_core::Workspace::new(&l.lagrangian());
             Outcome {
                 solver: s.name(),
                 converged: sol.report.converged,
@@ -208,7 +209,7 @@ pub fn run(cells: [usize; 3]) -> Vec<Outcome> {
                 force: report.get("force").expect("the cone reports its force"),
                 contact_nodes: report.contact_nodes,
                 plastic: sol.stress.n_plastic(),
-                kkt: l.kkt(&sol.iterate(), &mut ws).max(),
+                kkt: kkt(&l.lagrangian(), &sol.iterate(), &mut ws).max(),
                 seconds,
             }
         })

@@ -16,8 +16,8 @@
 
 use crate::report::{ReportError, SceneSource};
 use saddle_core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
-use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
-use saddle_core::{Discretisation, Lagrangian, Load, Material, Obstacles, P1P0Lagrangian, Silent, Solver, Workspace};
+use saddle_core::problem::operators::RIGID_BODY_MODES;
+use saddle_core::{DiscreteProblem, Load, Material, Obstacles, P1P0Element, Silent, Solver, Workspace, kkt};
 use saddle_solvers::{LinearSolver, Newton};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -219,10 +219,11 @@ pub fn measure(
     let mesh = scene.mesh.build(&scene.base_dir).map_err(saddle_core::SceneError::from)?;
     let mesh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let l = P1P0Lagrangian::new(mesh, &scene.dirichlet, scene.material, scene.yield_surface, scene.obstacle)?
-        .with_loads(&scene.load)?;
+    let element = Box::new(P1P0Element::new(mesh, &scene.dirichlet)?);
+    let problem = DiscreteProblem::new(element, scene.material, scene.yield_surface, scene.obstacle, &scene.load)?;
     let problem_s = t.elapsed().as_secs_f64();
-    let c = l.elasticity().stiffness_matrix();
+    let l = &problem.lagrangian();
+    let c = l.data.elasticity.stiffness_matrix();
     let mut k = vec![0.0; l.pattern().nnz()];
     let t = Instant::now();
     l.assemble(Material::Uniform(&c), &mut k);
@@ -235,7 +236,7 @@ pub fn measure(
         reset_peak_memory();
         let mut linear = LinearSolve::default();
         let t = Instant::now();
-        let mut chol = SparseCholesky::analyse(lower(&l), "elastic stiffness").map_err(bench_error)?;
+        let mut chol = SparseCholesky::analyse(lower(&problem), "elastic stiffness").map_err(bench_error)?;
         linear.analyse_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         chol.factorise(&k).map_err(bench_error)?;
@@ -263,7 +264,7 @@ pub fn measure(
         let t = Instant::now();
         let modes = l.rigid_body_modes().ok_or_else(|| bench_error("no rigid-body modes"))?;
         let near_null = NearNullSpace::new(modes.node, modes.modes, RIGID_BODY_MODES).map_err(bench_error)?;
-        let a = Csr::from_symmetric_lower(lower(&l), &k);
+        let a = Csr::from_symmetric_lower(lower(&problem), &k);
         let amg = SmoothedAggregation::new(&a, &near_null, &AmgParams::default()).map_err(bench_error)?;
         let setup_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
@@ -291,7 +292,7 @@ pub fn measure(
         runs.push(run);
     }
     for name in opts.solvers.iter().filter(|n| wanted(n)) {
-        let run = run_solver(&l, name, "scene")?;
+        let run = run_solver(&problem, name, "scene")?;
         progress(&format!(
             "{} dofs: {name}: {:.2} s, {} iterations, KKT {:.1e}{}",
             l.n_dofs(),
@@ -306,7 +307,7 @@ pub fn measure(
         cells,
         dofs: l.n_dofs(),
         elements: l.n_points(),
-        contact_rows: l.constraints().n_rows(),
+        contact_rows: l.data.rows.n_rows(),
         mesh_s,
         problem_s,
         reassembly_s,
@@ -321,7 +322,7 @@ fn bench_error(e: impl std::fmt::Display) -> ReportError {
 }
 
 /// The scene at `cells` without yield surface and obstacle, loaded by a body force instead.
-fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<Box<dyn Discretisation>, ReportError> {
+fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<DiscreteProblem, ReportError> {
     let mut scene = source.scene(Some(cells))?;
     scene.yield_surface = None;
     scene.obstacle = Obstacles::none();
@@ -331,13 +332,14 @@ fn elastic_variant(source: &SceneSource, cells: [usize; 3]) -> Result<Box<dyn Di
 }
 
 /// The lower triangle of L's matrices as the linear algebra takes it.
-fn lower(l: &dyn Discretisation) -> LowerCsc<'_> {
-    let p = l.pattern();
+fn lower(problem: &DiscreteProblem) -> LowerCsc<'_> {
+    let p = problem.element.pattern();
     LowerCsc::new(p.n(), p.col_ptr(), p.row_idx())
 }
 
 /// Runs solver `name` (defaults) on `l`, measuring time and peak memory.
-fn run_solver(l: &dyn Discretisation, name: &str, variant: &'static str) -> Result<SolverRun, ReportError> {
+fn run_solver(problem: &DiscreteProblem, name: &str, variant: &'static str) -> Result<SolverRun, ReportError> {
+    let l = &problem.lagrangian();
     let solver = solver_spec(name).map_err(bench_error)?.0;
     reset_peak_memory();
     let t = Instant::now();
@@ -346,7 +348,7 @@ fn run_solver(l: &dyn Discretisation, name: &str, variant: &'static str) -> Resu
     let peak_mib = peak_memory_mib();
     Ok(match result {
         Ok(sol) => {
-            let kkt = l.kkt(&sol.iterate(), &mut Workspace::new(l)).max();
+            let kkt = kkt(l, &sol.iterate(), &mut Workspace::new(l)).max();
             let r = &sol.report;
             SolverRun {
                 solver: name.into(),
@@ -387,7 +389,7 @@ pub fn generate(
 ) -> Result<Bench, ReportError> {
     let source = SceneSource::read(scene)?;
     let base = source.box_cells().map_err(bench_error)?;
-    let base_dofs = source.problem(None)?.n_dofs();
+    let base_dofs = source.problem(None)?.element.n_dofs();
     let load0 = load_average();
     let mut sizes = vec![];
     for &target in &opts.sizes {

@@ -31,9 +31,9 @@ use crate::scene::Scene;
 use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid, RigidPunch, RigidSphere};
 use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{
-    AdmissibleStresses, BoxMesh, Component, Dirichlet, Discretisation, Elasticity, FiniteElement, Lagrangian,
+    AdmissibleStresses, BoxMesh, Component, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Lagrangian,
     NamedObstacle, Obstacles, P2, Region, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace,
-    contact_set,
+    contact_set, kkt,
 };
 use saddle_yield::VonMises;
 use std::path::PathBuf;
@@ -99,7 +99,7 @@ pub struct KitScene {
     /// Name.
     pub name: &'static str,
     /// L.
-    pub problem: Box<dyn Discretisation>,
+    pub problem: DiscreteProblem,
     /// For homogeneous compression: the closed-form U.
     pub exact_u: Option<f64>,
 }
@@ -186,14 +186,14 @@ impl Johnson {
             ..base_scene(
                 mesh,
                 Elasticity { young: self.young, poisson: self.nu },
-                Some(Box::new(VonMises::new(self.k0, self.h))),
-                RigidPunch::new(self.force, zone, self.gap.clone()),
+                Some(Box::new(VonMises::new(self.k0, self.h).unwrap())),
+                RigidPunch::new(self.force, zone, self.gap.clone()).unwrap(),
             )
         }
     }
 
     /// The assembled problem.
-    pub fn problem(&self) -> Box<dyn Discretisation> {
+    pub fn problem(&self) -> DiscreteProblem {
         assemble(self.scene()).expect("kit scenes are valid")
     }
 }
@@ -238,8 +238,8 @@ pub fn homogeneous(f: f64) -> Scene {
         ..base_scene(
             BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]),
             Elasticity { young: 100.0, poisson: 0.3 },
-            Some(Box::new(VonMises::new(1.0, 5.0))),
-            RigidPunch::new(f, group("zmin"), Box::new(Flat::default())),
+            Some(Box::new(VonMises::new(1.0, 5.0).unwrap())),
+            RigidPunch::new(f, group("zmin"), Box::new(Flat::default())).unwrap(),
         )
     }
 }
@@ -260,7 +260,7 @@ pub fn hertz(cells: [usize; 3], ratio: f64) -> Scene {
             BoxMesh::new([0.0; 3], [6.0; 3], cells).graded([0.0; 3], ratio),
             Elasticity { young: 100.0, poisson: 0.3 },
             None,
-            RigidPunch::new(0.075, zone, Box::new(Paraboloid::new(5.0))),
+            RigidPunch::new(0.075, zone, Box::new(Paraboloid::new(5.0))).unwrap(),
         )
     }
 }
@@ -284,7 +284,7 @@ pub fn two_punches() -> Scene {
     let punch = |name: &str, f: f64, x: f64| {
         let zone = Region::All(vec![group("zmin"), Region::Disc { center: [x, 0.0], radius: 0.3 }]);
         let gap = Paraboloid { R: 5.0, center: [x, 0.0] };
-        NamedObstacle::new(name, Box::new(RigidPunch::new(f, zone, Box::new(gap))))
+        NamedObstacle::new(name, Box::new(RigidPunch::new(f, zone, Box::new(gap)).unwrap()))
     };
     let obstacles =
         Obstacles::new(vec![punch("left", 0.1, -0.35), punch("right", 0.25, 0.35)]).expect("two named obstacles");
@@ -293,12 +293,12 @@ pub fn two_punches() -> Scene {
 
 /// Validates `scene` (as reading a file does) and assembles L, or the scene error — among them
 /// the rigid-body motion a scene's Dirichlet conditions leave free ([`Scene::into_problem`]).
-pub fn assemble(scene: Scene) -> Result<Box<dyn Discretisation>, SceneError> {
+pub fn assemble(scene: Scene) -> Result<DiscreteProblem, SceneError> {
     scene.validate()?;
     Ok(scene.into_problem()?.0)
 }
 
-fn kit_problem(scene: Scene) -> Box<dyn Discretisation> {
+fn kit_problem(scene: Scene) -> DiscreteProblem {
     assemble(scene).expect("kit scenes are valid")
 }
 
@@ -353,7 +353,7 @@ pub fn johnson_p2() -> Johnson {
 }
 
 /// Compares `a` with the reference `b` on `l`.
-pub fn agreement(l: &dyn Lagrangian, a: &Solution, b: &Solution) -> Agreement {
+pub fn agreement(l: &Lagrangian<'_>, a: &Solution, b: &Solution) -> Agreement {
     let u_rel = if b.extras.is_empty() {
         let d = a.u.iter().zip(&b.u).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         d / b.u.iter().map(|x| x.abs()).fold(f64::MIN_POSITIVE, f64::max)
@@ -371,11 +371,11 @@ pub fn agreement(l: &dyn Lagrangian, a: &Solution, b: &Solution) -> Agreement {
     // elements whose trial stress lies within 1e-8 of the yield surface may flip either way
     let mut eps = vec![Sym::zeros(); l.n_points()];
     l.strain(&b.u, &mut eps);
-    let law = *l.elasticity();
-    let q0 = vec![0.0; l.hardening_dim()];
+    let law = *l.data.elasticity;
+    let q0 = vec![0.0; l.data.hardening_dim()];
     let plastic_mismatch = (0..l.n_points())
         .filter(|&e| a.stress.plastic[e] != b.stress.plastic[e])
-        .filter(|&e| match l.plasticity() {
+        .filter(|&e| match l.data.plasticity() {
             Some(p) => {
                 let tr = law.stress(&eps[e]);
                 p.contains(&tr, &q0, 1e-8) == p.contains(&tr, &q0, -1e-8)
@@ -387,9 +387,9 @@ pub fn agreement(l: &dyn Lagrangian, a: &Solution, b: &Solution) -> Agreement {
 }
 
 /// [σ̂_a − σ̂_b] / [σ̂_b] in the energy norm of theory §1.
-pub fn energy_distance(l: &dyn Lagrangian, a: &StressField, b: &StressField) -> f64 {
-    let law = *l.elasticity();
-    let p = l.plasticity();
+pub fn energy_distance(l: &Lagrangian<'_>, a: &StressField, b: &StressField) -> f64 {
+    let law = *l.data.elasticity;
+    let p = l.data.plasticity();
     let (mut num, mut den) = (0.0, 0.0);
     for (e, w) in l.weights().iter().enumerate() {
         let ds = a.sigma[e] - b.sigma[e];
@@ -422,7 +422,7 @@ pub fn check_solver(
     let mut out = Vec::new();
     for s in scenes() {
         let fail = |check: &'static str, message: String| KitFailure { scene: s.name.into(), check, message };
-        let l = &s.problem;
+        let l = &s.problem.lagrangian();
         let sol = solver.solve(l, &mut Silent).map_err(|e| fail("solve", e.to_string()))?;
         if !sol.report.converged {
             return Err(fail(
@@ -430,7 +430,7 @@ pub fn check_solver(
                 format!("stopped: {:?} at KKT {:.2e}", sol.report.stop_reason, sol.report.kkt.max()),
             ));
         }
-        let kkt = l.kkt(&sol.iterate(), &mut Workspace::new(l)).max();
+        let kkt = kkt(l, &sol.iterate(), &mut Workspace::new(l)).max();
         if !within(kkt, solver.tolerance()) {
             return Err(fail(
                 "kkt",
@@ -439,7 +439,7 @@ pub fn check_solver(
         }
         if let Some(exact) = s.exact_u {
             // U as the obstacle reports it, by name (not the position of an extra)
-            let u = single_quantity(l, &sol, "U")
+            let u = single_quantity(s.problem.view(), &sol, "U")
                 .ok_or_else(|| fail("closed form", "the scene's single obstacle reports no quantity U".into()))?;
             let err = (u - exact).abs() / exact;
             if !within(err, tol.u_rel) {
@@ -486,8 +486,9 @@ mod tests {
 
     /// Dofs, elements, contact rows and extras of the assembled problem.
     fn sizes(scene: Scene) -> [usize; 4] {
-        let l = assemble(scene).unwrap();
-        [l.n_dofs(), l.n_points(), l.constraints().n_rows(), l.n_extras()]
+        let problem = assemble(scene).unwrap();
+        let l = problem.lagrangian();
+        [l.n_dofs(), l.n_points(), l.n_rows(), l.n_extras()]
     }
 
     /// The scenes built in code are the example files' problems: the same data, field for field,
@@ -515,14 +516,14 @@ mod tests {
     #[test]
     fn variants_are_struct_updates_and_assemble() {
         let l = Johnson::default().problem();
-        assert_eq!(l.n_points(), 12 * 12 * 6 * 6);
+        assert_eq!(l.element.n_points(), 12 * 12 * 6 * 6);
         // no clamped node: the typed scene error naming the free motion
         match assemble(Johnson { clamped: false, ..Johnson::default() }.scene()) {
             Err(SceneError::Region { field, message }) => {
                 assert_eq!(field, "dirichlet");
                 assert!(message.contains("rigid-body motion free ("), "{message}");
             }
-            other => panic!("an unclamped body must be a scene error: {:?}", other.map(|l| l.n_dofs())),
+            other => panic!("an unclamped body must be a scene error: {:?}", other.map(|l| l.element.n_dofs())),
         }
         // a bad parameter is caught as when reading a file
         let e = assemble(Johnson { nu: 0.5, ..Johnson::default() }.scene()).unwrap_err().to_string();

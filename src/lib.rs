@@ -10,12 +10,12 @@
 //! `saddle` binary is its command line.
 //!
 //! ```no_run
-//! use saddle::core::{Lagrangian, Silent};
+//! use saddle::core::Silent;
 //! use saddle::scene::Scene;
 //! let scene = Scene::from_file("examples/johnson.toml".as_ref())?;
 //! let (problem, solver) = scene.into_problem()?;
 //! let solver = solver.unwrap_or_else(saddle::run::default_solver);
-//! let solution = solver.solve(&problem, &mut Silent)?;
+//! let solution = solver.solve(&problem.lagrangian(), &mut Silent)?;
 //! println!("U = {:?}, KKT = {:e}", solution.extras, solution.report.kkt.max());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

@@ -12,7 +12,7 @@
 //! solution of an element that locks ([`saddle_core::Discretisation::locks`]) is warned about
 //! when it exceeds [`LOCKING_FRACTION`].
 
-use saddle_core::{Discretisation, Sym, SymOp};
+use saddle_core::{Discretisation, Lagrangian, Sym, SymOp};
 
 /// ν_t at or above which a point counts as nearly incompressible. On the small default scene,
 /// elastic, P1's U is 4 % below P2's at ν = 0.45, 26 % at 0.49 and 67 % at 0.499 (P1 on 12×12×6
@@ -45,13 +45,13 @@ pub fn effective_poisson(c_t: &SymOp, sigma: &Sym, bulk: f64, shear: f64) -> f64
 
 /// The volume fraction of the body where the response at a solution with strains `eps`
 /// (ε(u) at every stress point) is nearly incompressible (ν_t ≥ [`NEAR_INCOMPRESSIBLE_NU`]).
-pub fn near_incompressible_fraction(l: &dyn Discretisation, eps: &[Sym]) -> f64 {
-    let law = *l.elasticity();
+pub fn near_incompressible_fraction(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
+    let law = *l.data.elasticity;
     let (e, nu) = (law.young, law.poisson);
     let (bulk, shear) = (e / (3.0 * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)));
-    let mut stress = saddle_core::StressField::new(l.n_points(), l.hardening_dim());
+    let mut stress = saddle_core::StressField::new(l.n_points(), l.data.hardening_dim());
     let mut tangents = vec![SymOp::zeros(); l.n_points()];
-    l.local_law(eps, &mut stress, Some(&mut tangents));
+    l.data.local_law(eps, &mut stress, Some(&mut tangents));
     let w = l.weights();
     let (mut near, mut total) = (0.0, 0.0);
     for i in 0..l.n_points() {

@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use saddle::output::Summary;
 use saddle::report::{self, Progress, ReportOptions};
 use saddle::run::{self, RunError};
-use saddle_core::{Lagrangian, Monitor};
+use saddle_core::Monitor;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -260,9 +260,9 @@ fn run(
         eprintln!(
             "{}: {} dofs, {} elements, {} contact rows, solver {}",
             scene.display(),
-            loaded.problem.n_dofs(),
-            loaded.problem.n_points(),
-            loaded.problem.constraints().n_rows(),
+            loaded.problem.element.n_dofs(),
+            loaded.problem.element.n_points(),
+            loaded.problem.obstacles.rows().n_rows(),
             loaded.solver.name()
         );
     }

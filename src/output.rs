@@ -7,7 +7,10 @@
 //! `contact` are filled from the obstacle's report when the scene has exactly one.
 
 use saddle_core::problem::tensor::{to_vtk, von_mises};
-use saddle_core::{Discretisation, KktResiduals, MeshQuality, ObstacleReport, Solution, StopReason, Workspace};
+use saddle_core::{
+    Discretisation, Elasticity, KktResiduals, MeshQuality, ObstacleReport, ProblemView, Solution, StopReason,
+    Workspace, dual_energy, energy, kkt,
+};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -261,24 +264,27 @@ impl ObstacleSummary {
 
 /// The quantity `quantity` of the only obstacle's report (None without obstacle, with several,
 /// or when it reports no such quantity): how scenes with one punch read its `U`.
-pub fn single_quantity(l: &dyn Discretisation, sol: &Solution, quantity: &str) -> Option<f64> {
-    match l.contact_reports(&sol.extras, &sol.lambda).as_slice() {
+pub fn single_quantity(p: ProblemView<'_>, sol: &Solution, quantity: &str) -> Option<f64> {
+    match p.contact_reports(&sol.extras, &sol.lambda).as_slice() {
         [r] => r.report.get(quantity),
         _ => None,
     }
 }
 
 impl Summary {
-    /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch.
-    pub fn new(l: &dyn Discretisation, sol: &Solution, title: Option<String>) -> Self {
+    /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch. The
+    /// extras the solution marks undetermined (theory §11.3) are null, and so are the obstacles'
+    /// quantities of the same name (`U`).
+    pub fn new(p: ProblemView<'_>, sol: &Solution, title: Option<String>) -> Self {
+        let l = &p.l;
         let mut ws = Workspace::new(l);
-        let kkt = l.kkt(&sol.iterate(), &mut ws);
-        let j = l.energy(&sol.u, &sol.extras, &mut ws);
+        let kkt = kkt(l, &sol.iterate(), &mut ws);
+        let j = energy(l, &sol.u, &sol.extras, &mut ws);
         // each obstacle reports from its own rows, extras and multipliers
-        let mut reports = l.contact_reports(&sol.extras, &sol.lambda);
+        let mut reports = p.contact_reports(&sol.extras, &sol.lambda);
         // the imprint of each obstacle: max_i (G u)_i over its rows, the largest displacement of
         // its candidate nodes away from it (theory §11.4); generic, from the rows
-        let parts = l.discrete_obstacles().parts();
+        let parts = p.obstacles.parts();
         let imprints: Vec<f64> = parts
             .iter()
             .map(|p| (0..p.rows.n_rows()).map(|i| p.rows.row_times(i, &sol.u)).fold(f64::NEG_INFINITY, f64::max))
@@ -286,6 +292,16 @@ impl Summary {
         for (r, m) in reports.iter_mut().zip(&imprints) {
             if m.is_finite() {
                 r.report.quantities.push(("imprint".into(), *m));
+            }
+        }
+        // an undetermined extra shows as null, in its obstacle's quantities too
+        let names = p.extra_names();
+        for (o, part) in parts.iter().enumerate() {
+            for k in part.extra_range.clone().filter(|k| sol.undetermined.contains(k)) {
+                let local = names[k].rsplit_once('.').map_or(names[k].as_str(), |(_, q)| q);
+                if let Some(q) = reports[o].report.quantities.iter_mut().find(|(n, _)| n == local) {
+                    q.1 = f64::NAN;
+                }
             }
         }
         let single = match reports.as_slice() {
@@ -298,18 +314,20 @@ impl Summary {
                 .iter()
                 .enumerate()
                 .flat_map(|(i, r)| {
-                    let name = r.name.clone().unwrap_or_else(|| l.obstacles().path("obstacle", i));
+                    let name = r.name.clone().unwrap_or_else(|| p.obstacles.obstacles().path("obstacle", i));
                     r.report.quantities.iter().map(move |(q, v)| (format!("{name}.{q}"), *v))
                 })
                 .collect(),
         };
-        let extras = l.extra_names().into_iter().zip(sol.extras.iter().map(|v| Some(*v))).collect();
-        let mut warnings = l.warnings();
+        let extras = (names.into_iter().enumerate())
+            .map(|(k, n)| (n, (!sol.undetermined.contains(&k)).then_some(sol.extras[k])))
+            .collect();
+        let mut warnings = p.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());
         // ws.eps holds ε(u), left there by `l.energy` above
         let near_incompressible_fraction = crate::locking::near_incompressible_fraction(l, &ws.eps);
-        warnings.extend(crate::locking::locking_warning(l, near_incompressible_fraction));
-        let mesh_quality = l.mesh().quality();
+        warnings.extend(crate::locking::locking_warning(p.element, near_incompressible_fraction));
+        let mesh_quality = p.element.mesh().quality();
         if mesh_quality.max_aspect_ratio > 30.0 {
             warnings.push(format!(
                 "the mesh has elements of aspect ratio up to {:.0} (element {}): expect larger discretisation errors \
@@ -318,7 +336,7 @@ impl Summary {
             ));
         }
         for (i, r) in reports.iter().enumerate() {
-            let path = l.obstacles().path("obstacle", i);
+            let path = p.obstacles.obstacles().path("obstacle", i);
             warnings.extend(r.report.warnings.iter().map(|w| {
                 if reports.len() > 1 && !w.contains(&format!("{path}.")) { format!("{path}: {w}") } else { w.clone() }
             }));
@@ -330,26 +348,26 @@ impl Summary {
             stop_reason: sol.report.stop_reason,
             iterations: sol.report.iterations,
             wall_s: sol.report.wall_s(),
-            U: single.and_then(|c| c.get("U")),
+            U: single.and_then(|c| c.get("U")).filter(|u| u.is_finite()),
             force: single.and_then(|c| c.get("force")),
             contact_nodes: reports.iter().map(|r| r.report.contact_nodes).sum(),
             contact_radius: reports.iter().map(|r| r.report.contact_radius).fold(0.0, f64::max),
-            plastic_elements: plastic_elements(l, sol),
+            plastic_elements: plastic_elements(p.element, sol),
             plastic_points: sol.stress.n_plastic(),
             max_von_mises: sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max),
             max_equivalent_plastic_strain: max_equivalent_plastic_strain(l, &ws.eps, sol),
             J: j,
-            dual_energy: l.dual_energy(&sol.stress, &sol.lambda),
+            dual_energy: dual_energy(l, &sol.stress, &sol.lambda),
             kkt_residual: kkt.max(),
             kkt,
             tolerance: sol.report.tolerance,
             dofs: l.n_dofs(),
-            elements: l.mesh().n_elements(),
+            elements: p.element.mesh().n_elements(),
             stress_points: l.n_points(),
-            discretisation: l.name().to_string(),
-            nodes: l.mesh().n_nodes(),
+            discretisation: p.element.name().to_string(),
+            nodes: p.element.mesh().n_nodes(),
             near_incompressible_fraction,
-            contact_rows: l.constraints().n_rows(),
+            contact_rows: l.data.rows.n_rows(),
             contact,
             extras,
             obstacles: reports.iter().map(ObstacleSummary::new).collect(),
@@ -365,29 +383,6 @@ impl Summary {
         }
     }
 
-    /// Marks the extras `names` undetermined (theory §11.3): null in `extras`, and the
-    /// obstacles' quantities of the same name (`U`) null too.
-    pub fn mark_undetermined(&mut self, names: &[String]) {
-        // with one obstacle `contact`, `U` and `force` hold its report under the plain names,
-        // also when it is named (extras `punch.U`); with several `contact` holds `name.quantity`
-        let single = self.obstacles.len() == 1;
-        for n in names {
-            self.extras.insert(n.clone(), None);
-            let (obstacle, local) = n.split_once('.').map_or((None, n.as_str()), |(o, q)| (Some(o), q));
-            if let Some(q) = self.contact.get_mut(if single { local } else { n.as_str() }) {
-                *q = f64::NAN;
-            }
-            for o in self.obstacles.iter_mut().filter(|o| o.name.as_deref() == obstacle) {
-                if let Some(q) = o.quantities.get_mut(local) {
-                    *q = f64::NAN;
-                }
-            }
-            if single && local == "U" {
-                self.U = None;
-            }
-        }
-    }
-
     /// Writes the summary as pretty JSON.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
@@ -397,22 +392,21 @@ impl Summary {
 
 /// The plastic strain ε_p = ε − Aσ at every stress point (theory §11.1), from the strains of
 /// the solution's displacement.
-pub fn plastic_strains(l: &dyn Discretisation, eps: &[saddle_core::Sym], sol: &Solution) -> Vec<saddle_core::Sym> {
-    let law = l.elasticity();
+pub fn plastic_strains(law: &Elasticity, eps: &[saddle_core::Sym], sol: &Solution) -> Vec<saddle_core::Sym> {
     eps.iter().zip(&sol.stress.sigma).map(|(e, s)| e - law.compliance(s)).collect()
 }
 
 /// The largest √(2/3)|ε_p| (0 for an elastic problem).
-fn max_equivalent_plastic_strain(l: &dyn Discretisation, eps: &[saddle_core::Sym], sol: &Solution) -> f64 {
-    if l.plasticity().is_none() {
+fn max_equivalent_plastic_strain(l: &saddle_core::Lagrangian<'_>, eps: &[saddle_core::Sym], sol: &Solution) -> f64 {
+    if l.data.plasticity().is_none() {
         return 0.0;
     }
-    plastic_strains(l, eps, sol).iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).fold(0.0, f64::max)
+    plastic_strains(l.data.elasticity, eps, sol).iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).fold(0.0, f64::max)
 }
 
 /// The elements with at least one plastic stress point.
-pub fn plastic_elements(l: &dyn Discretisation, sol: &Solution) -> usize {
-    sol.stress.plastic.chunks(l.points_per_element()).filter(|p| p.iter().any(|x| *x)).count()
+pub fn plastic_elements(element: &dyn Discretisation, sol: &Solution) -> usize {
+    sol.stress.plastic.chunks(element.points_per_element()).filter(|p| p.iter().any(|x| *x)).count()
 }
 
 /// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data, with
@@ -423,17 +417,18 @@ pub fn plastic_elements(l: &dyn Discretisation, sol: &Solution) -> usize {
 /// hardening variables under the names the yield surface gives them (`xi` for von Mises),
 /// `plastic` (0/1: one of the element's points is plastic), and with plasticity
 /// `plastic_strain` (tensor, ε(u) − Aσ) and `equivalent_plastic_strain` (√(2/3)|ε_p|).
-pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io::Result<()> {
-    let mesh = l.mesh();
-    let k = l.points_per_element();
+pub fn write_vtu(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Result<()> {
+    let (l, element) = (&p.l, p.element);
+    let mesh = element.mesh();
+    let k = element.points_per_element();
     let mean_stress: Vec<saddle_core::Sym> =
         sol.stress.sigma.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
     let plastic: Vec<u8> = sol.stress.plastic.chunks(k).map(|p| p.iter().any(|x| *x) as u8).collect();
-    let disp = l.nodal_vectors(&sol.u);
+    let disp = element.nodal_vectors(&sol.u);
     let mut gu = vec![0.0; l.n_dofs()];
     let mut gv = vec![0.0; l.n_extras()];
-    l.constraints().add_transpose(&sol.lambda, &mut gu, &mut gv);
-    let force = l.nodal_vectors(&gu);
+    l.data.rows.add_transpose(&sol.lambda, &mut gu, &mut gv);
+    let force = element.nodal_vectors(&gu);
     let mut arrays: Vec<(&str, &str, usize, Vec<u8>)> = Vec::new(); // (section, name, components, bytes)
     let f64s = |it: &mut dyn Iterator<Item = f64>| it.flat_map(f64::to_le_bytes).collect::<Vec<u8>>();
     arrays.push(("point", "displacement", 3, f64s(&mut disp.iter().flatten().copied())));
@@ -441,9 +436,9 @@ pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io
     arrays.push(("cell", "stress", 6, f64s(&mut mean_stress.iter().flat_map(to_vtk))));
     arrays.push(("cell", "von_mises", 1, f64s(&mut mean_stress.iter().map(von_mises))));
     // the hardening variables, one cell field per name the yield surface gives them
-    if let Some(p) = l.plasticity() {
+    if let Some(yield_surface) = l.data.plasticity() {
         let mut first = 0;
-        for (name, comps) in p.hardening_fields() {
+        for (name, comps) in yield_surface.hardening_fields() {
             let field = (0..mesh.n_elements()).flat_map(|e| {
                 (first..first + comps).map(move |c| (0..k).map(|q| sol.stress.q(e * k + q)[c]).sum::<f64>() / k as f64)
             });
@@ -454,18 +449,19 @@ pub fn write_vtu(path: &Path, l: &dyn Discretisation, sol: &Solution) -> std::io
     arrays.push(("cell", "plastic", 1, plastic));
     // the plastic strain ε_p = ε(u) − Aσ (theory §11.1), element means: after unloading the
     // residual plastic strain
-    if l.plasticity().is_some() {
+    if l.data.plasticity().is_some() {
         let mut eps = vec![saddle_core::Sym::zeros(); l.n_points()];
         l.strain(&sol.u, &mut eps);
-        let ep = plastic_strains(l, &eps, sol);
+        let ep = plastic_strains(l.data.elasticity, &eps, sol);
         let mean: Vec<saddle_core::Sym> = ep.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
         arrays.push(("cell", "plastic_strain", 6, f64s(&mut mean.iter().flat_map(to_vtk))));
         let eq = ep.chunks(k).map(|s| s.iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).sum::<f64>() / k as f64);
         arrays.push(("cell", "equivalent_plastic_strain", 1, f64s(&mut eq.into_iter())));
     }
     arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));
-    // VTK_TETRA (10) or VTK_QUADRATIC_TETRA (24): vertices, then the edge nodes in VTK's order
-    let (per_cell, cell_type) = if mesh.is_second_order() { (10, 24u8) } else { (4, 10u8) };
+    // the element's VTK cell, its nodes as the mesh lists them
+    let cell = element.vtk_cell();
+    let (per_cell, cell_type) = (cell.nodes, cell.type_id);
     let conn: Vec<u8> =
         (0..mesh.n_elements()).flat_map(|e| mesh.element_nodes(e)).flat_map(|n| (n as i64).to_le_bytes()).collect();
     let offs: Vec<u8> = (1..=mesh.n_elements()).flat_map(|e| ((per_cell * e) as i64).to_le_bytes()).collect();

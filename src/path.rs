@@ -18,14 +18,14 @@
 //! for f in step_factors(&[0.0, 1.0, 0.0], 4) {
 //!     let step = path.step(f, solver.as_ref(), &mut Silent).unwrap();
 //!     assert!(step.converged());
-//!     println!("factor {f}: U = {:?}, undetermined extras {:?}", step.solution.extras, step.undetermined);
+//!     println!("factor {f}: U = {:?}, undetermined extras {:?}", step.solution.extras, step.solution.undetermined);
 //! }
 //! ```
 
 use crate::output::{StepSummary, Summary, write_vtu};
 use crate::run::{Loaded, Outcome, RunError};
 use crate::scene::LoadPath;
-use saddle_core::{Discretisation, Evolution, Monitor, PathError, Solution};
+use saddle_core::{Evolution, Monitor, PathError, Solution};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -88,9 +88,7 @@ pub fn solve_and_write(
     std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let mut timer = loaded.timer.clone();
     let factors = path.step_factors();
-    let l: &dyn Discretisation = &loaded.problem;
-    let names = l.extra_names();
-    let mut evolution = Evolution::new(l);
+    let mut evolution = Evolution::new(&loaded.problem);
     let mut steps: Vec<StepSummary> = Vec::new();
     let mut last: Option<(Summary, Solution)> = None;
     let mut failure: Option<(usize, String)> = None;
@@ -116,13 +114,11 @@ pub fn solve_and_write(
                 break;
             }
         };
-        let mut s = timer.time("summary", || Summary::new(&step.problem, &step.solution, loaded.title.clone()));
-        let undetermined: Vec<String> = step.undetermined.iter().map(|&i| names[i].clone()).collect();
-        s.mark_undetermined(&undetermined);
+        let mut s = timer.time("summary", || Summary::new(step.problem.view(), &step.solution, loaded.title.clone()));
         s.warnings.extend(step.warnings.iter().cloned());
         let file = format!("solution_{k:04}.vtu");
         timer
-            .time("write", || write_vtu(&out_dir.join(&file), &step.problem, &step.solution))
+            .time("write", || write_vtu(&out_dir.join(&file), step.problem.view(), &step.solution))
             .map_err(io(&out_dir.join(&file)))?;
         let entry = StepSummary::new(k, factor, &s, Some(file), started.elapsed().as_secs_f64());
         progress(&step_line(&entry, path));

@@ -3,7 +3,9 @@
 
 use crate::output::{Summary, write_vtu};
 use crate::scene::Scene;
-use saddle_core::{Discretisation, Monitor, PhaseTimer, SceneError, Solution, SolveError, Solver};
+use saddle_core::{
+    DiscreteProblem, Evolution, Monitor, PathError, PhaseTimer, ProblemView, SceneError, Solution, SolveError, Solver,
+};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -42,10 +44,10 @@ pub fn solver_by_type(name: &str) -> Result<Box<dyn Solver>, RunError> {
         .map_err(|e| RunError::UnknownSolver { name: name.to_string(), message: e.message().to_string() })
 }
 
-/// A loaded problem: L, the solver to use, and the scene's title.
+/// A loaded problem: the discrete problem, the solver to use, and the scene's title.
 pub struct Loaded {
-    /// L.
-    pub problem: Box<dyn Discretisation>,
+    /// The discrete problem: the element and the problem's data.
+    pub problem: DiscreteProblem,
     /// The solver (the scene's, the override, or the default).
     pub solver: Box<dyn Solver>,
     /// Scene title.
@@ -115,13 +117,22 @@ pub fn solve_and_write_with(
         return crate::path::solve_and_write(loaded, path, out_dir, monitor, progress);
     }
     let mut timer = loaded.timer.clone();
-    let solution = timer.time("solve", || loaded.solver.solve(&loaded.problem, monitor))?;
-    let mut summary = timer.time("summary", || Summary::new(&loaded.problem, &solution, loaded.title.clone()));
-    let (vtu_tmp, vtu) = timer.time("write", || write_vtu_file(out_dir, &loaded.problem, &solution))?;
+    // one step at the scene's load from the zero state: the stationary problem, through the same
+    // load-scaling path as sweeps and load paths (an obstacle without load leaves its extras
+    // undetermined, theory §11.3)
+    let mut evolution = Evolution::new(&loaded.problem);
+    let step = timer.time("solve", || evolution.step(1.0, loaded.solver.as_ref(), monitor)).map_err(|e| match e {
+        PathError::Solve { source, .. } => RunError::Solve(source),
+        PathError::Scene { source, .. } => RunError::Scene(source),
+    })?;
+    let view = step.problem.view();
+    let mut summary = timer.time("summary", || Summary::new(view, &step.solution, loaded.title.clone()));
+    summary.warnings.extend(step.warnings.iter().cloned());
+    let (vtu_tmp, vtu) = timer.time("write", || write_vtu_file(out_dir, view, &step.solution))?;
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
     write_summary(out_dir, &summary, &vtu_tmp, &vtu)?;
-    Ok(Outcome { solution, summary, out_dir: out_dir.to_path_buf() })
+    Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf() })
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
@@ -130,11 +141,11 @@ fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
 }
 
 /// Writes solution.vtu under a temporary name in `out_dir` (created): (temporary, final) path.
-fn write_vtu_file(out_dir: &Path, l: &dyn Discretisation, sol: &Solution) -> Result<(PathBuf, PathBuf), RunError> {
+fn write_vtu_file(out_dir: &Path, p: ProblemView<'_>, sol: &Solution) -> Result<(PathBuf, PathBuf), RunError> {
     std::fs::create_dir_all(out_dir).map_err(io_error(out_dir))?;
     let vtu = out_dir.join("solution.vtu");
     let vtu_tmp = out_dir.join(".solution.vtu.partial");
-    write_vtu(&vtu_tmp, l, sol).map_err(io_error(&vtu))?;
+    write_vtu(&vtu_tmp, p, sol).map_err(io_error(&vtu))?;
     Ok((vtu_tmp, vtu))
 }
 

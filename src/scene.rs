@@ -57,15 +57,15 @@
 
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleStresses, Dirichlet, Discretisation, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P1,
+    AdmissibleStresses, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P1,
     SceneError, Solver, TetMesh,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// What a scene assembles into: L (of the scene's finite element) and the scene's solver, if
-/// it names one.
-pub type Assembled = (Box<dyn Discretisation>, Option<Box<dyn Solver>>);
+/// What a scene assembles into: the discrete problem (the scene's finite element with the
+/// problem's data) and the scene's solver, if it names one.
+pub type Assembled = (DiscreteProblem, Option<Box<dyn Solver>>);
 
 /// A problem as written in a scene file: a typed value, validated once when it is read.
 /// Variants (a refined mesh, another solver) are made by changing the value — it is `Clone`,
@@ -166,25 +166,40 @@ impl Scene {
             s.validate("solver")?;
         }
         if let Some(p) = &self.load_path {
-            p.validate(&self.obstacle)?;
+            p.validate(self)?;
         }
         Ok(())
     }
 
-    /// The same scene with every load multiplied by `factor` (finite, ≥ 0): tractions, body
-    /// forces, and each obstacle's prescribed force or displacement. The result is validated;
-    /// errors name `load_factor` or the obstacle that cannot scale (or rejects the scaled value).
-    pub fn with_load_factor(&self, factor: f64) -> Result<Self, SceneError> {
-        if !(factor.is_finite() && factor >= 0.0) {
-            return Err(ParameterError::new("load_factor", factor, "must be finite and >= 0").into());
+    /// Checks that every obstacle takes the load factor `factor` (theory §11.2: a load path's
+    /// step, a sweep's point): its load scaled is a valid parameter. The error names `field`
+    /// (`load_path.factors[2]`, `--factors[0]`), the factor, and the obstacle's field with the
+    /// scene's own value and the scaled one.
+    pub fn check_load_factor(&self, factor: f64, field: &str) -> Result<(), SceneError> {
+        if !factor.is_finite() {
+            return Err(ParameterError::new(field, factor, "must be finite").into());
         }
-        let scene = Self {
-            load: self.load.iter().map(|l| l.scaled(factor)).collect(),
-            obstacle: self.obstacle.scaled_load(factor)?,
-            ..self.clone()
-        };
-        scene.validate()?;
-        Ok(scene)
+        if factor == 1.0 || self.obstacle.is_empty() {
+            return Ok(());
+        }
+        let scaled = self.obstacle.scaled_load(factor).map_err(|e| {
+            ParameterError::new(field, factor, format!("{} ({} = {}): {}", e.field, e.field, e.value, e.requirement))
+        })?;
+        scaled.validate("obstacle").map_err(|e| {
+            let own = scene_value(&self.obstacle, &e.field);
+            ParameterError::new(
+                field,
+                factor,
+                format!(
+                    "the obstacle at this load factor is invalid: {} = {}{} {}",
+                    e.field,
+                    own.map_or(String::new(), |v| format!("{v} × {factor} = ")),
+                    e.value,
+                    e.requirement
+                ),
+            )
+            .into()
+        })
     }
 
     /// The same scene on its structured mesh with `cells` per axis (a refinement study). An
@@ -213,14 +228,15 @@ impl Scene {
         Ok(self.mesh.build(&self.base_dir)?)
     }
 
-    /// L assembled on `mesh` (the `setup` phase of a run: dofs, pattern, the obstacles' rows,
-    /// loads), with the scene's solver. A scene whose Dirichlet conditions leave a rigid-body
-    /// motion free is an error here.
+    /// The discrete problem on `mesh` (the `setup` phase of a run: the element's dofs and
+    /// pattern, the obstacles' rows, the loads), with the scene's solver. A scene whose
+    /// Dirichlet conditions leave a rigid-body motion free is an error here.
     pub fn assemble(self, mesh: TetMesh) -> Result<Assembled, SceneError> {
         let element = self.discretisation.unwrap_or_else(|| Box::new(P1::default()));
-        let l = element.build(mesh, &self.dirichlet, self.material, self.yield_surface, self.obstacle, &self.load)?;
-        l.dofs().check_rigid_motions(l.mesh())?;
-        Ok((l, self.solver))
+        let element = element.build(mesh, &self.dirichlet)?;
+        element.dofs().check_rigid_motions(element.mesh())?;
+        let problem = DiscreteProblem::new(element, self.material, self.yield_surface, self.obstacle, &self.load)?;
+        Ok((problem, self.solver))
     }
 
     /// The `type` of the scene's finite element (`p1` when the scene names none).
@@ -273,10 +289,11 @@ impl LoadPath {
         saddle_core::step_factors(&self.factors, self.substeps)
     }
 
-    /// Checks the table: at least one factor, every factor finite, `substeps` ≥ 1, and every
-    /// obstacle takes every nonzero factor (a negative factor reverses the loads; a punch's force
-    /// cannot, and the error names `load_path.factors[i]` and the obstacle's field).
-    pub fn validate(&self, obstacles: &saddle_core::Obstacles) -> Result<(), SceneError> {
+    /// Checks the table: at least one factor and `substeps` ≥ 1; each factor is checked against
+    /// the scene's obstacles by [`Scene::check_load_factor`] (a negative factor reverses the
+    /// loads; a punch's force cannot, and the error names `load_path.factors[i]` and the
+    /// obstacle's field).
+    pub fn validate(&self, scene: &Scene) -> Result<(), SceneError> {
         if self.factors.is_empty() {
             return Err(ParameterError::new("load_path.factors", "[]", "give at least one load factor").into());
         }
@@ -284,28 +301,29 @@ impl LoadPath {
             return Err(ParameterError::new("load_path.substeps", 0, "must be >= 1").into());
         }
         for (i, &f) in self.factors.iter().enumerate() {
-            if !f.is_finite() {
-                return Err(ParameterError::new(format!("load_path.factors[{i}]"), f, "must be finite").into());
-            }
-            if f != 0.0 && !obstacles.is_empty() {
-                let scaled = obstacles.scaled_load(f).map_err(|e| {
-                    ParameterError::new(
-                        format!("load_path.factors[{i}]"),
-                        f,
-                        format!("{} ({} = {}): {}", e.field, e.field, e.value, e.requirement),
-                    )
-                })?;
-                scaled.validate("obstacle").map_err(|e| {
-                    ParameterError::new(
-                        format!("load_path.factors[{i}]"),
-                        f,
-                        format!("the scaled obstacle is invalid: {} = {} {}", e.field, e.value, e.requirement),
-                    )
-                })?;
-            }
+            scene.check_load_factor(f, &format!("load_path.factors[{i}]"))?;
         }
         Ok(())
     }
+}
+
+/// The scene's own value of the obstacle field `field` (`obstacle.F`, `obstacle[1].U`), when it
+/// is a number: what a scaled value is reported against.
+fn scene_value(obstacles: &Obstacles, field: &str) -> Option<f64> {
+    let value = toml::Value::try_from(obstacles).ok()?;
+    let mut parts = field.split('.');
+    let mut node = match parts.next()?.split_once('[') {
+        Some((_, index)) => value.get(index.trim_end_matches(']').parse::<usize>().ok()?)?,
+        None => &value,
+    };
+    for part in parts {
+        let mut pieces = part.split(['[', ']']).filter(|s| !s.is_empty());
+        node = node.get(pieces.next()?)?;
+        for index in pieces {
+            node = node.get(index.parse::<usize>().ok()?)?;
+        }
+    }
+    node.as_float().or_else(|| node.as_integer().map(|i| i as f64))
 }
 
 /// The finite element of type `name` with its default options (as `[discretisation] type =

@@ -18,8 +18,7 @@ use crate::run::solver_by_type;
 use crate::scene::Scene;
 use saddle_contact::{Flat, Paraboloid};
 use saddle_core::{
-    Discretisation, FiniteElement, Lagrangian, P2, SceneError, Silent, Solution, SolveError, Solver, StopReason,
-    Workspace,
+    DiscreteProblem, FiniteElement, P2, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace, kkt,
 };
 use saddle_solvers::{Penalty, Uzawa};
 use std::sync::Arc;
@@ -219,23 +218,24 @@ impl Row {
 }
 
 /// Validates and assembles the scene; its typed error if it is rejected.
-pub fn problem(scene: &Scene) -> Result<Box<dyn Discretisation>, SceneError> {
+pub fn problem(scene: &Scene) -> Result<DiscreteProblem, SceneError> {
     assemble(scene.clone())
 }
 
 /// Runs `solver` on `scene`.
 pub fn run(scene: &Scene, solver: &dyn Solver) -> (Outcome, Option<Solution>) {
-    let l = match problem(scene) {
-        Ok(l) => l,
+    let p = match problem(scene) {
+        Ok(p) => p,
         Err(e) => return (Outcome::SceneError(Arc::new(e)), None),
     };
+    let l = &p.lagrangian();
     let t0 = Instant::now();
-    match solver.solve(&l, &mut Silent) {
+    match solver.solve(l, &mut Silent) {
         Err(e) => (Outcome::SolveError(Arc::new(e)), None),
         Ok(sol) => {
             let wall_s = t0.elapsed().as_secs_f64();
-            let recomputed_kkt = l.kkt(&sol.iterate(), &mut Workspace::new(&l)).max();
-            let summary = Box::new(Summary::new(&l, &sol, None));
+            let recomputed_kkt = kkt(l, &sol.iterate(), &mut Workspace::new(l)).max();
+            let summary = Box::new(Summary::new(p.view(), &sol, None));
             (Outcome::Returned { summary, recomputed_kkt, wall_s }, Some(sol))
         }
     }

@@ -30,9 +30,20 @@ fn negative_yield_and_hardening() {
 }
 
 #[test]
-fn non_positive_force() {
-    assert_rejected(&edited("obstacle.F", toml::Value::Float(0.0)), &["obstacle.F = 0"]);
-    assert_rejected(&edited("obstacle.F", toml::Value::Float(-0.3)), &["obstacle.F = -0.3"]);
+fn negative_force_is_rejected_and_zero_force_leaves_the_punch_undetermined() {
+    assert_rejected(&edited("obstacle.F", toml::Value::Float(-0.3)), &["obstacle.F = -0.3", ">= 0"]);
+    // F = 0 is one rule for scenes, sweeps and load paths (F ≥ 0): the punch carries no load,
+    // so its contact forces vanish and U is undetermined (theory §11.3) — null in the summary,
+    // the body unloaded: zero displacement, exactly
+    let (code, err, dir) = run_scene_kept(&edited("obstacle.F", toml::Value::Float(0.0)));
+    assert_eq!(code, 0, "{err}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    assert!(s["U"].is_null() && s["extras"]["U"].is_null() && s["contact"]["U"].is_null(), "{s}");
+    assert_eq!(s["contact"]["force"], 0.0);
+    assert_eq!(s["contact_nodes"], 0);
+    assert_eq!(s["plastic_elements"], 0);
+    assert!(s["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("carries no load")), "{s}");
 }
 
 #[test]

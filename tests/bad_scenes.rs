@@ -196,7 +196,7 @@ fn out_of_range_values_are_rejected_by_path() {
         ("uzawa", "material.nu", (-1.0).into()),
         ("uzawa", "yield.k0", (-1.0).into()),
         ("uzawa", "yield.h", (-1e-3).into()),
-        ("uzawa", "obstacle.F", 0.0.into()),
+        ("uzawa", "obstacle.F", (-0.3).into()),
         ("uzawa", "obstacle.gap.R", 0.0.into()),
         ("uzawa", "obstacle.zone.all[1].disc.radius", (-0.5).into()),
         ("uzawa", "mesh.cells[0]", 0.into()),
@@ -215,7 +215,7 @@ fn out_of_range_values_are_rejected_by_path() {
         ("tilting", "obstacle.F", (-0.3).into()),
         ("tilting", "obstacle.at[0]", 0.9.into()),
         ("sphere", "obstacle.R", 0.0.into()),
-        ("sphere", "obstacle.F", 0.0.into()),
+        ("sphere", "obstacle.F", (-0.1).into()),
     ];
     let mut failures = vec![];
     for (base, path, value) in &cases {

@@ -9,7 +9,7 @@ mod common;
 use common::*;
 use saddle::core::mesh::gmsh::{GmshImport, GmshMesh, read_msh};
 use saddle::core::mesh::{TET_EDGES, TRI_EDGES};
-use saddle::core::{Lagrangian, MeshSource, Region, Silent, Solver, TetMesh};
+use saddle::core::{MeshSource, Region, Silent, Solver, TetMesh};
 use saddle::scene::Scene;
 use saddle::solvers::Newton;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
@@ -34,10 +34,11 @@ fn box_solution(cells: [i64; 3]) -> BoxSolution {
     let mut t = small_johnson();
     set(&mut t, "mesh.cells", toml::Value::try_from(cells).unwrap());
     let (l, _) = build(&t);
-    let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(&l, &mut Silent).unwrap();
+    let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged, "box mesh {cells:?}: {:?}", sol.report.stop_reason);
-    let report = l.obstacle().unwrap().report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda);
-    BoxSolution { u: sol.extras[0], radius: report.contact_radius, sizes: sizes(l.mesh()) }
+    let report =
+        l.view().obstacle().unwrap().report(l.element.mesh(), l.lagrangian().data.rows, &sol.extras, &sol.lambda);
+    BoxSolution { u: sol.extras[0], radius: report.contact_radius, sizes: sizes(l.element.mesh()) }
 }
 
 /// The box-mesh references, solved once per test binary: the 12×12×6 mesh (5 184 tetrahedra)
@@ -175,8 +176,8 @@ fn physical_surfaces_become_facet_groups() {
 fn node_rules_on_the_rims_between_groups() {
     let scene = Scene::from_file(&repo("examples/gmsh_punch.toml")).unwrap();
     let (l, _) = scene.into_problem().unwrap();
-    assert!(l.warnings().is_empty(), "{:?}", l.warnings());
-    let m = l.mesh();
+    assert!(l.view().warnings().is_empty(), "{:?}", l.view().warnings());
+    let m = l.element.mesh();
     let (contact, free, clamped) = (group_nodes(m, "contact"), group_nodes(m, "free"), group_nodes(m, "clamped"));
     let disc_rim: Vec<usize> = contact.intersection(&free).copied().collect();
     let square_rim: Vec<usize> = free.intersection(&clamped).copied().collect();
@@ -192,7 +193,7 @@ fn node_rules_on_the_rims_between_groups() {
     assert!(contact.is_disjoint(&clamped), "the disc lies strictly inside the square");
 
     // contact nodes: every node of the "contact" facets, its rim with "free" included
-    let rows: BTreeSet<usize> = l.constraints().node.iter().copied().collect();
+    let rows: BTreeSet<usize> = l.lagrangian().data.rows.node.iter().copied().collect();
     assert_eq!(rows, contact);
     assert!(disc_rim.iter().all(|n| rows.contains(n)));
     for &n in &disc_rim {
@@ -200,7 +201,7 @@ fn node_rules_on_the_rims_between_groups() {
         assert!((x[0].hypot(x[1]) - 0.5).abs() < 1e-9 && x[2] == 0.0, "rim node at {x:?}");
     }
     // clamped: every node of the "clamped" facets, its rim with "free" included; nothing else
-    let dofs = l.dofs();
+    let dofs = l.element.dofs();
     for n in 0..m.n_nodes() {
         let fixed = (0..3).filter(|&c| dofs.free(n, c).is_none()).count();
         assert_eq!(fixed, if clamped.contains(&n) { 3 } else { 0 }, "node {n} at {:?}", m.nodes[n]);
@@ -231,10 +232,10 @@ fn geometric_regions_give_the_same_problem_as_the_groups() {
         ),
     );
     let (by_geometry, _) = build(&t);
-    assert_eq!(by_group.dofs().dof, by_geometry.dofs().dof);
-    assert_eq!(by_group.constraints().node, by_geometry.constraints().node);
+    assert_eq!(by_group.element.dofs().dof, by_geometry.element.dofs().dof);
+    assert_eq!(by_group.lagrangian().data.rows.node, by_geometry.lagrangian().data.rows.node);
     // and the same facets as the groups
-    let m = by_group.mesh();
+    let m = by_group.element.mesh();
     let square = Region::Box { min: [-0.75, -0.75, -1e-9], max: [0.75, 0.75, 1e-9] };
     let expected: BTreeSet<usize> = m.groups["contact"].iter().chain(&m.groups["free"]).copied().collect();
     assert_eq!(square.facets(m).into_iter().collect::<BTreeSet<_>>(), expected);
@@ -250,10 +251,11 @@ fn newton_solves_the_default_scene_on_the_gmsh_mesh() {
         set(&mut t, "mesh.file", toml::Value::String(repo(&format!("tests/data/{file}")).display().to_string()));
         let (l, solver) = build(&t);
         let solver = solver.unwrap();
-        let sol = solver.solve(&l, &mut Silent).unwrap();
-        let report = l.obstacle().unwrap().report(l.mesh(), l.constraints(), &sol.extras, &sol.lambda);
+        let sol = solver.solve(&l.lagrangian(), &mut Silent).unwrap();
+        let report =
+            l.view().obstacle().unwrap().report(l.element.mesh(), l.lagrangian().data.rows, &sol.extras, &sol.lambda);
         let u = sol.extras[0];
-        let h = sizes(l.mesh());
+        let h = sizes(l.element.mesh());
         println!(
             "{file}: U = {u:.6e} ({:+.2} % against the 12×12×6 box mesh, {:+.2} % against the 24×24×12 one), KKT \
              {:.2e}, {} iterations, {} contact nodes of {}, contact radius {:.4}, sizes (contact patch, bulk) {h:.4?}, \
@@ -263,10 +265,10 @@ fn newton_solves_the_default_scene_on_the_gmsh_mesh() {
             sol.report.kkt.max(),
             sol.report.iterations,
             report.contact_nodes,
-            l.constraints().n_rows(),
+            l.lagrangian().data.rows.n_rows(),
             report.contact_radius,
             sol.stress.n_plastic(),
-            l.mesh().n_elements()
+            l.element.mesh().n_elements()
         );
         assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
         assert!(sol.report.kkt.max() <= 1e-10, "{:?}", sol.report.kkt);
@@ -302,7 +304,7 @@ fn newton_solves_the_default_scene_on_the_gmsh_mesh() {
             );
         }
         assert!(sol.stress.n_plastic() > 0);
-        assert!(report.warnings.is_empty() && l.warnings().is_empty(), "{:?}", report.warnings);
+        assert!(report.warnings.is_empty() && l.view().warnings().is_empty(), "{:?}", report.warnings);
     }
 }
 
@@ -409,7 +411,7 @@ fn saddle_run_on_the_gmsh_scene() {
     // the same U as the library's solve of the same scene (the CLI reads the scene file, solves
     // with its solver and writes the JSON): to the solver's tolerance
     let (l, scene_solver) = Scene::from_file(&repo("examples/gmsh_punch.toml")).unwrap().into_problem().unwrap();
-    let expected = scene_solver.unwrap().solve(&l, &mut Silent).unwrap().extras[0];
+    let expected = scene_solver.unwrap().solve(&l.lagrangian(), &mut Silent).unwrap().extras[0];
     let u = summary["U"].as_f64().unwrap();
     assert!((u - expected).abs() <= 1e-9 * expected, "U = {u:e} from `saddle run`, {expected:e} from the library");
     let vtu = std::fs::read(out.join("solution.vtu")).unwrap();

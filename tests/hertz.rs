@@ -15,7 +15,8 @@
 
 mod common;
 use common::*;
-use saddle::core::{Discretisation, Silent, Solution};
+use saddle::core::DiscreteProblem;
+use saddle::core::{Silent, Solution};
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
@@ -62,24 +63,24 @@ fn half_space_axis_displacement(a: f64, p0: f64, z: f64) -> f64 {
 }
 
 /// The quarter model with whole force 0.3, solved once for all tests.
-fn default_solution() -> &'static (Box<dyn Discretisation>, Solution) {
-    static SOLVED: OnceLock<(Box<dyn Discretisation>, Solution)> = OnceLock::new();
+fn default_solution() -> &'static (DiscreteProblem, Solution) {
+    static SOLVED: OnceLock<(DiscreteProblem, Solution)> = OnceLock::new();
     SOLVED.get_or_init(|| solve(0.3))
 }
 
 /// The quarter model with whole force `f`.
-fn solve(f: f64) -> (Box<dyn Discretisation>, Solution) {
+fn solve(f: f64) -> (DiscreteProblem, Solution) {
     let mut t = example("hertz.toml");
     set(&mut t, "obstacle.F", toml::Value::Float(f / 4.0));
     let (l, solver) = build(&t);
-    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    let sol = solver.unwrap().solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged);
     (l, sol)
 }
 
 /// Measured (a, p₀, δ).
-fn measure(l: &dyn Discretisation, sol: &Solution) -> (f64, f64, f64) {
-    let mesh = l.mesh();
+fn measure(l: &DiscreteProblem, sol: &Solution) -> (f64, f64, f64) {
+    let mesh = l.element.mesh();
     // each node's share of the contact face x₃ = 0
     let mut area = vec![0.0; mesh.n_nodes()];
     for &f in &mesh.groups["zmin"] {
@@ -89,7 +90,7 @@ fn measure(l: &dyn Discretisation, sol: &Solution) -> (f64, f64, f64) {
             area[n] += cross.abs() / 6.0;
         }
     }
-    let rows = l.constraints();
+    let rows = l.lagrangian().data.rows;
     let r2 = |i: usize| {
         let x = mesh.nodes[rows.node[i]];
         x[0] * x[0] + x[1] * x[1]
@@ -108,7 +109,7 @@ fn measure(l: &dyn Discretisation, sol: &Solution) -> (f64, f64, f64) {
         pts.iter().map(|p| (p.0 - sx) * (p.1 - sy)).sum::<f64>() / pts.iter().map(|p| (p.0 - sx).powi(2)).sum::<f64>();
     let p0 = (sy - slope * sx).sqrt();
     // δ against the axis node nearest to depth 3a
-    let disp = l.nodal_vectors(&sol.u);
+    let disp = l.element.nodal_vectors(&sol.u);
     let axis = (0..mesh.n_nodes())
         .filter(|&k| mesh.nodes[k][0] == 0.0 && mesh.nodes[k][1] == 0.0)
         .min_by(|&i, &j| (mesh.nodes[i][2] - 3.0 * a).abs().total_cmp(&(mesh.nodes[j][2] - 3.0 * a).abs()))

@@ -22,7 +22,7 @@ fn closed_form(e: f64, nu: f64, k0: f64, h: f64, f: f64) -> (f64, f64, f64, f64,
     (-f, -e33, xi, e11, e33)
 }
 
-fn check(sol: &Solution, l: &dyn saddle::core::Discretisation, f: f64, tol: f64) {
+fn check(sol: &Solution, l: &saddle::core::DiscreteProblem, f: f64, tol: f64) {
     let (s33, u_exact, xi, e11, e33) = closed_form(100.0, 0.3, 1.0, 5.0, f);
     let u = sol.extras[0];
     assert!((u - u_exact).abs() <= tol * u_exact, "U = {u:.12e}, closed form {u_exact:.12e}");
@@ -33,9 +33,9 @@ fn check(sol: &Solution, l: &dyn saddle::core::Discretisation, f: f64, tol: f64)
             assert!((sol.stress.q(i)[0] - xi).abs() <= tol * xi, "element {i}: ξ = {}", sol.stress.q(i)[0]);
         }
     }
-    assert_eq!(sol.stress.n_plastic(), if xi > 0.0 { l.n_points() } else { 0 });
+    assert_eq!(sol.stress.n_plastic(), if xi > 0.0 { l.element.n_points() } else { 0 });
     // the displacement field is linear: u₁ = ε₁₁ x₁, u₂ = ε₁₁ x₂, u₃ = ε₃₃ (x₃ − 1)
-    for (x, d) in l.mesh().nodes.iter().zip(l.nodal_vectors(&sol.u)) {
+    for (x, d) in l.element.mesh().nodes.iter().zip(l.element.nodal_vectors(&sol.u)) {
         let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
         for c in 0..3 {
             assert!((d[c] - exact[c]).abs() <= tol * u_exact, "node {x:?}: u = {d:?}, exact {exact:?}");
@@ -44,11 +44,11 @@ fn check(sol: &Solution, l: &dyn saddle::core::Discretisation, f: f64, tol: f64)
     let _ = SQRT2;
 }
 
-fn solve(f: f64, solver_toml: &str) -> (Solution, Box<dyn saddle::core::Discretisation>) {
+fn solve(f: f64, solver_toml: &str) -> (Solution, saddle::core::DiscreteProblem) {
     let mut t = example("homogeneous.toml");
     set(&mut t, "obstacle.F", toml::Value::Float(f));
     let (l, _) = build(&t);
-    let sol = solver(solver_toml).solve(&l, &mut Silent).unwrap();
+    let sol = solver(solver_toml).solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
     (sol, l)
 }
@@ -69,6 +69,6 @@ fn uzawa_above_yield() {
 #[test]
 fn example_scene_is_the_plastic_case() {
     let (l, solver) = build(&example("homogeneous.toml"));
-    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    let sol = solver.unwrap().solve(&l.lagrangian(), &mut Silent).unwrap();
     check(&sol, &l, 2.0, 1e-8);
 }

@@ -4,7 +4,8 @@
 mod common;
 use common::*;
 use saddle::core::problem::tensor::deviator;
-use saddle::core::{Discretisation, Evolution, Lagrangian, Silent, Sym, Workspace, step_factors};
+use saddle::core::{DiscreteProblem, dual_energy, energy};
+use saddle::core::{Evolution, Silent, Sym, Workspace, step_factors};
 
 /// Every solver, tight enough that the closed forms hold to 1e-8.
 const SOLVERS: [&str; 4] = [
@@ -21,7 +22,7 @@ fn one_step_from_zero_is_the_stationary_problem_for_every_solver() {
     let (l, _) = build(&small_johnson());
     for text in SOLVERS {
         let solver = solver(text);
-        let stationary = solver.solve(&l, &mut Silent).unwrap();
+        let stationary = solver.solve(&l.lagrangian(), &mut Silent).unwrap();
         let mut path = Evolution::new(&l);
         let step = path.step(1.0, solver.as_ref(), &mut Silent).unwrap();
         assert!(step.converged() && stationary.report.converged, "{text}");
@@ -97,17 +98,17 @@ fn homogeneous_compression_loaded_and_unloaded_matches_the_closed_form_for_every
             }
             // strong duality of the step problem (theory §11.1): J_n(u) equals the dual energy
             // −(½Aσ:σ + ½|q − q_n|²_H + (ε_p, σ) + λ·c) at the solution
-            let mut ws = Workspace::new(&step.problem);
-            let j = step.problem.energy(&sol.u, &sol.extras, &mut ws);
-            let dual = step.problem.dual_energy(&sol.stress, &sol.lambda);
+            let mut ws = Workspace::new(&step.problem.lagrangian());
+            let j = energy(&step.problem.lagrangian(), &sol.u, &sol.extras, &mut ws);
+            let dual = dual_energy(&step.problem.lagrangian(), &sol.stress, &sol.lambda);
             // the work of the largest load, F·U, is the problem's energy scale (J → 0 unloaded)
             let scale = j.abs().max(2.0 * (2.0 / c.e - p[2]));
             assert!((j - dual).abs() <= 1e-8 * scale, "{name}, step {k}: J = {j:e}, dual {dual:e}");
             // the plastic strain: none before F = 2, p after; ξ likewise
             let p_now = if k == 0 { Sym::zeros() } else { p };
-            step.problem.strain(&sol.u, &mut ws.eps);
+            step.problem.lagrangian().strain(&sol.u, &mut ws.eps);
             for (i, e) in ws.eps.iter().enumerate() {
-                let elastic = l.elasticity().compliance(&sol.stress.sigma[i]);
+                let elastic = l.lagrangian().data.elasticity.compliance(&sol.stress.sigma[i]);
                 let ep = e - elastic;
                 worst = worst.max((ep - p_now).norm() / p.norm());
                 assert!((ep - p_now).norm() <= 1e-8 * p.norm(), "{name}, step {k}, element {i}: ε_p = {ep:?}");
@@ -127,13 +128,13 @@ fn homogeneous_compression_loaded_and_unloaded_matches_the_closed_form_for_every
                     (u - u_exact).abs() <= 1e-8 * u_exact,
                     "{name}, step {k}: U = {u:.12e}, closed form {u_exact:.12e}"
                 );
-                assert!(step.undetermined.is_empty());
+                assert!(step.solution.undetermined.is_empty());
             } else {
                 // F = 0: U undetermined, the residual strain is the plastic strain, σ = 0
-                assert_eq!(step.undetermined, vec![0], "{name}: U is undetermined at F = 0");
+                assert_eq!(step.solution.undetermined, vec![0], "{name}: U is undetermined at F = 0");
                 assert!(!step.warnings.is_empty());
-                let nodal = l.nodal_vectors(&sol.u);
-                for (x, d) in l.mesh().nodes.iter().zip(nodal) {
+                let nodal = l.element.nodal_vectors(&sol.u);
+                for (x, d) in l.element.mesh().nodes.iter().zip(nodal) {
                     let exact = [p[0] * x[0], p[1] * x[1], p[2] * (x[2] - 1.0)];
                     for q in 0..3 {
                         worst = worst.max((d[q] - exact[q]).abs() / p.norm());
@@ -177,10 +178,14 @@ fn uniaxial_path(scene: saddle::scene::Scene, solver_text: &str) -> Vec<(f64, f6
         let step = path.step(f, solver.as_ref(), &mut Silent).unwrap();
         assert!(step.converged(), "{solver_text}: factor {f}: {:?}", step.solution.report.stop_reason);
         let sol = &step.solution;
-        let mut ws = Workspace::new(&step.problem);
-        step.problem.strain(&sol.u, &mut ws.eps);
-        let ep: Vec<Sym> =
-            ws.eps.iter().zip(&sol.stress.sigma).map(|(e, s)| e - l.elasticity().compliance(s)).collect();
+        let mut ws = Workspace::new(&step.problem.lagrangian());
+        step.problem.lagrangian().strain(&sol.u, &mut ws.eps);
+        let ep: Vec<Sym> = ws
+            .eps
+            .iter()
+            .zip(&sol.stress.sigma)
+            .map(|(e, s)| e - l.lagrangian().data.elasticity.compliance(s))
+            .collect();
         for (s, p) in sol.stress.sigma.iter().zip(&ep) {
             assert!((s - sol.stress.sigma[0]).norm() <= 1e-9 && (p - ep[0]).norm() <= 1e-9, "homogeneous");
         }
@@ -264,7 +269,7 @@ fn isotropic_hardening_reverse_yields_at_minus_the_maximum_stress() {
 }
 
 /// The small default scene (8 × 8 × 4 cells) with another yield table or obstacle table.
-fn punch_scene(yield_table: Option<&str>, obstacle_tables: &str) -> Box<dyn Discretisation> {
+fn punch_scene(yield_table: Option<&str>, obstacle_tables: &str) -> DiscreteProblem {
     let mut t = small_johnson();
     set(&mut t, "mesh.cells", toml::Value::try_from([8, 8, 4]).unwrap());
     t.remove("yield");
@@ -308,7 +313,7 @@ fn every_yield_surface_loads_holds_and_unloads() {
                 assert!(r.converged, "{name}, {}, step {k}: {:?}", solver.name(), r.stop_reason);
                 let sol = &step.solution;
                 // the imprint: the largest u₃ of the punch's candidate nodes (its rows' G u)
-                let rows = step.problem.constraints();
+                let rows = step.problem.lagrangian().data.rows;
                 let m = (0..rows.n_rows()).map(|i| rows.row_times(i, &sol.u)).fold(f64::MIN, f64::max);
                 imprint.push(m);
                 if k == 1 {
@@ -366,19 +371,20 @@ fn every_obstacle_plugin_loads_and_unloads() {
         let l = punch_scene(Some("type = \"von_mises\"\nk0 = 1.0\nh = 5.0"), &table);
         let mut path = Evolution::new(&l);
         let loaded = path.step(1.0, newton.as_ref(), &mut Silent).unwrap();
-        assert!(loaded.converged() && loaded.undetermined.is_empty(), "{name}: loaded");
+        assert!(loaded.converged() && loaded.solution.undetermined.is_empty(), "{name}: loaded");
         let force: f64 = loaded.solution.lambda.iter().sum();
         assert!(force > 0.05, "{name}: contact force {force}");
         let unloaded = path.step(0.0, newton.as_ref(), &mut Silent).unwrap();
         assert!(unloaded.converged(), "{name}: unloaded {:?}", unloaded.solution.report.stop_reason);
-        let names: Vec<String> = unloaded.undetermined.iter().map(|&k| l.extra_names()[k].clone()).collect();
+        let names: Vec<String> =
+            unloaded.solution.undetermined.iter().map(|&k| l.view().extra_names()[k].clone()).collect();
         assert_eq!(names, undetermined, "{name}: undetermined extras");
         assert_eq!(unloaded.warnings.len(), usize::from(!undetermined.is_empty()), "{name}: {:?}", unloaded.warnings);
         // the unloaded body carries no contact force (a prescribed punch back at U = 0 is
         // clear of the imprint) and keeps a plastic imprint
         let residual_force: f64 = unloaded.solution.lambda.iter().sum();
         assert!(residual_force.abs() <= 1e-9 * force, "{name}: residual contact force {residual_force:e}");
-        let max_u3 = l.nodal_vectors(&unloaded.solution.u).iter().map(|d| d[2]).fold(f64::MIN, f64::max);
+        let max_u3 = l.element.nodal_vectors(&unloaded.solution.u).iter().map(|d| d[2]).fold(f64::MIN, f64::max);
         assert!(max_u3 > 0.0, "{name}: no residual imprint");
     }
 }

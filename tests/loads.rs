@@ -2,7 +2,8 @@
 //! P1/P0, elastic and plastic, for every solver; an elastic scene without contact is one linear
 //! solve and builds no contact structures and runs no return mapping.
 
-use saddle::core::{Discretisation, Lagrangian, Silent, Solver};
+use saddle::core::{DiscreteProblem, energy};
+use saddle::core::{Silent, Solver};
 use saddle::scene::Scene;
 use std::path::Path;
 
@@ -18,7 +19,7 @@ components = ["y"]
 on = { group = "zmin" }
 components = ["z"]"#;
 
-fn bar(p: f64, plastic: bool) -> Box<dyn Discretisation> {
+fn bar(p: f64, plastic: bool) -> DiscreteProblem {
     let yield_table = if plastic { "[yield]\ntype = \"von_mises\"\nk0 = 1.0\nh = 5.0\n" } else { "" };
     let text = format!(
         r#"
@@ -72,7 +73,7 @@ fn uniaxial_tension_is_exact_for_every_solver() {
         let l = bar(p, plastic);
         let (e11, e33) = strains(p, plastic);
         for s in solvers() {
-            let sol = s.solve(&l, &mut Silent).unwrap();
+            let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap();
             assert!(
                 sol.report.converged,
                 "{} plastic={plastic}: {:?} kkt {:?} history {:?} counters {:?}",
@@ -82,7 +83,7 @@ fn uniaxial_tension_is_exact_for_every_solver() {
                 sol.report.residual_history,
                 sol.report.counters
             );
-            for (x, d) in l.mesh().nodes.iter().zip(l.nodal_vectors(&sol.u)) {
+            for (x, d) in l.element.mesh().nodes.iter().zip(l.element.nodal_vectors(&sol.u)) {
                 let exact = [e11 * x[0], e11 * x[1], e33 * x[2]];
                 for c in 0..3 {
                     assert!(
@@ -93,7 +94,7 @@ fn uniaxial_tension_is_exact_for_every_solver() {
                 }
             }
             assert!(sol.stress.sigma.iter().all(|sg| (sg[2] - p).abs() <= 1e-8 * p), "{}", s.name());
-            assert_eq!(sol.stress.n_plastic(), if plastic { l.n_points() } else { 0 });
+            assert_eq!(sol.stress.n_plastic(), if plastic { l.element.n_points() } else { 0 });
         }
     }
 }
@@ -101,19 +102,19 @@ fn uniaxial_tension_is_exact_for_every_solver() {
 #[test]
 fn an_elastic_scene_without_contact_is_one_linear_solve() {
     let l = bar(0.5, false);
-    let uz = saddle::solvers::Uzawa::default().solve(&l, &mut Silent).unwrap();
+    let uz = saddle::solvers::Uzawa::default().solve(&l.lagrangian(), &mut Silent).unwrap();
     assert_eq!(uz.report.iterations, 1);
     assert_eq!(uz.report.counters["factorisations"], 1.0);
     assert_eq!(uz.report.counters["triangular_solve_pairs"], 1.0);
     assert_eq!(uz.report.counters["contact_structures"], 0.0);
     assert_eq!(uz.report.counters["return_mappings"], 0.0);
     assert!(uz.report.phases.iter().all(|(p, _)| p != "contact set-up"));
-    let nt = saddle::solvers::Newton::default().solve(&l, &mut Silent).unwrap();
+    let nt = saddle::solvers::Newton::default().solve(&l.lagrangian(), &mut Silent).unwrap();
     assert_eq!((nt.report.iterations, nt.report.counters["factorisations"]), (1, 1.0));
     assert_eq!(nt.report.counters["return_mappings"], 0.0);
     // J = −½ f_u·u at the elastic solution (Clapeyron)
-    let j = l.energy(&nt.u, &[], &mut saddle::core::Workspace::new(&l));
-    let work: f64 = l.nodal_load().iter().zip(&nt.u).map(|(f, u)| f * u).sum();
+    let j = energy(&l.lagrangian(), &nt.u, &[], &mut saddle::core::Workspace::new(&l.lagrangian()));
+    let work: f64 = l.lagrangian().data.nodal_load.iter().zip(&nt.u).map(|(f, u)| f * u).sum();
     assert!((j + 0.5 * work).abs() <= 1e-12 * work);
 }
 
@@ -138,12 +139,13 @@ b = [0.0, 0.0, -0.8]
 "#
     );
     let l = Scene::from_toml(&text, Path::new("col.toml")).unwrap().into_problem().unwrap().0;
-    let sol = saddle::solvers::Newton::default().solve(&l, &mut Silent).unwrap();
+    let sol = saddle::solvers::Newton::default().solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged);
-    l.mesh()
+    l.element
+        .mesh()
         .nodes
         .iter()
-        .zip(l.nodal_vectors(&sol.u))
+        .zip(l.element.nodal_vectors(&sol.u))
         .map(|(x, d)| (d[2] + (0.8 / 100.0) * (x[2] - 0.5 * x[2] * x[2])).abs())
         .fold(0.0, f64::max)
 }

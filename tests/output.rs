@@ -3,8 +3,9 @@
 
 mod common;
 use common::*;
+use saddle::core::DiscreteProblem;
 use saddle::core::problem::tensor::to_matrix;
-use saddle::core::{Discretisation, Lagrangian, Silent, Solution};
+use saddle::core::{Silent, Solution};
 use saddle::output::write_vtu;
 use saddle::scene::Scene;
 use serde::Deserialize;
@@ -70,12 +71,12 @@ fn arrays(attributes: &[Attribute]) -> BTreeMap<String, (ElementType, Vec<f64>)>
 }
 
 /// Solves the scene `t` with its solver, writes its solution.vtu and reads it back.
-fn solve_write_read(t: &toml::Table) -> (Box<dyn Discretisation>, Solution, UnstructuredGridPiece) {
+fn solve_write_read(t: &toml::Table) -> (DiscreteProblem, Solution, UnstructuredGridPiece) {
     let (l, solver) = build(t);
-    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    let sol = solver.unwrap().solve(&l.lagrangian(), &mut Silent).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.vtu");
-    write_vtu(&path, &l, &sol).unwrap();
+    write_vtu(&path, l.view(), &sol).unwrap();
     let piece = read_vtu(&path);
     (l, sol, piece)
 }
@@ -83,7 +84,7 @@ fn solve_write_read(t: &toml::Table) -> (Box<dyn Discretisation>, Solution, Unst
 #[test]
 fn vtu_reads_back_with_vtkio() {
     let (l, sol, piece) = solve_write_read(&small_johnson());
-    let mesh = l.mesh();
+    let mesh = l.element.mesh();
     let (n_nodes, n_elements) = (mesh.n_nodes(), mesh.n_elements());
 
     // geometry and topology
@@ -117,7 +118,7 @@ fn vtu_reads_back_with_vtkio() {
 
     // displacement: the solution's free dofs at their nodes, 0 at the clamped ones
     let disp = &point["displacement"].1;
-    let dofs = l.dofs();
+    let dofs = l.element.dofs();
     let mut clamped = 0;
     for n in 0..n_nodes {
         for c in 0..3 {
@@ -132,7 +133,7 @@ fn vtu_reads_back_with_vtkio() {
     // 0 elsewhere; Σ λ_i = F = 0.3
     let force = &point["contact_force"].1;
     let mut expected = vec![0.0; 3 * n_nodes];
-    for (i, &n) in l.constraints().node.iter().enumerate() {
+    for (i, &n) in l.lagrangian().data.rows.node.iter().enumerate() {
         expected[3 * n + 2] += sol.lambda[i];
     }
     assert_eq!(force, &expected);
@@ -164,10 +165,10 @@ fn vtu_reads_back_with_vtkio() {
     // element is elastic, along dev σ where it is plastic (the flow rule), √(2/3)|ε_p| its size
     let (ep, eq) = (&cell["plastic_strain"].1, &cell["equivalent_plastic_strain"].1);
     let mut eps = vec![saddle::core::Sym::zeros(); n_elements];
-    l.strain(&sol.u, &mut eps);
+    l.element.strain(&sol.u, &mut eps);
     let largest = eq.iter().fold(0.0f64, |m, x| m.max(*x));
     for e in 0..n_elements {
-        let p = to_matrix(&(eps[e] - l.elasticity().compliance(&sol.stress.sigma[e])));
+        let p = to_matrix(&(eps[e] - l.lagrangian().data.elasticity.compliance(&sol.stress.sigma[e])));
         let vtk_order = [p[(0, 0)], p[(1, 1)], p[(2, 2)], p[(0, 1)], p[(1, 2)], p[(0, 2)]];
         for (k, x) in vtk_order.iter().enumerate() {
             assert!((ep[6 * e + k] - x).abs() <= 1e-12 * largest, "ε_p of element {e}, component {k}");
@@ -221,9 +222,9 @@ fn p2_vtu_has_quadratic_cells_and_element_means() {
     d.insert("type".into(), toml::Value::String("p2".into()));
     t.insert("discretisation".into(), toml::Value::Table(d));
     let (l, sol, piece) = solve_write_read(&t);
-    let mesh = l.mesh();
+    let mesh = l.element.mesh();
     let (n_nodes, n_elements) = (mesh.n_nodes(), mesh.n_elements());
-    assert!(mesh.is_second_order() && l.points_per_element() == 4);
+    assert!(mesh.is_second_order() && l.element.points_per_element() == 4);
     // every node, edge nodes included, with its displacement
     let points = piece.points.clone().cast_into::<f64>().unwrap();
     assert_eq!(points.len(), 3 * n_nodes);
@@ -242,7 +243,7 @@ fn p2_vtu_has_quadratic_cells_and_element_means() {
     let point = arrays(&piece.data.point);
     let cell = arrays(&piece.data.cell);
     let disp = &point["displacement"].1;
-    let dofs = l.dofs();
+    let dofs = l.element.dofs();
     for n in 0..n_nodes {
         for c in 0..3 {
             assert_eq!(disp[3 * n + c], dofs.free(n, c).map_or(0.0, |d| sol.u[d]), "u of node {n}");

@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use saddle::core::{Lagrangian, Silent, Solver};
+use saddle::core::{Silent, Solver};
 use saddle::output::Summary;
 
 /// Prandtl's limit force on the strip of `examples/strip_punch.toml`: (2 + π) k B t with
@@ -27,9 +27,9 @@ fn strip(element: &str, u: f64) -> toml::Table {
 /// The summary of a converged solve.
 fn solve(t: &toml::Table) -> Summary {
     let (l, solver) = build(t);
-    let sol = solver.unwrap().solve(&l, &mut Silent).unwrap();
+    let sol = solver.unwrap().solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
-    Summary::new(&l, &sol, None)
+    Summary::new(l.view(), &sol, None)
 }
 
 /// Whether a summary carries the locking warning.
@@ -85,9 +85,9 @@ fn incompressible_u(element: &str, cells: [usize; 3]) -> f64 {
     t.insert("discretisation".into(), toml::Value::Table(d));
     let (l, _) = build(&t);
     let newton = saddle::solvers::Newton { linear: saddle::solvers::LinearSolver::Direct, ..Default::default() };
-    let sol = newton.solve(&l, &mut Silent).unwrap();
+    let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged);
-    assert_eq!(l.n_extras(), 1);
+    assert_eq!(l.lagrangian().n_extras(), 1);
     sol.extras[0]
 }
 
@@ -108,7 +108,7 @@ fn both_newton_backends_solve_p2_alike() {
     let l = saddle::conformance::johnson_p2().problem();
     let solve = |linear| {
         let newton = saddle::solvers::Newton { linear, tol: 1e-11, ..Default::default() };
-        let sol = newton.solve(&l, &mut Silent).unwrap();
+        let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();
         assert!(sol.report.converged, "{linear:?}: {:?}", sol.report.stop_reason);
         (sol.extras[0], sol.report.iterations, sol.report.counters.get("pcg_iterations").copied().unwrap_or(0.0))
     };

@@ -29,7 +29,8 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
-use saddle::core::{Discretisation, Lagrangian, Silent, Solution, SolveError, Solver, StopReason, Workspace};
+use saddle::core::{DiscreteProblem, kkt};
+use saddle::core::{Silent, Solution, SolveError, Solver, StopReason, Workspace};
 use saddle::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -88,7 +89,7 @@ impl Case {
         self.f_rel * self.first_yield_force()
     }
 
-    fn scene(&self) -> Box<dyn Discretisation> {
+    fn scene(&self) -> DiscreteProblem {
         let yield_table = if self.elastic {
             String::new()
         } else {
@@ -207,12 +208,12 @@ fn kind(e: &SolveError) -> &'static str {
 /// Runs `solver` on `case` and checks the three honest outcomes (module docs).
 fn check(solver: &dyn Solver, case: &Case, tally: &mut Tally) -> Result<(), TestCaseError> {
     let l = case.scene();
-    match solver.solve(&l, &mut Silent) {
+    match solver.solve(&l.lagrangian(), &mut Silent) {
         Ok(sol) => {
             let bad = non_finite_fields(&sol);
             prop_assert!(bad.is_empty(), "{}: non-finite {:?} in the solution of {:?}", solver.name(), bad, case);
             let r = &sol.report;
-            let recomputed = l.kkt(&sol.iterate(), &mut Workspace::new(&l)).max();
+            let recomputed = kkt(&l.lagrangian(), &sol.iterate(), &mut Workspace::new(&l.lagrangian())).max();
             prop_assert!(recomputed.is_finite(), "{}: recomputed KKT {recomputed} for {:?}", solver.name(), case);
             if r.converged {
                 prop_assert_eq!(r.stop_reason, StopReason::Converged);

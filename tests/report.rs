@@ -4,7 +4,8 @@
 
 mod common;
 use common::*;
-use saddle::core::{BoxMesh, Discretisation, Elasticity, Lagrangian, P1P0Lagrangian, Silent, Solver, Sym};
+use saddle::core::P1P0Element;
+use saddle::core::{BoxMesh, DiscreteProblem, Elasticity, Silent, Solver, Sym};
 use saddle::report::convergence::{fitted_rate, observed_rate, refinement_levels, richardson};
 use saddle::report::runs::{Errors, RunRecord, errors, strain_distance};
 use saddle::report::tables::{
@@ -90,17 +91,25 @@ fn split_csv(line: &str) -> Vec<String> {
 }
 
 /// A box mesh problem without boundary conditions or plasticity (every dof free).
-fn free_problem(cells: [usize; 3], ratio: f64) -> Box<dyn Discretisation> {
+fn free_problem(cells: [usize; 3], ratio: f64) -> DiscreteProblem {
     let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], cells).graded([0.0, 0.0, 0.0], ratio).mesh().unwrap();
-    Box::new(P1P0Lagrangian::new(mesh, &[], Elasticity::new(100.0, 0.3).unwrap(), None, None).unwrap())
+    DiscreteProblem::new(
+        Box::new(P1P0Element::new(mesh, &[]).unwrap()),
+        Elasticity::new(100.0, 0.3).unwrap(),
+        None,
+        None,
+        &[],
+    )
+    .unwrap()
 }
 
 /// The nodal values of the linear field u(x) = G x + c.
-fn linear_field(l: &dyn Discretisation, g: [[f64; 3]; 3]) -> Vec<f64> {
-    let mut u = vec![0.0; l.n_dofs()];
-    for (n, x) in l.mesh().nodes.iter().enumerate() {
+fn linear_field(l: &DiscreteProblem, g: [[f64; 3]; 3]) -> Vec<f64> {
+    let mut u = vec![0.0; l.element.n_dofs()];
+    for (n, x) in l.element.mesh().nodes.iter().enumerate() {
         for c in 0..3 {
-            u[l.dofs().free(n, c).unwrap()] = 0.01 * (c as f64 + 1.0) + (0..3).map(|k| g[c][k] * x[k]).sum::<f64>();
+            u[l.element.dofs().free(n, c).unwrap()] =
+                0.01 * (c as f64 + 1.0) + (0..3).map(|k| g[c][k] * x[k]).sum::<f64>();
         }
     }
     u
@@ -109,7 +118,7 @@ fn linear_field(l: &dyn Discretisation, g: [[f64; 3]; 3]) -> Vec<f64> {
 #[test]
 fn the_locator_finds_the_element_containing_a_point() {
     let l = free_problem([7, 5, 4], 3.0);
-    let mesh = l.mesh();
+    let mesh = l.element.mesh();
     let locator = Locator::new(mesh);
     // every element's centroid and the centroids of its red children lie in it
     for e in (0..mesh.n_elements()).step_by(7) {
@@ -143,28 +152,28 @@ fn the_locator_finds_the_element_containing_a_point() {
 #[test]
 fn a_field_transferred_to_its_own_mesh_has_no_difference() {
     let l = small_johnson_problem();
-    let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(&l, &mut Silent).unwrap();
-    let eps = strains(&l, &sol.u);
+    let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
+    let eps = strains(&l.lagrangian(), &sol.u);
     for q in [Quadrature::Centroid, Quadrature::Children] {
-        let map = SampleMap::new(l.mesh(), l.mesh(), q).unwrap();
+        let map = SampleMap::new(l.element.mesh(), l.element.mesh(), q).unwrap();
         assert!(map.coarse.chunks(q.points()).enumerate().all(|(e, c)| c.iter().all(|&x| x == e)));
         let d = field_distance(&Metric::of(&l), &sol.stress, &eps, &sol.stress, &eps, &map);
         assert_eq!((d.stress_energy, d.strain_l2), (0.0, 0.0));
     }
     // and the same-mesh error measures of the work–precision runs vanish against themselves
-    let e = errors(&l, &sol, &sol);
+    let e = errors(&l.lagrangian(), &sol, &sol);
     assert_eq!((e.u_rel, e.stress_rel, e.strain_rel, e.contact_mismatch), (0.0, 0.0, 0.0, 0));
     // a perturbed field: the transfer to the same mesh measures exactly the same-mesh distance
     let mut u2 = sol.u.clone();
     u2.iter_mut().enumerate().for_each(|(i, x)| *x *= 1.0 + 0.01 * ((i % 7) as f64 - 3.0));
-    let eps2 = strains(&l, &u2);
-    let map = SampleMap::new(l.mesh(), l.mesh(), Quadrature::Children).unwrap();
+    let eps2 = strains(&l.lagrangian(), &u2);
+    let map = SampleMap::new(l.element.mesh(), l.element.mesh(), Quadrature::Children).unwrap();
     let d = field_distance(&Metric::of(&l), &sol.stress, &eps, &sol.stress, &eps2, &map);
-    let direct = strain_distance(&l, &u2, &sol.u);
+    let direct = strain_distance(&l.lagrangian(), &u2, &sol.u);
     assert!(direct > 1e-3 && (d.strain_l2 - direct).abs() < 1e-12 * direct, "{} vs {direct}", d.strain_l2);
 }
 
-fn small_johnson_problem() -> Box<dyn Discretisation> {
+fn small_johnson_problem() -> DiscreteProblem {
     build(&small_johnson()).0
 }
 
@@ -177,10 +186,10 @@ fn the_strain_error_of_a_linear_field_between_meshes_vanishes() {
         (free_problem([5, 4, 3], 3.0), free_problem([8, 9, 5], 4.0)),
     ] {
         let (uc, uf) = (linear_field(&coarse, g), linear_field(&fine, g));
-        let (ec, ef) = (strains(&coarse, &uc), strains(&fine, &uf));
+        let (ec, ef) = (strains(&coarse.lagrangian(), &uc), strains(&fine.lagrangian(), &uf));
         let sc = saddle::core::StressField { sigma: ec.clone(), ..saddle::core::StressField::new(ec.len(), 0) };
         let sf = saddle::core::StressField { sigma: ef.clone(), ..saddle::core::StressField::new(ef.len(), 0) };
-        let map = SampleMap::new(coarse.mesh(), fine.mesh(), Quadrature::Children).unwrap();
+        let map = SampleMap::new(coarse.element.mesh(), fine.element.mesh(), Quadrature::Children).unwrap();
         let d = field_distance(&Metric::of(&fine), &sf, &ef, &sc, &ec, &map);
         assert!(d.strain_l2 < 1e-13 && d.stress_energy < 1e-13, "{d:?}");
         // a field that is not linear has a visible difference
@@ -316,7 +325,7 @@ fn report_quick_on_a_small_johnson_scene() {
     std::fs::write(&scene, toml::to_string(&small_johnson()).unwrap()).unwrap();
     let out = dir.path().join("rep");
     let r = generate(&scene, &out, &ReportOptions { quick: true }, &mut Silent).unwrap();
-    assert_eq!(r.dofs, small_johnson_problem().n_dofs());
+    assert_eq!(r.dofs, small_johnson_problem().element.n_dofs());
     let reference = r.reference().unwrap();
     assert!(reference.converged && reference.kkt < 1e-13, "{reference:?}");
     for run in &r.runs {
@@ -334,7 +343,7 @@ fn report_quick_on_a_small_johnson_scene() {
     #[cfg(feature = "socp")]
     {
         let polished = r.runs.iter().find(|r| r.solver == "socp" && r.setting.contains("polish = true")).unwrap();
-        let socp = saddle::solvers::Socp::default().solve(&small_johnson_problem(), &mut Silent).unwrap();
+        let socp = saddle::solvers::Socp::default().solve(&small_johnson_problem().lagrangian(), &mut Silent).unwrap();
         assert!((polished.u - socp.extras[0]).abs() < 1e-9 * socp.extras[0], "{} vs {}", polished.u, socp.extras[0]);
         assert!(polished.note.contains("interior point"), "{}", polished.note);
     }

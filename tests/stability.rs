@@ -6,8 +6,9 @@
 //! that must fail is checked for its kind of error, so that a failure for another reason fails.
 
 use saddle::conformance::{Johnson, johnson_p2};
+use saddle::core::P1P0Element;
 use saddle::core::linalg::error::LinalgError;
-use saddle::core::{Lagrangian, P1P0Lagrangian, SceneError, Silent, SolveError, Solver, StopReason};
+use saddle::core::{DiscreteProblem, SceneError, Silent, SolveError, Solver, StopReason};
 use saddle::output::Summary;
 use saddle::scene::Scene;
 use saddle::stability::{
@@ -184,13 +185,20 @@ fn slivers_and_unclamped_body() {
     // stiffness as a typed linear-algebra error naming itself, not a panic or a NaN
     let scene = unclamped_scene();
     let mesh = scene.mesh.build(Path::new(".")).unwrap();
-    let l = P1P0Lagrangian::new(mesh, &[], scene.material, scene.yield_surface, scene.obstacle).unwrap();
+    let l = DiscreteProblem::new(
+        Box::new(P1P0Element::new(mesh, &[]).unwrap()),
+        scene.material,
+        scene.yield_surface,
+        scene.obstacle,
+        &[],
+    )
+    .unwrap();
     for solver in all_solvers() {
-        match solver.solve(&l, &mut Silent) {
+        match solver.solve(&l.lagrangian(), &mut Silent) {
             Err(SolveError::LinearAlgebra { solver: name, source }) => {
                 assert_eq!(name, solver.name());
                 match source.downcast_ref::<LinalgError>() {
-                    Some(LinalgError::NotPositiveDefinite { n, .. }) => assert_eq!(*n, l.n_dofs(), "{source}"),
+                    Some(LinalgError::NotPositiveDefinite { n, .. }) => assert_eq!(*n, l.element.n_dofs(), "{source}"),
                     _ => panic!("{name}: the singular stiffness must be reported as such: {source}"),
                 }
             }

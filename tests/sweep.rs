@@ -78,11 +78,15 @@ fn a_perfectly_plastic_strip_bends_over() {
 
 #[test]
 fn bad_factors_and_unscalable_scenes_are_refused() {
-    let (code, _, err) = sweep(&coarse_strip(), "1,-2");
+    // a force-controlled punch takes no negative factor (F ≥ 0): the error names the factor,
+    // the obstacle's field, the scene's own value and the scaled one
+    let (code, _, err) = sweep(&small_johnson(), "1,-2");
     assert_eq!(code, 1);
-    assert!(err.contains("--factors") && err.contains("-2"), "{err}");
-    // a force-controlled punch at factor 0 has F = 0, which it refuses, naming the field
-    let (code, _, err) = sweep(&small_johnson(), "0,1");
-    assert_eq!(code, 1);
-    assert!(err.contains("obstacle.F"), "{err}");
+    assert!(err.contains("--factors[1] = -2") && err.contains("obstacle.F = 0.3 × -2 = -0.6"), "{err}");
+    // factor 0 is the rule of load paths too: the punch carries no load and its U is
+    // undetermined (theory §11.3) — empty in the CSV, the force 0
+    let (code, rows, md) = sweep(&small_johnson(), "0,0.5,1");
+    assert_eq!(code, 0, "{md}");
+    assert_eq!(num(&rows[0], "force"), 0.0);
+    assert!(rows[0]["U"].is_empty() && num(&rows[1], "U") > 0.0, "{md}");
 }

@@ -13,8 +13,9 @@
 mod common;
 use common::*;
 use saddle::conformance::agreement;
+use saddle::core::DiscreteProblem;
 use saddle::core::problem::tensor::{deviator, trace};
-use saddle::core::{Discretisation, Lagrangian, Silent, Solution, Solver, Sym};
+use saddle::core::{Silent, Solution, Solver, Sym};
 use saddle::solvers::{Newton, Penalty, Uzawa};
 use std::path::Path;
 
@@ -40,8 +41,8 @@ fn solvers() -> Vec<(&'static str, Box<dyn Solver>)> {
     v
 }
 
-fn solve(l: &dyn Discretisation, name: &str, s: &dyn Solver) -> Solution {
-    let sol = s.solve(l, &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
+fn solve(l: &DiscreteProblem, name: &str, s: &dyn Solver) -> Solution {
+    let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
     sol
 }
@@ -76,12 +77,12 @@ fn homogeneous_compression_matches_the_closed_form() {
         let sol = solve(&l, name, s.as_ref());
         let u = sol.extras[0];
         let (mut es, mut eq, mut eu) = (0.0f64, 0.0f64, 0.0f64);
-        for i in 0..l.n_points() {
+        for i in 0..l.element.n_points() {
             let exact = Sym::new(0.0, 0.0, -f, 0.0, 0.0, 0.0);
             es = es.max((sol.stress.sigma[i] - exact).norm() / f);
             eq = eq.max((sol.stress.q(i)[0] - xi).abs() / xi);
         }
-        for (x, d) in l.mesh().nodes.iter().zip(l.nodal_vectors(&sol.u)) {
+        for (x, d) in l.element.mesh().nodes.iter().zip(l.element.nodal_vectors(&sol.u)) {
             let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
             for k in 0..3 {
                 eu = eu.max((d[k] - exact[k]).abs() / u_exact);
@@ -94,7 +95,7 @@ fn homogeneous_compression_matches_the_closed_form() {
         );
         assert!(e_u <= tol, "{name}: U = {u:.12e}, closed form {u_exact:.12e}");
         assert!(es <= tol && eq <= tol && eu <= tol, "{name}: σ {es:e}, ξ {eq:e}, u {eu:e}");
-        assert_eq!(sol.stress.n_plastic(), l.n_points(), "{name}: every element plastic");
+        assert_eq!(sol.stress.n_plastic(), l.element.n_points(), "{name}: every element plastic");
     }
 }
 
@@ -109,11 +110,11 @@ fn alpha_zero_is_von_mises_on_the_small_default_scene() {
     );
     let problem = |s: &str| saddle::scene::Scene::from_toml(s, Path::new("x.toml")).unwrap().into_problem().unwrap().0;
     let (lv, ld) = (problem(&text), problem(&dp_text));
-    assert_eq!(ld.plasticity().unwrap().name(), "drucker_prager");
+    assert_eq!(ld.lagrangian().data.plasticity().unwrap().name(), "drucker_prager");
     let newton = Newton { tol: 1e-12, ..Newton::default() };
     let a = solve(&lv, "newton", &newton);
     let b = solve(&ld, "newton", &newton);
-    let ag = agreement(&ld, &b, &a);
+    let ag = agreement(&ld.lagrangian(), &b, &a);
     println!(
         "DP α = 0 vs von Mises, small default scene: newton {} / {} it | U {:.1e} | σ̂ {:.1e} | plastic {} / {}",
         a.report.iterations,
@@ -141,7 +142,7 @@ fn apex_elements(sol: &Solution, k0: f64, alpha: f64) -> usize {
 
 /// The laterally confined cube (rollers on all four sides, u₃ = 0 on top) pulled down by the
 /// traction p on its bottom face, with the flat punch pushing up with force F on `zone`.
-fn confined_cube(k0: f64, alpha: f64, h: f64, p: f64, f: f64, zone: &str, cells: usize) -> Box<dyn Discretisation> {
+fn confined_cube(k0: f64, alpha: f64, h: f64, p: f64, f: f64, zone: &str, cells: usize) -> DiscreteProblem {
     let text = format!(
         r#"
 title = "Laterally confined cube in tension against a punch (theory §9.1)"
@@ -204,7 +205,7 @@ fn confined_tension_returns_every_element_to_the_apex() {
     // the global tangent stiffness is singular on the discrete isochoric fields that satisfy
     // the boundary conditions, and u itself is not unique (U, σ and ξ are). Newton and the
     // Newton polish of the SOCP solver need that tangent; the interior point alone does not.
-    match (Newton { tol: 1e-12, ..Newton::default() }).solve(&l, &mut Silent) {
+    match (Newton { tol: 1e-12, ..Newton::default() }).solve(&l.lagrangian(), &mut Silent) {
         Ok(sol) => println!("DP confined tension: newton converged = {}", sol.report.converged),
         Err(e) => println!("DP confined tension: newton fails as expected on the singular tangent: {e}"),
     }
@@ -227,15 +228,15 @@ fn confined_tension_returns_every_element_to_the_apex() {
         let u = sol.extras[0];
         let e_u = (u - u_exact).abs() / u_exact.abs();
         let es = sol.stress.sigma.iter().map(|x| (x - Sym::new(s, s, s, 0.0, 0.0, 0.0)).norm() / s).fold(0.0, f64::max);
-        let eq = (0..l.n_points()).map(|i| (sol.stress.q(i)[0] - xi).abs() / xi).fold(0.0, f64::max);
+        let eq = (0..l.element.n_points()).map(|i| (sol.stress.q(i)[0] - xi).abs() / xi).fold(0.0, f64::max);
         let apex = apex_elements(&sol, k0, alpha);
         println!(
             "DP confined tension S = {s}: {name:>16} | {:>3} it | U {e_u:.1e} | σ {es:.1e} | ξ {eq:.1e} | apex {apex} / {}",
             sol.report.iterations,
-            l.n_points()
+            l.element.n_points()
         );
         assert!(e_u <= 1e-8 && es <= 1e-8 && eq <= 1e-8, "{name}: U {e_u:e} ({u} vs {u_exact}), σ {es:e}, ξ {eq:e}");
-        assert_eq!(apex, l.n_points(), "{name}: every element on the apex");
+        assert_eq!(apex, l.element.n_points(), "{name}: every element on the apex");
     }
 }
 
@@ -251,16 +252,16 @@ fn all_solvers_agree_on_a_scene_with_apex_returns() {
     let apex = apex_elements(&reference, k0, alpha);
     println!(
         "DP confined tension, punch on a quarter disc: {} elements, {} plastic, {apex} on the apex",
-        l.n_points(),
+        l.element.n_points(),
         reference.stress.n_plastic()
     );
-    assert!(apex > 0 && apex < l.n_points(), "apex elements: {apex}");
+    assert!(apex > 0 && apex < l.element.n_points(), "apex elements: {apex}");
     // the reference itself is Newton at 1e-12; compare Newton at its default tolerance
     let mut list = solvers();
     list[0].1 = Box::new(Newton::default());
     for (name, s) in list {
         let sol = solve(&l, name, s.as_ref());
-        let a = agreement(&l, &sol, &reference);
+        let a = agreement(&l.lagrangian(), &sol, &reference);
         println!(
             "DP confined tension, punch on a quarter disc: {name:>7} vs newton 1e-12 | {:>4} it | U {:.1e} | σ̂ {:.1e} | apex {}",
             sol.report.iterations,

@@ -10,7 +10,7 @@
 mod common;
 use common::*;
 use saddle::conformance::agreement;
-use saddle::core::{Discretisation, Lagrangian, Silent, Solution, Solver, Sym};
+use saddle::core::{DiscreteProblem, Silent, Solution, Solver, Sym};
 use saddle::solvers::{Newton, Penalty, Uzawa};
 use saddle::yield_surfaces::{Tresca, TrescaReturn};
 
@@ -23,8 +23,8 @@ fn tresca(sigma0: f64, h: f64) -> toml::Value {
     toml::Value::Table(t)
 }
 
-fn solve(l: &dyn Discretisation, name: &str, s: &dyn Solver) -> Solution {
-    let sol = s.solve(l, &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
+fn solve(l: &DiscreteProblem, name: &str, s: &dyn Solver) -> Solution {
+    let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
     sol
 }
@@ -48,7 +48,7 @@ fn homogeneous(sigma0: f64, h: f64, f: f64) {
     let (l, _) = build(&t);
     let (u_exact, xi) = closed_form(100.0, sigma0, h, f);
     assert!(xi > 0.1, "clearly plastic: ξ = {xi}");
-    let tp = Tresca::new(sigma0, h);
+    let tp = Tresca::new(sigma0, h).unwrap();
     let tol = 1e-8;
     let solvers: Vec<(&str, Box<dyn Solver>)> = vec![
         ("newton", Box::new(Newton { tol: 1e-12, ..Newton::default() })),
@@ -59,26 +59,27 @@ fn homogeneous(sigma0: f64, h: f64, f: f64) {
         let sol = solve(&l, name, s.as_ref());
         let u = sol.extras[0];
         let (mut es, mut eq) = (0.0f64, 0.0f64);
-        for i in 0..l.n_points() {
+        for i in 0..l.element.n_points() {
             let exact = Sym::new(0.0, 0.0, -f, 0.0, 0.0, 0.0);
             es = es.max((sol.stress.sigma[i] - exact).norm() / f);
             eq = eq.max((sol.stress.q(i)[0] - xi).abs() / xi);
         }
-        let mut eps = vec![Sym::zeros(); l.n_points()];
-        l.strain(&sol.u, &mut eps);
-        let edges = eps.iter().filter(|e| tp.return_kind(l.elasticity(), e) == TrescaReturn::Edge).count();
+        let mut eps = vec![Sym::zeros(); l.element.n_points()];
+        l.element.strain(&sol.u, &mut eps);
+        let edges =
+            eps.iter().filter(|e| tp.return_kind(l.lagrangian().data.elasticity, e) == TrescaReturn::Edge).count();
         // the undetermined split: ε₁₁ − ε₂₂ = γ_a − γ_b
         let split = eps.iter().map(|e| e[0] - e[1]).fold(0.0f64, |a, b| a.max(b.abs()));
         let e_u = (u - u_exact).abs() / u_exact;
         println!(
             "tresca homogeneous σ₀ = {sigma0}, h = {h}, F = {f}: {name:>7} | {:>3} it | U {u:.10e} (closed form {u_exact:.10e}, error {e_u:.1e}) | σ {es:.1e} | ξ {eq:.1e} | edge returns {edges}/{} | max |ε₁₁ − ε₂₂| {split:.1e}",
             sol.report.iterations,
-            l.n_points()
+            l.element.n_points()
         );
         assert!(e_u <= tol, "{name}: U = {u:.12e}, closed form {u_exact:.12e}");
         assert!(es <= tol && eq <= tol, "{name}: σ {es:e}, ξ {eq:e}");
-        assert_eq!(sol.stress.n_plastic(), l.n_points(), "{name}: every element plastic");
-        assert_eq!(edges, l.n_points(), "{name}: every element returns to the edge σ₁ = σ₂");
+        assert_eq!(sol.stress.n_plastic(), l.element.n_points(), "{name}: every element plastic");
+        assert_eq!(edges, l.element.n_points(), "{name}: every element returns to the edge σ₁ = σ₂");
     }
 }
 
@@ -99,18 +100,18 @@ fn solvers_agree_on_the_small_default_scene_with_tresca() {
     let mut t = small_johnson();
     t.insert("yield".into(), tresca(SIGMA0, 5.0));
     let (l, _) = build(&t);
-    assert_eq!(l.plasticity().unwrap().name(), "tresca");
+    assert_eq!(l.lagrangian().data.plasticity().unwrap().name(), "tresca");
     let reference = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
     let plastic = reference.stress.n_plastic();
-    let tp = Tresca::new(SIGMA0, 5.0);
-    let mut eps = vec![Sym::zeros(); l.n_points()];
-    l.strain(&reference.u, &mut eps);
-    let kinds: Vec<TrescaReturn> = eps.iter().map(|e| tp.return_kind(l.elasticity(), e)).collect();
+    let tp = Tresca::new(SIGMA0, 5.0).unwrap();
+    let mut eps = vec![Sym::zeros(); l.element.n_points()];
+    l.element.strain(&reference.u, &mut eps);
+    let kinds: Vec<TrescaReturn> = eps.iter().map(|e| tp.return_kind(l.lagrangian().data.elasticity, e)).collect();
     let count = |k: TrescaReturn| kinds.iter().filter(|&&x| x == k).count();
     let (faces, edges) = (count(TrescaReturn::Face), count(TrescaReturn::Edge));
     println!(
         "tresca σ₀ = √(3/2) k₀, h = 5, small default scene: {} elements, {plastic} plastic: {faces} face returns, {edges} edge returns",
-        l.n_points()
+        l.element.n_points()
     );
     assert_eq!(faces + edges, plastic);
     assert!(edges > 0 && faces > 0, "faces {faces}, edges {edges}");
@@ -122,7 +123,7 @@ fn solvers_agree_on_the_small_default_scene_with_tresca() {
     ];
     for (name, s) in list {
         let sol = solve(&l, name, s.as_ref());
-        let a = agreement(&l, &sol, &reference);
+        let a = agreement(&l.lagrangian(), &sol, &reference);
         println!(
             "tresca small default scene: {name:>7} vs newton 1e-12 | {:>4} it | KKT {:.1e} | U {:.1e} | σ̂ {:.1e} | plastic {}",
             sol.report.iterations,
@@ -162,7 +163,7 @@ fn socp_refuses_tresca_naming_it() {
     let mut t = small_johnson();
     t.insert("yield".into(), tresca(SIGMA0, 5.0));
     let (l, _) = build(&t);
-    let e = saddle::solvers::Socp::default().solve(&l, &mut Silent).unwrap_err();
+    let e = saddle::solvers::Socp::default().solve(&l.lagrangian(), &mut Silent).unwrap_err();
     let msg = e.to_string();
     println!("socp on tresca: {msg}");
     assert!(msg.contains("tresca"), "{msg}");

@@ -13,7 +13,7 @@
 //! too high; the rates of the coarsest pairs are the least affected. The differences between
 //! *consecutive* levels do not depend on the finest level; their rates are reported as well.
 
-use saddle_core::Discretisation;
+use saddle_core::DiscreteProblem;
 
 /// The cells of each refinement level: `base` scaled by each factor (rounded, at least 1),
 /// ascending, levels with the same cells merged.
@@ -46,11 +46,12 @@ impl MeshSize {
 }
 
 /// The mesh sizes of `l` (module docs).
-pub fn mesh_size(l: &dyn Discretisation) -> MeshSize {
-    let mesh = l.mesh();
+pub fn mesh_size(problem: &DiscreteProblem) -> MeshSize {
+    let (l, element) = (&problem.lagrangian(), &*problem.element);
+    let mesh = element.mesh();
     let volume: f64 = l.weights().iter().sum();
     let mean = (volume / mesh.n_elements() as f64).cbrt();
-    let rows = l.constraints();
+    let rows = l.data.rows;
     let contact = if rows.n_rows() == 0 {
         None
     } else {

@@ -36,7 +36,7 @@ pub mod transfer;
 use crate::scene::Scene;
 use convergence::{ConvergenceStudy, LevelResult, mesh_size, refinement_levels};
 use runs::{RunRecord, Rung, RungKind, Timed, ladder, record, reference_solver, timed_polish, timed_solve};
-use saddle_core::{Discretisation, Lagrangian, Monitor, SceneError, Silent, Solution, SolveError, Workspace};
+use saddle_core::{DiscreteProblem, Monitor, SceneError, Silent, Solution, SolveError, Workspace, kkt};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use thiserror::Error;
@@ -125,7 +125,7 @@ impl SceneSource {
     }
 
     /// The assembled problem (with `cells`: on the refined box mesh).
-    pub fn problem(&self, cells: Option<[usize; 3]>) -> Result<Box<dyn Discretisation>, ReportError> {
+    pub fn problem(&self, cells: Option<[usize; 3]>) -> Result<DiscreteProblem, ReportError> {
         Ok(self.scene(cells)?.into_problem()?.0)
     }
 
@@ -192,11 +192,12 @@ impl Report {
 /// reports the reference run), the reference solution and its wall time. `counter` numbers the
 /// runs for `progress`.
 pub fn work_precision(
-    l: &dyn Discretisation,
+    problem: &DiscreteProblem,
     rungs: &[Rung],
     progress: &mut dyn Progress,
     counter: &mut usize,
 ) -> Result<(Vec<RunRecord>, Solution, f64), ReportError> {
+    let l = &problem.lagrangian();
     let reference_rung = rungs
         .iter()
         .find(|r| matches!(r.kind, RungKind::Reference))
@@ -222,7 +223,7 @@ pub fn work_precision(
     let reference = reference_timed.result.as_ref().expect("checked above");
     for (i, rung) in rungs.iter().enumerate() {
         if matches!(rung.kind, RungKind::Reference) {
-            records.push(record(l, rung, &reference_timed, reference));
+            records.push(record(problem, rung, &reference_timed, reference));
             continue;
         }
         let label = rung.label();
@@ -247,7 +248,7 @@ pub fn work_precision(
             },
             RungKind::Reference => unreachable!("handled above"),
         };
-        let mut rec = record(l, rung, &timed, reference);
+        let mut rec = record(problem, rung, &timed, reference);
         if let Some(from) = start {
             runs::add_start_time(&mut rec, &records[from]);
         }
@@ -267,7 +268,7 @@ pub struct KnownLevel {
     /// Its cells.
     pub cells: [usize; 3],
     /// The problem.
-    pub problem: Box<dyn Discretisation>,
+    pub problem: DiscreteProblem,
     /// Its solution by [`runs::reference_solver`].
     pub solution: Solution,
     /// The solve's wall time, seconds.
@@ -276,7 +277,7 @@ pub struct KnownLevel {
 
 /// A level's solve and its fields, kept while the next coarser level is compared with it.
 struct Solved {
-    l: Box<dyn Discretisation>,
+    l: DiscreteProblem,
     stress: saddle_core::StressField,
     strain: Vec<saddle_core::Sym>,
 }
@@ -299,10 +300,15 @@ pub fn convergence_study(
             return Ok((k.problem, Timed { result: Ok(k.solution), wall_s: k.wall_s }));
         }
         let l = source.problem(Some(cells))?;
-        let label =
-            format!("convergence: newton on {}x{}x{} cells ({} dofs)", cells[0], cells[1], cells[2], l.n_dofs());
+        let label = format!(
+            "convergence: newton on {}x{}x{} cells ({} dofs)",
+            cells[0],
+            cells[1],
+            cells[2],
+            l.element.n_dofs()
+        );
         progress.start(*counter, &label);
-        let timed = timed_solve(&solver, &l, progress);
+        let timed = timed_solve(&solver, &l.lagrangian(), progress);
         let status = match &timed.result {
             Ok(s) => runs::status_of(s.report.stop_reason).to_string(),
             Err(e) => format!("error: {e}"),
@@ -312,15 +318,16 @@ pub fn convergence_study(
         Ok((l, timed))
     };
     // U as the single obstacle reports it, by name
-    let u_of = |l: &dyn Discretisation, s: &Solution| crate::output::single_quantity(l, s, "U").unwrap_or(f64::NAN);
-    let level_result = |l: &dyn Discretisation, cells: [usize; 3], timed: &Timed| {
+    let u_of = |p: &DiscreteProblem, s: &Solution| crate::output::single_quantity(p.view(), s, "U").unwrap_or(f64::NAN);
+    let level_result = |p: &DiscreteProblem, cells: [usize; 3], timed: &Timed| {
+        let l = &p.lagrangian();
         let (status, converged, iterations, kkt, u) = match &timed.result {
             Ok(s) => (
                 runs::status_of(s.report.stop_reason).to_string(),
                 s.report.converged,
                 s.report.iterations,
-                l.kkt(&s.iterate(), &mut Workspace::new(l)).max(),
-                u_of(l, s),
+                kkt(l, &s.iterate(), &mut Workspace::new(l)).max(),
+                u_of(p, s),
             ),
             Err(e) => (format!("error: {e}"), false, 0, f64::NAN, f64::NAN),
         };
@@ -328,7 +335,7 @@ pub fn convergence_study(
             cells,
             dofs: l.n_dofs(),
             elements: l.n_points(),
-            size: mesh_size(l),
+            size: mesh_size(p),
             wall_s: timed.wall_s,
             status,
             converged,
@@ -351,8 +358,8 @@ pub fn convergence_study(
     finest_result.err_u = 0.0;
     finest_result.err_stress = 0.0;
     finest_result.err_strain = 0.0;
-    let fine_metric = transfer::Metric::of(&*fl);
-    let (fine_stress, fine_strain) = transfer::p0_fields(&*fl, &fsol.u, &fsol.stress);
+    let fine_metric = transfer::Metric::of(&fl);
+    let (fine_stress, fine_strain) = transfer::p0_fields(&fl, &fsol.u, &fsol.stress);
     let u_f = u_of(&fl, &fsol);
     let mut results = vec![finest_result];
     // the next finer level that was solved, for the consecutive differences
@@ -361,8 +368,8 @@ pub fn convergence_study(
         let (l, timed) = solve_level(cells, progress)?;
         let mut res = level_result(&l, cells, &timed);
         if let Ok(sol) = timed.result {
-            let (stress, strain) = transfer::p0_fields(&*l, &sol.u, &sol.stress);
-            let map = SampleMap::new(l.mesh(), fl.mesh(), Quadrature::default())?;
+            let (stress, strain) = transfer::p0_fields(&l, &sol.u, &sol.stress);
+            let map = SampleMap::new(l.element.mesh(), fl.element.mesh(), Quadrature::default())?;
             let d = transfer::field_distance(&fine_metric, &fine_stress, &fine_strain, &stress, &strain, &map);
             res.err_u = (res.u - u_f).abs() / u_f.abs();
             res.err_stress = d.stress_energy;
@@ -370,8 +377,8 @@ pub fn convergence_study(
             res.diff_stress_next = match &finer {
                 None => d.stress_energy,
                 Some(next) => {
-                    let map = SampleMap::new(l.mesh(), next.l.mesh(), Quadrature::default())?;
-                    let metric = transfer::Metric::of(&*next.l);
+                    let map = SampleMap::new(l.element.mesh(), next.l.element.mesh(), Quadrature::default())?;
+                    let metric = transfer::Metric::of(&next.l);
                     transfer::field_distance(&metric, &next.stress, &next.strain, &stress, &strain, &map).stress_energy
                 }
             };
@@ -422,7 +429,7 @@ pub fn generate(
     let mut counter = 0;
     std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
     let (runs, reference, reference_wall) = work_precision(&l, &rungs, progress, &mut counter)?;
-    let (dofs, elements, contact_rows) = (l.n_dofs(), l.n_points(), l.constraints().n_rows());
+    let (dofs, elements, contact_rows) = (l.element.n_dofs(), l.element.n_points(), l.obstacles.rows().n_rows());
     let convergence = match levels {
         Ok(levels) if levels.len() >= 2 => {
             let cells = *base.as_ref().expect("levels come from the base cells");

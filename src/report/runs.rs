@@ -14,7 +14,7 @@ use super::transfer::{l2_distance, strains};
 use crate::conformance::agreement;
 use crate::output::single_quantity;
 use saddle_core::{
-    Discretisation, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace,
+    DiscreteProblem, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace, kkt,
 };
 use saddle_solvers::{Newton, Penalty, Start, Uzawa};
 use std::time::Instant;
@@ -144,7 +144,7 @@ pub struct Errors {
 }
 
 /// The errors of `sol` against `reference` on `l` (module docs).
-pub fn errors(l: &dyn Lagrangian, sol: &Solution, reference: &Solution) -> Errors {
+pub fn errors(l: &Lagrangian<'_>, sol: &Solution, reference: &Solution) -> Errors {
     let a = agreement(l, sol, reference);
     Errors {
         u_rel: a.u_rel,
@@ -155,7 +155,7 @@ pub fn errors(l: &dyn Lagrangian, sol: &Solution, reference: &Solution) -> Error
 }
 
 /// ‖ε(u_a − u_b)‖_{L²} / ‖ε(u_b)‖_{L²} with the element volumes as weights.
-pub fn strain_distance(l: &dyn Lagrangian, u_a: &[f64], u_b: &[f64]) -> f64 {
+pub fn strain_distance(l: &Lagrangian<'_>, u_a: &[f64], u_b: &[f64]) -> f64 {
     l2_distance(l.weights(), &strains(l, u_a), &strains(l, u_b))
 }
 
@@ -216,14 +216,14 @@ pub struct Timed {
 }
 
 /// Runs `solver` on `l`, timed.
-pub fn timed_solve(solver: &dyn Solver, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Timed {
+pub fn timed_solve(solver: &dyn Solver, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Timed {
     let t0 = Instant::now();
     let result = solver.solve(l, monitor);
     Timed { result, wall_s: t0.elapsed().as_secs_f64() }
 }
 
 /// Polishes `start` by `newton` (see [`RungKind::Polish`]), timed.
-pub fn timed_polish(newton: &Newton, l: &dyn Lagrangian, start: &Solution, monitor: &mut dyn Monitor) -> Timed {
+pub fn timed_polish(newton: &Newton, l: &Lagrangian<'_>, start: &Solution, monitor: &mut dyn Monitor) -> Timed {
     let t0 = Instant::now();
     let s = Start { u: start.u.clone(), extras: start.extras.clone(), lambda: start.lambda.clone() };
     let result = newton.solve_from(l, Some(s), monitor, &mut PhaseTimer::default(), "socp");
@@ -231,7 +231,8 @@ pub fn timed_polish(newton: &Newton, l: &dyn Lagrangian, start: &Solution, monit
 }
 
 /// The record of a run: its status, time, errors against `reference` and recomputed KKT residual.
-pub fn record(l: &dyn Discretisation, rung: &Rung, timed: &Timed, reference: &Solution) -> RunRecord {
+pub fn record(problem: &DiscreteProblem, rung: &Rung, timed: &Timed, reference: &Solution) -> RunRecord {
+    let l = &problem.lagrangian();
     let mut rec = RunRecord {
         solver: rung.solver.to_string(),
         setting: rung.setting.clone(),
@@ -253,9 +254,9 @@ pub fn record(l: &dyn Discretisation, rung: &Rung, timed: &Timed, reference: &So
             rec.status = status_of(sol.report.stop_reason).to_string();
             rec.iterations = sol.report.iterations;
             rec.solver_s = sol.report.wall_s();
-            rec.u = single_quantity(l, sol, "U").unwrap_or(f64::NAN);
+            rec.u = single_quantity(problem.view(), sol, "U").unwrap_or(f64::NAN);
             rec.errors = Some(errors(l, sol, reference));
-            rec.kkt = l.kkt(&sol.iterate(), &mut Workspace::new(l)).max();
+            rec.kkt = kkt(l, &sol.iterate(), &mut Workspace::new(l)).max();
             rec.note = sol.report.warnings.join("; ");
         }
     }

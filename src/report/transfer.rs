@@ -297,7 +297,7 @@ pub fn l2_distance(w: &[f64], a: &[Sym], b: &[Sym]) -> f64 {
 }
 
 /// The strains ε(u) of a displacement on `l`.
-pub fn strains(l: &dyn Lagrangian, u: &[f64]) -> Vec<Sym> {
+pub fn strains(l: &Lagrangian<'_>, u: &[f64]) -> Vec<Sym> {
     let mut eps = vec![Sym::zeros(); l.n_points()];
     l.strain(u, &mut eps);
     eps
@@ -316,12 +316,13 @@ pub struct Metric<'a> {
 
 impl<'a> Metric<'a> {
     /// The metric of `l`'s mesh.
-    pub fn of(l: &'a dyn saddle_core::Discretisation) -> Self {
-        let k = l.points_per_element();
+    pub fn of(problem: &'a saddle_core::DiscreteProblem) -> Self {
+        let (l, element) = (&problem.lagrangian(), &*problem.element);
+        let k = element.points_per_element();
         Self {
             weights: l.weights().chunks(k).map(|w| w.iter().sum()).collect(),
-            law: *l.elasticity(),
-            plasticity: l.plasticity(),
+            law: *l.data.elasticity,
+            plasticity: l.data.plasticity(),
         }
     }
 }
@@ -331,24 +332,25 @@ impl<'a> Metric<'a> {
 /// are. The convergence study compares these ([`field_distance`]), so both elements are
 /// measured alike (P2's stresses are measured by their element means, which caps their
 /// observed rate at that of P0).
-pub fn p0_fields(l: &dyn saddle_core::Discretisation, u: &[f64], stress: &StressField) -> (StressField, Vec<Sym>) {
-    let k = l.points_per_element();
+pub fn p0_fields(problem: &saddle_core::DiscreteProblem, u: &[f64], stress: &StressField) -> (StressField, Vec<Sym>) {
+    let (l, element) = (&problem.lagrangian(), &*problem.element);
+    let k = element.points_per_element();
     let strain = strains(l, u);
     if k == 1 {
         return (stress.clone(), strain);
     }
     let w = l.weights();
-    let n = l.mesh().n_elements();
-    let mut out = StressField::new(n, stress.q_dim);
+    let n = element.mesh().n_elements();
+    let mut out = StressField::new(n, stress.q.dim());
     let mut mean_strain = vec![Sym::zeros(); n];
-    let stride = out.stride();
+    let stride = out.q.stride();
     for e in 0..n {
         let we: f64 = w[e * k..(e + 1) * k].iter().sum();
         for i in e * k..(e + 1) * k {
             let f = w[i] / we;
             out.sigma[e] += f * stress.sigma[i];
             mean_strain[e] += f * strain[i];
-            for c in 0..stress.q_dim {
+            for c in 0..stress.q.dim() {
                 out.q[e * stride + c] += f * stress.q(i)[c];
             }
             out.plastic[e] |= stress.plastic[i];
@@ -379,7 +381,7 @@ pub fn field_distance(
 ) -> FieldDistance {
     let (law, p) = (fine.law, fine.plasticity);
     debug_assert_eq!(fine.weights.len(), fine_stress.len(), "P0 fields ([`p0_fields`])");
-    let m = fine_stress.q_dim;
+    let m = fine_stress.q.dim();
     let (mut s_num, mut s_den, mut e_num, mut e_den) = (0.0, 0.0, 0.0, 0.0);
     let mut dq = vec![0.0; m];
     for (e, &w) in fine.weights.iter().enumerate() {

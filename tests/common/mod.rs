@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests: scenes from the examples with edits.
 #![allow(dead_code)]
 
-use saddle::core::{Discretisation, Solver};
+use saddle::core::DiscreteProblem;
+use saddle::core::Solver;
 use saddle::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -28,7 +29,7 @@ pub fn set(t: &mut toml::Table, path: &str, value: toml::Value) {
 }
 
 /// Assembles a scene table.
-pub fn build(t: &toml::Table) -> (Box<dyn Discretisation>, Option<Box<dyn Solver>>) {
+pub fn build(t: &toml::Table) -> (DiscreteProblem, Option<Box<dyn Solver>>) {
     let scene = Scene::from_toml(&toml::to_string(t).unwrap(), Path::new("test.toml")).unwrap();
     scene.into_problem().unwrap()
 }

@@ -9,7 +9,7 @@
 //! let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [4, 4, 2]).mesh().unwrap();
 //! let dofs = DofMap::new(&mesh, &[Dirichlet::clamped(Region::Group("zmax".into()))]).unwrap();
 //! let zone = Region::Group("zmin".into());
-//! let punch = RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0)));
+//! let punch = RigidPunch::new(0.3, zone, Box::new(Paraboloid::new(5.0))).unwrap();
 //! check_all(&punch, &mesh, &dofs, 1, 0.01).unwrap();
 //! ```
 //!
@@ -55,6 +55,9 @@
 //!   ([`AdmissibleDisplacements::scaled_load`], for sweeps and load paths), factor 1 gives the
 //!   same load term and rows, and factor 2 doubles the load term and keeps the number of rows
 //!   and extra unknowns.
+//! * `rows_at_factor` (f): the rows a load step gets from the obstacle's own rows
+//!   ([`AdmissibleDisplacements::rows_at_factor`]) are those of the scaled obstacle discretised
+//!   afresh, at factors 0, ½ and 2.
 //!
 //! Tolerances are relative: g is compared to 1e-9 × (max|c| + scale × the largest row norm).
 
@@ -76,7 +79,7 @@ pub struct KitFailure {
 }
 
 /// The names of the checks, in the order [`check_all`] runs them (see the module docs).
-pub const CHECKS: [&str; 14] = [
+pub const CHECKS: [&str; 15] = [
     "setup",
     "validate",
     "discretise",
@@ -91,6 +94,7 @@ pub const CHECKS: [&str; 14] = [
     "projection_idempotent",
     "projection_vi",
     "scaled_load",
+    "rows_at_factor",
 ];
 
 /// Random samples per check.
@@ -135,7 +139,41 @@ pub fn check_all(
     check_linearisation(k, mesh, dofs, seed, scale)?;
     check_load(k, mesh, dofs, seed, scale)?;
     check_projection(k, mesh, dofs, seed, scale)?;
-    check_scaled_load(k, mesh, dofs)
+    check_scaled_load(k, mesh, dofs)?;
+    check_rows_at_factor(k, mesh, dofs)
+}
+
+/// (f) `rows_at_factor` (when the plugin can scale its load): the rows a load step at factors
+/// 0, ½ and 2 gets from the obstacle's own rows are those of the scaled obstacle discretised
+/// afresh — bit for bit: a step's rows must not depend on whether they were remade.
+pub fn check_rows_at_factor(k: &dyn AdmissibleDisplacements, mesh: &TetMesh, dofs: &DofMap) -> Result<(), KitFailure> {
+    let Ok(rows) = k.discretise(mesh, dofs, "obstacle") else { return Ok(()) };
+    for factor in [0.0, 0.5, 2.0] {
+        let Some(scaled) = k.scaled_load(factor) else { return Ok(()) };
+        let fresh = match scaled.discretise(mesh, dofs, "obstacle") {
+            Ok(r) => r,
+            Err(e) => return fail("rows_at_factor", format!("scaled_load({factor}) does not discretise: {e}")),
+        };
+        match k.rows_at_factor(factor, &rows, mesh, dofs, "obstacle") {
+            Ok(r) if *r == fresh => {}
+            Ok(r) => {
+                let worst = (0..r.n_rows().min(fresh.n_rows()))
+                    .map(|i| (r.offset[i] - fresh.offset[i]).abs())
+                    .fold(0.0, f64::max);
+                return fail(
+                    "rows_at_factor",
+                    format!(
+                        "rows_at_factor({factor}) differs from scaled_load({factor}).discretise(): {} rows against {}, \
+                         largest offset difference {worst:e}",
+                        r.n_rows(),
+                        fresh.n_rows()
+                    ),
+                );
+            }
+            Err(e) => return fail("rows_at_factor", format!("rows_at_factor({factor}) fails: {e}")),
+        }
+    }
+    Ok(())
 }
 
 /// (e) `scaled_load` (when the plugin has it): factor 1 gives the same obstacle (the same load

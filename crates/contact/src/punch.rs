@@ -17,8 +17,10 @@ use saddle_core::{
     contact_set,
 };
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
-/// `type = "rigid_punch"`: the force-controlled punch of theory §1, pushed up by F > 0.
+/// `type = "rigid_punch"`: the force-controlled punch of theory §1, pushed up by F ≥ 0 (F = 0:
+/// the punch carries no load, its U is undetermined, theory §11.3).
 ///
 /// ```toml
 /// [obstacle]
@@ -31,7 +33,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 #[allow(non_snake_case)]
 pub struct RigidPunch {
-    /// The upward force F > 0 on the punch (theory §1).
+    /// The upward force F ≥ 0 on the punch (theory §1).
     pub F: f64,
     /// The candidate contact zone Γ₀ (boundary nodes; theory §1, §3).
     pub zone: Region,
@@ -161,9 +163,12 @@ impl Punch<'_> {
 }
 
 impl RigidPunch {
-    /// A punch pushed by `force` against the nodes of `zone`.
-    pub fn new(force: f64, zone: Region, gap: Box<dyn GapShape>) -> Self {
-        Self { F: force, zone, gap }
+    /// A punch pushed by `force` against the nodes of `zone`, validated (errors name
+    /// `obstacle.F`, `obstacle.zone`, `obstacle.gap`).
+    pub fn new(force: f64, zone: Region, gap: Box<dyn GapShape>) -> Result<Self, ParameterError> {
+        let k = Self { F: force, zone, gap };
+        k.validate("obstacle")?;
+        Ok(k)
     }
 
     fn punch(&self) -> Punch<'_> {
@@ -172,9 +177,12 @@ impl RigidPunch {
 }
 
 impl RigidPunchDisplacement {
-    /// A punch moved by `u` against the nodes of `zone`.
-    pub fn new(u: f64, zone: Region, gap: Box<dyn GapShape>) -> Self {
-        Self { U: u, zone, gap }
+    /// A punch moved by `u` against the nodes of `zone`, validated (errors name `obstacle.U`,
+    /// `obstacle.zone`, `obstacle.gap`).
+    pub fn new(u: f64, zone: Region, gap: Box<dyn GapShape>) -> Result<Self, ParameterError> {
+        let k = Self { U: u, zone, gap };
+        k.validate("obstacle")?;
+        Ok(k)
     }
 
     fn punch(&self) -> Punch<'_> {
@@ -189,9 +197,9 @@ impl AdmissibleDisplacements for RigidPunch {
         Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
     }
 
-    /// F finite and > 0 (`{path}.F`), the zone and the gap shape.
+    /// F finite and ≥ 0 (`{path}.F`; 0: no load, U undetermined), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        check::positive(path, "F", self.F)?;
+        check::non_negative(path, "F", self.F)?;
         self.punch().validate(path)
     }
 
@@ -206,12 +214,20 @@ impl AdmissibleDisplacements for RigidPunch {
     }
 
     /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0: G = e₃ at the node, H = −1, c = φ(x_i) (theory §3).
-    /// F = 0 (a load path at factor 0) discretises: the rows do not depend on F.
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        check::finite(path, "F", self.F)?;
-        check::non_negative(path, "F", self.F)?;
-        self.punch().validate(path)?;
         self.punch().discretise(mesh, dofs, path)
+    }
+
+    /// The rows do not depend on F: the same rows.
+    fn rows_at_factor<'r>(
+        &self,
+        _factor: f64,
+        rows: &'r ConstraintRows,
+        _mesh: &TetMesh,
+        _dofs: &DofMap,
+        _path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        Ok(Cow::Borrowed(rows))
     }
 
     fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]) {
@@ -247,8 +263,24 @@ impl AdmissibleDisplacements for RigidPunchDisplacement {
 
     /// g_i = u₃(x_i) + φ(x_i) − U ≥ 0 with U given: G = e₃ at the node, c = φ(x_i) − U.
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        self.validate(path)?;
         self.punch().discretise(mesh, dofs, path)
+    }
+
+    /// The same rows with the offsets c_i = φ(x_i) − U of the scaled U.
+    fn rows_at_factor<'r>(
+        &self,
+        factor: f64,
+        rows: &'r ConstraintRows,
+        mesh: &TetMesh,
+        _dofs: &DofMap,
+        _path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        let u = self.U * factor;
+        let mut rows = rows.clone();
+        for (c, &n) in rows.offset.iter_mut().zip(&rows.node) {
+            *c = self.punch().phi(mesh, n) - u;
+        }
+        Ok(Cow::Owned(rows))
     }
 
     fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]) {

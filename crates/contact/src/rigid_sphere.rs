@@ -32,6 +32,7 @@ use saddle_core::{
     contact_set,
 };
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// Relative round-off (of R) below which a zone node at distance < R from the centre still
 /// counts as touching the sphere rather than inside it.
@@ -68,7 +69,8 @@ pub struct RigidSphere {
     pub R: f64,
     /// The direction d of motion (normalised by the code; finite and nonzero).
     pub direction: [f64; 3],
-    /// The force F > 0 along d (force control: V is an extra unknown). Exclusive with `V`.
+    /// The force F ≥ 0 along d (force control: V is an extra unknown; 0: no load, V
+    /// undetermined). Exclusive with `V`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub F: Option<f64>,
     /// The prescribed displacement V along d (no extra unknown). Exclusive with `F`.
@@ -183,7 +185,7 @@ impl AdmissibleDisplacements for RigidSphere {
     }
 
     /// `center` finite, R finite and > 0, `direction` finite and nonzero (`{path}.direction`
-    /// with the vector), exactly one of F (finite, > 0) and V (finite) — both or neither is an
+    /// with the vector), exactly one of F (finite, ≥ 0) and V (finite) — both or neither is an
     /// error on `{path}.F` whose message names `{path}.V` — and the zone.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::finite_all(path, "center", &self.center)?;
@@ -199,7 +201,7 @@ impl AdmissibleDisplacements for RigidSphere {
         let (f_field, v_field) = (join(path, "F"), join(path, "V"));
         match (self.F, self.V) {
             (Some(f), None) => {
-                check::positive(path, "F", f)?;
+                check::non_negative(path, "F", f)?;
             }
             (None, Some(v)) => {
                 check::finite(path, "V", v)?;
@@ -243,16 +245,10 @@ impl AdmissibleDisplacements for RigidSphere {
 
     /// g_i = n_i·(x_i + u_i − c − V d) − R ≥ 0 (theory §8): G = n_i on the free dofs of node i,
     /// H_i = −n_i·d (V unknown), c_i = |x_i − c| − R; with V prescribed, n_i and c_i are taken
-    /// about c + V d (see the module docs). Errors: the parameters, the zone (no node with a
-    /// free dof), a zone node inside the sphere at V = 0 (`{path}.center`), and a prescribed V
+    /// about c + V d (see the module docs). Errors: the zone (no node with a free dof), a zone
+    /// node inside the sphere at V = 0 (`{path}.center`), and a prescribed V
     /// that puts the sphere's centre on a zone node (`{path}.V`).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        // F = 0 (a load path at factor 0) discretises: the rows do not depend on F
-        if self.F == Some(0.0) {
-            Self { F: Some(1.0), ..self.clone() }.validate(path)?
-        } else {
-            self.validate(path)?
-        }
         let zone = candidate_nodes_with(&self.zone, mesh, dofs, path, Selection::AnyFreeDof)?;
         self.check_outside(mesh, &zone.nodes, path)?;
         let d = self.d();
@@ -293,6 +289,22 @@ impl AdmissibleDisplacements for RigidSphere {
     }
 
     /// The exact gap |x_i + u_i − c − V d| − R.
+    /// Under force control the rows do not depend on F: the same rows. With V prescribed they
+    /// are linearised about the displaced centre (module docs): discretised again.
+    fn rows_at_factor<'r>(
+        &self,
+        factor: f64,
+        rows: &'r ConstraintRows,
+        mesh: &TetMesh,
+        dofs: &DofMap,
+        path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        match self.V {
+            None => Ok(Cow::Borrowed(rows)),
+            Some(v) => Self { V: Some(v * factor), ..self.clone() }.discretise(mesh, dofs, path).map(Cow::Owned),
+        }
+    }
+
     fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]) {
         let d = self.d();
         let v = self.v(extras);

@@ -23,6 +23,7 @@ use saddle_core::{
     contact_set,
 };
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// Relative tolerance (of the zone's extent in the (x₁, x₂) plane) of the convex-hull test on
 /// `at`: a point on the hull's boundary within round-off is inside (the punch balances on an
@@ -44,7 +45,7 @@ const HULL_TOL: f64 = 1e-10;
 #[serde(deny_unknown_fields)]
 #[allow(non_snake_case)]
 pub struct TiltingPunch {
-    /// The upward force F > 0 on the punch.
+    /// The upward force F ≥ 0 on the punch (0: no load, its extras undetermined).
     pub F: f64,
     /// Where the force acts, (a₁, a₂); the gap's centre (the pivot) when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -57,15 +58,19 @@ pub struct TiltingPunch {
 }
 
 impl TiltingPunch {
-    /// A punch pushed by `force` at its pivot (the centre of `gap`) against the nodes of `zone`.
-    pub fn new(force: f64, zone: Region, gap: Box<dyn GapShape>) -> Self {
-        Self { F: force, at: None, zone, gap }
+    /// A punch pushed by `force` at its pivot (the centre of `gap`) against the nodes of `zone`,
+    /// validated (errors name `obstacle.F`, `obstacle.zone`, `obstacle.gap`).
+    pub fn new(force: f64, zone: Region, gap: Box<dyn GapShape>) -> Result<Self, ParameterError> {
+        let k = Self { F: force, at: None, zone, gap };
+        k.validate("obstacle")?;
+        Ok(k)
     }
 
-    /// The same punch with the force acting at `a` = (a₁, a₂).
-    pub fn at(mut self, a: [f64; 2]) -> Self {
+    /// The same punch with the force acting at `a` = (a₁, a₂), validated (`obstacle.at`).
+    pub fn at(mut self, a: [f64; 2]) -> Result<Self, ParameterError> {
         self.at = Some(a);
-        self
+        self.validate("obstacle")?;
+        Ok(self)
     }
 
     /// The pivot c: the gap's centre.
@@ -185,9 +190,9 @@ impl AdmissibleDisplacements for TiltingPunch {
         Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
     }
 
-    /// F finite and > 0 (`{path}.F`), `at` finite (`{path}.at[k]`), the zone and the gap shape.
+    /// F finite and ≥ 0 (`{path}.F`), `at` finite (`{path}.at[k]`), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        check::positive(path, "F", self.F)?;
+        check::non_negative(path, "F", self.F)?;
         if let Some(a) = &self.at {
             check::finite_all(path, "at", a)?;
         }
@@ -208,15 +213,9 @@ impl AdmissibleDisplacements for TiltingPunch {
     }
 
     /// g_i = u₃(x_i) + φ(x_i) − w(x_i) ≥ 0: G = e₃ at the node, H_i = (−1, −(x_i1 − c₁),
-    /// −(x_i2 − c₂)), c_i = φ(x_i) (theory §8). Errors: the parameters, the zone (as for the
+    /// −(x_i2 − c₂)), c_i = φ(x_i) (theory §8). Errors: the zone (as for the
     /// rigid punch), contact nodes on one line, and `{path}.at` outside their convex hull.
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
-        // F = 0 (a load path at factor 0) discretises: the rows do not depend on F
-        if self.F == 0.0 {
-            Self { F: 1.0, ..self.clone() }.validate(path)?
-        } else {
-            self.validate(path)?
-        }
         let zone = candidate_nodes(&self.zone, mesh, dofs, path)?;
         self.check_hull(mesh, &zone.nodes, path)?;
         let mut rows = ConstraintRows::new(3);
@@ -231,6 +230,18 @@ impl AdmissibleDisplacements for TiltingPunch {
     }
 
     /// g_i = u₃(x_i) + φ(x_i) − w(x_i) from the node coordinates and the extras.
+    /// The rows do not depend on F: the same rows.
+    fn rows_at_factor<'r>(
+        &self,
+        _factor: f64,
+        rows: &'r ConstraintRows,
+        _mesh: &TetMesh,
+        _dofs: &DofMap,
+        _path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        Ok(Cow::Borrowed(rows))
+    }
+
     fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]) {
         let [big_u, s1, s2] = [extras[0], extras[1], extras[2]];
         for (g, &n) in out.iter_mut().zip(&rows.node) {

@@ -111,7 +111,7 @@ impl AdmissibleDisplacements for Broken {
 }
 
 fn broken(flaw: Flaw) -> Broken {
-    Broken { punch: RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(5.0))), flaw }
+    Broken { punch: RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(5.0))).unwrap(), flaw }
 }
 
 #[test]
@@ -178,10 +178,13 @@ fn the_individual_checks_run_alone() {
     assert_eq!(conformance::check_rows(&broken(Flaw::ZeroRow), &m, &d, 4, 0.01).unwrap_err().check, "rows");
     let e = check_all(&broken(Flaw::WrongU), &m, &d, 4, f64::NAN).unwrap_err();
     assert_eq!(e.check, "setup");
-    let bad = Broken { punch: RigidPunch::new(-1.0, disc(0.5), Box::new(Paraboloid::new(5.0))), flaw: Flaw::WrongU };
+    let bad = Broken {
+        punch: RigidPunch { F: -1.0, zone: disc(0.5), gap: Box::new(Paraboloid::new(5.0)) },
+        flaw: Flaw::WrongU,
+    };
     assert_eq!(check_all(&bad, &m, &d, 4, 0.01).unwrap_err().check, "validate");
     let far = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [5.0, 5.0], radius: 0.5 }]);
-    let bad = Broken { punch: RigidPunch::new(0.3, far, Box::new(Paraboloid::new(5.0))), flaw: Flaw::WrongU };
+    let bad = Broken { punch: RigidPunch::new(0.3, far, Box::new(Paraboloid::new(5.0))).unwrap(), flaw: Flaw::WrongU };
     let e = check_all(&bad, &m, &d, 4, 0.01).unwrap_err();
     assert_eq!(e.check, "discretise");
     assert!(e.message.contains("obstacle.zone"), "{e}");

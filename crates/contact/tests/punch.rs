@@ -9,10 +9,10 @@ use saddle_core::{AdmissibleDisplacements, Dirichlet, DofMap, Region, SceneError
 fn punches() -> Vec<Box<dyn AdmissibleDisplacements>> {
     let mut k: Vec<Box<dyn AdmissibleDisplacements>> = Vec::new();
     for gap in shapes() {
-        k.push(Box::new(RigidPunch::new(0.3, disc(0.5), gap)));
+        k.push(Box::new(RigidPunch::new(0.3, disc(0.5), gap).unwrap()));
     }
     for gap in shapes() {
-        k.push(Box::new(RigidPunchDisplacement::new(0.004, disc(0.5), gap)));
+        k.push(Box::new(RigidPunchDisplacement::new(0.004, disc(0.5), gap).unwrap()));
     }
     k
 }
@@ -55,7 +55,7 @@ fn one_row_per_bottom_node_in_the_disc_with_phi_offsets() {
         assert_eq!(k.load(), if force_controlled { vec![0.3] } else { vec![] });
     }
     // the default paraboloid: φ(0.5, 0) = 0.25/10
-    let k = RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(5.0)));
+    let k = RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(5.0))).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     let r = rows.node.iter().position(|&n| n == node_at(&m, 0.5, 0.0)).unwrap();
     assert_eq!(rows.offset[r], 0.025);
@@ -66,7 +66,7 @@ fn elliptic_paraboloid_off_centre_by_hand() {
     let m = mesh();
     let d = dofs(&m);
     let gap = EllipticParaboloid { R1: 2.0, R2: 8.0, c1: 0.25, c2: -0.125 };
-    let k = RigidPunch::new(0.3, disc(0.5), Box::new(gap));
+    let k = RigidPunch::new(0.3, disc(0.5), Box::new(gap)).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     let offset = |x1, x2| rows.offset[rows.node.iter().position(|&n| n == node_at(&m, x1, x2)).unwrap()];
     // (0.5 − 0.25)²/4 + (0 + 0.125)²/16 = 0.015625 + 0.0009765625
@@ -90,34 +90,34 @@ fn elliptic_paraboloid_off_centre_by_hand() {
 #[test]
 fn parameters_name_the_field_and_the_value() {
     let k = |f| RigidPunch::new(f, disc(0.5), Box::new(Paraboloid::new(5.0)));
-    for (f, shown) in [(0.0, "0"), (-0.3, "-0.3"), (f64::NAN, "NaN"), (f64::INFINITY, "inf")] {
-        let e = k(f).validate("obstacle").unwrap_err();
+    for (f, shown) in [(-0.3, "-0.3"), (f64::NAN, "NaN"), (f64::INFINITY, "inf")] {
+        let e = k(f).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.F", shown));
     }
+    // F = 0 is a punch without load (its U undetermined, theory §11.3): one rule, F ≥ 0, for a
+    // scene, a sweep factor and a load-path factor alike
+    assert!(k(0.0).is_ok());
     for r in [0.0, -5.0] {
-        let e = RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(r))).validate("obstacle").unwrap_err();
+        let e = RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(r))).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.clone()), ("obstacle.gap.R", r.to_string()));
         assert!(e.to_string().contains("obstacle.gap.R = ") && e.to_string().contains("> 0"), "{e}");
     }
     let e = RigidPunch::new(0.3, disc(0.5), Box::new(EllipticParaboloid { R1: 1.0, R2: 0.0, c1: 0.0, c2: 0.0 }))
-        .validate("obstacle")
         .unwrap_err();
     assert_eq!(e.field, "obstacle.gap.R2");
-    let e =
-        RigidPunchDisplacement::new(f64::NAN, disc(0.5), Box::new(Flat::default())).validate("obstacle").unwrap_err();
+    let e = RigidPunchDisplacement::new(f64::NAN, disc(0.5), Box::new(Flat::default())).unwrap_err();
     assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.U", "NaN"));
     let bad_zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: -1.0 }]);
-    let e = RigidPunch::new(0.3, bad_zone, Box::new(Flat::default())).validate("obstacle").unwrap_err();
+    let e = RigidPunch::new(0.3, bad_zone, Box::new(Flat::default())).unwrap_err();
     assert_eq!((e.field.as_str(), e.value.as_str()), ("obstacle.zone.all[1].disc.radius", "-1"));
     // a negative prescribed U is a legal position (the punch pulled away)
-    RigidPunchDisplacement::new(-0.01, disc(0.5), Box::new(Flat::default())).validate("obstacle").unwrap();
-    // discretise validates too, but takes F = 0 (a load path at factor 0, theory §11.3): the
-    // rows do not depend on F
+    RigidPunchDisplacement::new(-0.01, disc(0.5), Box::new(Flat::default())).unwrap();
+    // the rows do not depend on F (a load path at factor 0, theory §11.3)
     let m = mesh();
-    let err = k(-0.3).discretise(&m, &dofs(&m), "obstacle").unwrap_err();
-    assert!(matches!(&err, SceneError::Parameter(p) if p.field == "obstacle.F"), "{err}");
-    let (zero, one) =
-        (k(0.0).discretise(&m, &dofs(&m), "obstacle").unwrap(), k(0.3).discretise(&m, &dofs(&m), "obstacle").unwrap());
+    let (zero, one) = (
+        k(0.0).unwrap().discretise(&m, &dofs(&m), "obstacle").unwrap(),
+        k(0.3).unwrap().discretise(&m, &dofs(&m), "obstacle").unwrap(),
+    );
     assert_eq!(zero, one);
 }
 
@@ -126,7 +126,8 @@ fn empty_and_unknown_zones_are_region_errors() {
     let m = mesh();
     let d = dofs(&m);
     let far = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [5.0, 5.0], radius: 0.5 }]);
-    let err = RigidPunch::new(0.3, far, Box::new(Paraboloid::new(5.0))).discretise(&m, &d, "obstacle").unwrap_err();
+    let err =
+        RigidPunch::new(0.3, far, Box::new(Paraboloid::new(5.0))).unwrap().discretise(&m, &d, "obstacle").unwrap_err();
     match &err {
         SceneError::Region { field, message } => {
             assert_eq!(field, "obstacle.zone");
@@ -135,8 +136,10 @@ fn empty_and_unknown_zones_are_region_errors() {
         other => panic!("{other}"),
     }
     let zone = Region::All(vec![Region::Group("bottom".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
-    let err =
-        RigidPunchDisplacement::new(0.0, zone, Box::new(Flat::default())).discretise(&m, &d, "obstacle").unwrap_err();
+    let err = RigidPunchDisplacement::new(0.0, zone, Box::new(Flat::default()))
+        .unwrap()
+        .discretise(&m, &d, "obstacle")
+        .unwrap_err();
     match &err {
         SceneError::Region { field, message } => {
             assert_eq!(field, "obstacle.zone");
@@ -148,7 +151,8 @@ fn empty_and_unknown_zones_are_region_errors() {
     // a zone of clamped nodes only: the bottom corner x, y ≥ 0.8 lies in Γ₂
     let corner =
         Region::All(vec![Region::Group("zmin".into()), Region::Box { min: [0.8, 0.8, -1.0], max: [1.0, 1.0, 1.0] }]);
-    let err = RigidPunch::new(0.3, corner, Box::new(Flat::default())).discretise(&m, &d, "obstacle").unwrap_err();
+    let err =
+        RigidPunch::new(0.3, corner, Box::new(Flat::default())).unwrap().discretise(&m, &d, "obstacle").unwrap_err();
     match &err {
         SceneError::Region { field, message } => {
             assert_eq!(field, "obstacle.zone");
@@ -169,7 +173,7 @@ fn clamped_zone_nodes_are_dropped_with_a_warning() {
         in_disc.iter().copied().filter(|&n| m.nodes[n][0].abs() < 0.7 && m.nodes[n][1].abs() < 0.7).collect();
     // grid points with i² + j² ≤ 10 (37), of which those with |i| = 3 or |j| = 3 (12) are clamped
     assert_eq!((in_disc.len(), free.len()), (37, 25));
-    let k = RigidPunch::new(0.3, disc(0.8), Box::new(Paraboloid::new(5.0)));
+    let k = RigidPunch::new(0.3, disc(0.8), Box::new(Paraboloid::new(5.0))).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     assert_eq!(rows.node, free);
     assert_eq!(rows.warnings.len(), 1);
@@ -183,12 +187,13 @@ fn clamped_zone_nodes_are_dropped_with_a_warning() {
 fn a_zone_off_the_contact_plane_is_warned_about() {
     let m = mesh();
     let d = DofMap::new(&m, &[Dirichlet::clamped(Region::Group("zmax".into()))]).unwrap();
-    let k = RigidPunch::new(0.3, Region::Not(Box::new(Region::Group("zmax".into()))), Box::new(Flat::default()));
+    let k =
+        RigidPunch::new(0.3, Region::Not(Box::new(Region::Group("zmax".into()))), Box::new(Flat::default())).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     assert_eq!(rows.warnings.len(), 1, "{:?}", rows.warnings);
     assert!(rows.warnings[0].contains("span x₃ ∈ [0, 0.75]"), "{}", rows.warnings[0]);
     // the plane face alone is not
-    let k = RigidPunch::new(0.3, Region::Group("zmin".into()), Box::new(Flat::default()));
+    let k = RigidPunch::new(0.3, Region::Group("zmin".into()), Box::new(Flat::default())).unwrap();
     assert!(k.discretise(&m, &d, "obstacle").unwrap().warnings.is_empty());
 }
 
@@ -197,7 +202,7 @@ fn report_gives_u_force_contact_set_and_radius() {
     let m = mesh();
     let d = dofs(&m);
     let gap = EllipticParaboloid { R1: 2.0, R2: 8.0, c1: 0.25, c2: -0.125 };
-    let k = RigidPunch::new(0.3, disc(0.5), Box::new(gap));
+    let k = RigidPunch::new(0.3, disc(0.5), Box::new(gap)).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     let row = |x1, x2| rows.node.iter().position(|&n| n == node_at(&m, x1, x2)).unwrap();
     let mut lambda = vec![0.0; rows.n_rows()];
@@ -210,7 +215,7 @@ fn report_gives_u_force_contact_set_and_radius() {
     assert_eq!(r.contact_nodes, 2);
     // farthest contact node from the apex (0.25, −0.125): (−0.25, 0)
     assert!((r.contact_radius - 0.5f64.hypot(0.125)).abs() < 1e-15, "{}", r.contact_radius);
-    let k = RigidPunchDisplacement::new(0.004, disc(0.5), Box::new(Paraboloid::new(5.0)));
+    let k = RigidPunchDisplacement::new(0.004, disc(0.5), Box::new(Paraboloid::new(5.0))).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     let mut lambda = vec![0.0; rows.n_rows()];
     lambda[0] = 0.5;
@@ -224,7 +229,7 @@ fn report_gives_u_force_contact_set_and_radius() {
 fn the_rim_warning_fires_only_for_contact_at_the_rim() {
     let m = mesh();
     let d = dofs(&m);
-    let k = RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(5.0)));
+    let k = RigidPunch::new(0.3, disc(0.5), Box::new(Paraboloid::new(5.0))).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     let row = |x1, x2| rows.node.iter().position(|&n| n == node_at(&m, x1, x2)).unwrap();
     let centre = row(0.0, 0.0);
@@ -250,7 +255,7 @@ fn the_rim_warning_fires_only_for_contact_at_the_rim() {
     assert_eq!(r.contact_radius, 0.5);
     // a zone covering the whole face facing the punch has no rim (homogeneous compression, theory §7)
     let d = DofMap::new(&m, &[Dirichlet::clamped(Region::Group("zmax".into()))]).unwrap();
-    let k = RigidPunch::new(0.3, Region::Group("zmin".into()), Box::new(Flat::default()));
+    let k = RigidPunch::new(0.3, Region::Group("zmin".into()), Box::new(Flat::default())).unwrap();
     let rows = k.discretise(&m, &d, "obstacle").unwrap();
     assert_eq!(rows.n_rows(), 81);
     let r = k.report(&m, &rows, &[0.0], &vec![1.0; 81]);
@@ -310,7 +315,7 @@ fn contact_pressures_of_a_uniform_force_field() {
     let mesh = common::mesh();
     let dofs = common::dofs(&mesh);
     let zone = saddle_core::Region::Group("zmin".into());
-    let punch = saddle_contact::RigidPunch::new(1.0, zone, Box::new(saddle_contact::Flat::default()));
+    let punch = saddle_contact::RigidPunch::new(1.0, zone, Box::new(saddle_contact::Flat::default())).unwrap();
     let rows = saddle_core::AdmissibleDisplacements::discretise(&punch, &mesh, &dofs, "obstacle").unwrap();
     let areas = saddle_contact::zone::row_areas(&mesh, &rows);
     let zone_area: f64 = areas.iter().sum();

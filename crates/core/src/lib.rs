@@ -14,8 +14,8 @@
 //! | [`error`] | parameter and scene errors that name the field and value | — |
 //! | [`linalg`] | sparse Cholesky, CSR, conjugate gradients, smoothed-aggregation multigrid: matrices and vectors only | `error` |
 //! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
-//! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), **L** [`Lagrangian`], the [`Solver`] interface | `error`, `mesh` |
-//! | [`fem`] | discretisations of L: [`P1P0Lagrangian`], [`P2Lagrangian`]; loads as nodal forces | `error`, `mesh`, `problem` |
+//! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), the element's operators [`ElementOperators`], **L** [`Lagrangian`] (operators and data) with its energies and KKT residuals, the [`Solver`] interface | `error`, `mesh` |
+//! | [`fem`] | the elements [`P1P0Element`], [`P2Element`]; loads as nodal forces; [`DiscreteProblem`], an element with the problem's data | `error`, `mesh`, `problem` |
 //! | [`evolution`] | load paths (theory §11): [`LoadStep`] (L at a load factor from a [`PlasticState`]), [`Evolution`] (the steps one after another) | `problem`, `fem` |
 //!
 //! Linear algebra knows no mesh and no mechanics (the multigrid takes its near-nullspace as
@@ -33,9 +33,9 @@ pub mod problem;
 pub use error::{MeshError, ParameterError, SceneError};
 pub use evolution::{Evolution, LoadStep, PathError, StepSolution, step_factors};
 pub use fem::loads::Load;
-pub use fem::p1p0::{P1, P1P0Lagrangian};
-pub use fem::p2::{P2, P2Lagrangian};
-pub use fem::{Discretisation, FiniteElement};
+pub use fem::p1p0::{P1, P1P0Element};
+pub use fem::p2::{P2, P2Element};
+pub use fem::{DiscreteProblem, Discretisation, FiniteElement, ProblemView, VtkCell};
 pub use mesh::box_mesh::{BoxMesh, Grading, Subdivision};
 pub use mesh::dofs::{Component, Dirichlet, DofMap};
 #[cfg(feature = "gmsh")]
@@ -45,10 +45,13 @@ pub use mesh::region::Region;
 pub use mesh::{MeshQuality, MeshSource, TetMesh};
 pub use problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
 pub use problem::elasticity::Elasticity;
-pub use problem::lagrangian::{Iterate, KktResiduals, Lagrangian, Material, RigidBodyModes, StressField, Workspace};
+pub use problem::energies::{dual_energy, energy, energy_of_strain, stress_energy};
+pub use problem::fields::{Hardening, PlasticState, StressField};
+pub use problem::kkt::{KktResiduals, kkt, kkt_with_stress};
+pub use problem::lagrangian::{Data, Iterate, Lagrangian, LocalLaw, Workspace};
 pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};
+pub use problem::operators::{ElementOperators, Material, RigidBodyModes};
 pub use problem::pattern::SymmetricPattern;
 pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason};
-pub use problem::state::PlasticState;
 pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
 pub use problem::tensor::{Sym, SymOp};

@@ -6,11 +6,11 @@ use saddle_core::linalg::{
     AmgError, AmgParams, Csr, Jacobi, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky,
 };
 use saddle_core::mesh::dofs::FIXED;
-use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
-use saddle_core::{BoxMesh, Dirichlet, Discretisation, Elasticity, Lagrangian, Material, P1P0Lagrangian, Region};
+use saddle_core::problem::operators::RIGID_BODY_MODES;
+use saddle_core::{BoxMesh, Dirichlet, Discretisation, Elasticity, ElementOperators, Material, P1P0Element, Region};
 
 /// The elastic block of the default scene (graded, clamped but for the bottom square).
-fn problem(cells: [usize; 3]) -> P1P0Lagrangian {
+fn problem(cells: [usize; 3]) -> P1P0Element {
     let mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], cells)
         .graded([0.0; 3], 4.0)
         .aligned(0, &[-0.75, 0.75])
@@ -22,22 +22,22 @@ fn problem(cells: [usize; 3]) -> P1P0Lagrangian {
         Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
     ]);
     let clamp = Dirichlet::clamped(Region::Not(Box::new(gamma1)));
-    P1P0Lagrangian::new(mesh, &[clamp], Elasticity::new(100.0, 0.3).unwrap(), None, None).unwrap()
+    P1P0Element::new(mesh, &[clamp]).unwrap()
 }
 
-fn stiffness(l: &P1P0Lagrangian) -> (Vec<f64>, Csr) {
-    let c = l.elasticity().stiffness_matrix();
+fn stiffness(l: &P1P0Element) -> (Vec<f64>, Csr) {
+    let c = Elasticity::new(100.0, 0.3).unwrap().stiffness_matrix();
     let v = l.stiffness(Material::Uniform(&c));
     let a = Csr::from_symmetric_lower(lower(l), &v);
     (v, a)
 }
 
-fn lower(l: &P1P0Lagrangian) -> LowerCsc<'_> {
+fn lower(l: &P1P0Element) -> LowerCsc<'_> {
     let p = l.pattern();
     LowerCsc::new(p.n(), p.col_ptr(), p.row_idx())
 }
 
-fn near_null(l: &P1P0Lagrangian) -> NearNullSpace {
+fn near_null(l: &P1P0Element) -> NearNullSpace {
     let m = l.rigid_body_modes().unwrap();
     NearNullSpace::new(m.node, m.modes, RIGID_BODY_MODES).unwrap()
 }

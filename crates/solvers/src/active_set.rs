@@ -235,8 +235,8 @@ pub struct ActiveSetSystem {
 impl ActiveSetSystem {
     /// The direct backend: the symbolic analysis of L's pattern, once; `solver` names the
     /// solver this system serves in errors.
-    pub fn new(l: &dyn Lagrangian, solver: &str) -> Result<Self, SolveError> {
-        let basis = RowBasis::new(l.constraints(), l.n_dofs(), l.pattern(), solver)?;
+    pub fn new(l: &Lagrangian<'_>, solver: &str) -> Result<Self, SolveError> {
+        let basis = RowBasis::new(l.data.rows, l.n_dofs(), l.pattern(), solver)?;
         let mut symbolic_analyses = 0;
         let chol = linear::analyse(basis.pattern(l.pattern()), "tangent stiffness", solver, &mut symbolic_analyses)?;
         let mut system = Self::with(l, solver, basis, LinearBackend::Direct(Box::new(chol)));
@@ -247,17 +247,17 @@ impl ActiveSetSystem {
     /// The iterative backend: the multigrid hierarchy of the elastic stiffness with the
     /// parameters `amg`, and CG with at most `cg_max_iter` iterations per solve.
     pub fn multigrid(
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         solver: &str,
         amg: &AmgParams,
         cg_max_iter: usize,
     ) -> Result<Self, SolveError> {
-        let basis = RowBasis::new(l.constraints(), l.n_dofs(), l.pattern(), solver)?;
+        let basis = RowBasis::new(l.data.rows, l.n_dofs(), l.pattern(), solver)?;
         let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
             solver: solver.into(),
             message: "linear = \"amg\" needs the nodes of the dofs (rigid-body modes); this L has none".into(),
         })?;
-        let c = l.elasticity().stiffness_matrix();
+        let c = l.data.elasticity.stiffness_matrix();
         let k_values = l.stiffness(Material::Uniform(&c));
         let k = Csr::from_symmetric_lower(lower(l.pattern()), &k_values);
         let amg = SmoothedAggregation::new(&k, &near_null, amg).map_err(|e| SolveError::Unsupported {
@@ -289,7 +289,7 @@ impl ActiveSetSystem {
     }
 
     /// The system for the rows' coordinates `basis` on `backend`.
-    fn with(l: &dyn Lagrangian, solver: &str, basis: RowBasis, backend: LinearBackend) -> Self {
+    fn with(l: &Lagrangian<'_>, solver: &str, basis: RowBasis, backend: LinearBackend) -> Self {
         let p = basis.pattern(l.pattern());
         Self {
             solver: solver.to_string(),
@@ -344,14 +344,14 @@ impl ActiveSetSystem {
     /// extra with a load needs an active row. Solved in the rows' coordinates y (module docs).
     pub fn step(
         &mut self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         k: &[f64],
         active: &[bool],
         grad: &[f64],
         gap: &[f64],
         cg_tol: f64,
     ) -> Result<Step, SolveError> {
-        let rows = l.constraints();
+        let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let basis = &self.basis;
         let p = basis.pattern(l.pattern());
@@ -454,7 +454,7 @@ impl ActiveSetSystem {
         if ne > 0 {
             let h = DMatrix::from_fn(nr, ne, |i, kx| if active[i] { rows.extra_row(i)[kx] } else { 0.0 });
             let s = h.transpose() * &lam_v;
-            let rhs = -DVector::from_column_slice(l.load()) - h.transpose() * DVector::from_column_slice(&lam0);
+            let rhs = -DVector::from_column_slice(l.data.load) - h.transpose() * DVector::from_column_slice(&lam0);
             let sol = s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| {
                 SolveError::Unsupported {
                     solver: self.solver.clone(),

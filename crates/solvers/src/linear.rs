@@ -3,7 +3,7 @@
 //! near-nullspace, and linear-algebra failures as [`SolveError`]s that name the solver.
 
 use saddle_core::linalg::{LowerCsc, NearNullSpace, SparseCholesky};
-use saddle_core::problem::lagrangian::RIGID_BODY_MODES;
+use saddle_core::problem::operators::RIGID_BODY_MODES;
 use saddle_core::{Lagrangian, SolveError, SymmetricPattern};
 
 /// The lower triangle of L's matrices (theory §3) as the linear algebra takes it.
@@ -26,7 +26,7 @@ pub fn analyse(
 
 /// The near-nullspace of L's elastic stiffness for a multigrid: the rigid-body modes, one
 /// block per node; `None` when L has no nodal dofs.
-pub fn near_null_space(l: &dyn Lagrangian) -> Option<NearNullSpace> {
+pub fn near_null_space(l: &Lagrangian<'_>) -> Option<NearNullSpace> {
     let m = l.rigid_body_modes()?;
     NearNullSpace::new(m.node, m.modes, RIGID_BODY_MODES).ok()
 }

@@ -40,9 +40,10 @@ use crate::linear::InSolver;
 use crate::residual;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
-use saddle_core::problem::lagrangian::{
-    Iterate, KktResiduals, Lagrangian, StressField, Workspace, locked_in_forces, max_abs,
-};
+use saddle_core::problem::energies::energy;
+use saddle_core::problem::fields::StressField;
+use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress, max_abs};
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace, locked_in_forces};
 pub use saddle_core::problem::solver::Start;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
@@ -141,7 +142,7 @@ struct SetupKey {
 
 impl SetupKey {
     /// The key of `l`, from its assembled elastic stiffness `k_el`.
-    fn new(l: &dyn Lagrangian, k_el: &[f64]) -> Self {
+    fn new(l: &Lagrangian<'_>, k_el: &[f64]) -> Self {
         use std::hash::{Hash, Hasher};
         let hash = |f: &mut dyn FnMut(&mut std::collections::hash_map::DefaultHasher)| {
             let mut h = std::collections::hash_map::DefaultHasher::new();
@@ -149,7 +150,7 @@ impl SetupKey {
             h.finish()
         };
         let p = l.pattern();
-        let rows = l.constraints();
+        let rows = l.data.rows;
         Self {
             n_dofs: l.n_dofs(),
             pattern: hash(&mut |h| {
@@ -235,13 +236,13 @@ impl Solver for Newton {
         self.tol
     }
 
-    fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         self.solve_from(l, None, monitor, &mut PhaseTimer::default(), "newton")
     }
 
     /// Newton from the previous step's (u, V, λ): its active set and plastic set are the
     /// first guesses (theory §11.2).
-    fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         start.check(l, "newton")?;
         let mut sol = self.iterate(l, Some(start.clone()), true, monitor, &mut PhaseTimer::default(), "newton")?;
         sol.report.counters.insert("warm_start".into(), 1.0);
@@ -254,7 +255,7 @@ impl Newton {
     /// the solver name `name`.
     pub fn solve_from(
         &self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         start: Option<Start>,
         monitor: &mut dyn Monitor,
         timer: &mut PhaseTimer,
@@ -267,7 +268,7 @@ impl Newton {
     /// in the [`SetupCache`].
     fn iterate(
         &self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         start: Option<Start>,
         reuse: bool,
         monitor: &mut dyn Monitor,
@@ -377,7 +378,7 @@ struct Scratch {
 /// One Newton solve: what it reads, its linear system, state, counters and scratch.
 struct Run<'a> {
     settings: &'a Newton,
-    l: &'a dyn Lagrangian,
+    l: &'a Lagrangian<'a>,
     name: &'a str,
     system: ActiveSetSystem,
     /// The elastic stiffness C.
@@ -402,17 +403,17 @@ impl<'a> Run<'a> {
     /// and the scratch.
     fn set_up(
         settings: &'a Newton,
-        l: &'a dyn Lagrangian,
+        l: &'a Lagrangian<'a>,
         start: Option<Start>,
         reuse: bool,
         name: &'a str,
         monitor: &mut dyn Monitor,
         timer: &mut PhaseTimer,
     ) -> Result<Self, SolveError> {
-        let nr = l.constraints().n_rows();
+        let nr = l.data.rows.n_rows();
         monitor.phase("analysis");
         let mut count = Counts::default();
-        let c_elastic = l.elasticity().stiffness_matrix();
+        let c_elastic = l.data.elasticity.stiffness_matrix();
         // a warm start may take the set-up the previous step kept (a load path, theory §11.2)
         let (key, k_el, kept) = if reuse {
             let k_el = timer.time("assembly", || l.stiffness(Material::Uniform(&c_elastic)));
@@ -457,12 +458,12 @@ impl<'a> Run<'a> {
         let (n, ne, np) = (l.n_dofs(), l.n_extras(), l.n_points());
         let Start { u, extras: v, lambda } =
             elastic_start.or(start).unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
-        let elastic_phase = cold && l.plasticity().is_some();
+        let elastic_phase = cold && l.data.plasticity().is_some();
         let state = State {
             u,
             v,
             lambda,
-            stress: StressField::new(np, l.hardening_dim()),
+            stress: StressField::new(np, l.data.hardening_dim()),
             active: vec![false; nr],
             it: 0,
             nu: 0.0,
@@ -499,13 +500,13 @@ impl<'a> Run<'a> {
     /// cheaper of the two by the cost rule of `auto` (its estimates go to `count`).
     fn backend(
         settings: &Newton,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         name: &str,
         count: &mut Counts,
         timer: &mut PhaseTimer,
     ) -> Result<ActiveSetSystem, SolveError> {
-        let nr = l.constraints().n_rows();
-        let nu = l.elasticity().poisson;
+        let nr = l.data.rows.n_rows();
+        let nu = l.data.elasticity.poisson;
         let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs, nu);
         let multigrid = |timer: &mut PhaseTimer| {
             timer.time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))
@@ -538,13 +539,13 @@ impl<'a> Run<'a> {
         let (l, s, w) = (self.l, &mut self.state, &mut self.work);
         let law = timer.time("local law", || {
             l.strain(&s.u, &mut w.ws.eps);
-            let law = l.local_law(&w.ws.eps, &mut s.stress, Some(&mut w.tangents));
+            let law = l.data.local_law(&w.ws.eps, &mut s.stress, Some(&mut w.tangents));
             w.ws.stress.clone_from(&s.stress);
             law
         });
         self.count.return_mappings += law.projected;
         timer.time("residual", || {
-            l.kkt_with_stress(&Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.lambda }, &mut w.ws)
+            kkt_with_stress(l, &Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.lambda }, &mut w.ws)
         })
     }
 
@@ -553,7 +554,7 @@ impl<'a> Run<'a> {
     /// once A has settled.
     fn update_active_set(&mut self) {
         let (l, s, w) = (self.l, &mut self.state, &mut self.work);
-        let rows = l.constraints();
+        let rows = l.data.rows;
         rows.gap(&s.u, &s.v, &mut w.gap);
         let mut changed = 0;
         // cold start: every candidate row active (the punch imprints its shape), tensile rows
@@ -568,7 +569,7 @@ impl<'a> Run<'a> {
             s.active[i] = a;
         }
         // an extra with a load needs a touching row: the one with the smallest gap
-        for (kx, f) in l.load().iter().enumerate() {
+        for (kx, f) in l.data.load.iter().enumerate() {
             let touching = (0..rows.n_rows()).filter(|&i| rows.extra_row(i)[kx] != 0.0);
             if *f != 0.0
                 && !touching.clone().any(|i| s.active[i])
@@ -594,9 +595,9 @@ impl<'a> Run<'a> {
             timer.time("assembly", || {
                 l.assemble(Material::Uniform(c), &mut w.k);
                 // C(ε − ε_p): the elastic response from the step's state (Cε without one)
-                l.elastic_stress(&w.ws.eps, &mut w.elastic_sigma);
+                l.data.elastic_stress(&w.ws.eps, &mut w.elastic_sigma);
                 l.divergence(&w.elastic_sigma, &mut w.grad);
-                for (g, f) in w.grad.iter_mut().zip(l.nodal_load()) {
+                for (g, f) in w.grad.iter_mut().zip(l.data.nodal_load) {
                     *g -= f;
                 }
             });
@@ -611,7 +612,7 @@ impl<'a> Run<'a> {
     fn solve(&mut self, r: f64, timer: &mut PhaseTimer) -> Result<Step, SolveError> {
         let l = self.l;
         // a linear problem (no plasticity, no contact) is solved in one step to the tolerance
-        let linear_problem = l.plasticity().is_none() && l.constraints().n_rows() == 0;
+        let linear_problem = l.data.plasticity().is_none() && l.data.rows.n_rows() == 0;
         let cg_tol = self.settings.cg_tol(r, linear_problem);
         let phase = if self.system.iterative().is_some() { "CG solves" } else { "factorisation and solves" };
         let (s, w) = (&self.state, &self.work);
@@ -635,16 +636,16 @@ impl<'a> Run<'a> {
         if !self.settings.line_search || s.elastic_phase {
             return 1.0;
         }
-        let rows = l.constraints();
+        let rows = l.data.rows;
         let (active, nu) = (&s.active, s.nu);
         // ℓ₁ violation of the *active* rows only: rows that a full step drives into the
         // obstacle join the active set at the next iteration (PDAS), they do not block
         let violation = |g: &[f64]| (0..rows.n_rows()).filter(|&i| active[i]).map(|i| g[i].abs()).sum::<f64>();
         let backtracks = &mut self.count.backtracks;
         timer.time("line search", || {
-            let j0 = l.energy(&s.u, &s.v, &mut w.ws) + nu * violation(&w.gap);
+            let j0 = energy(l, &s.u, &s.v, &mut w.ws) + nu * violation(&w.gap);
             let slope = w.grad.iter().zip(&step.du).map(|(a, b)| a * b).sum::<f64>()
-                - l.load().iter().zip(&step.dv).map(|(a, b)| a * b).sum::<f64>()
+                - l.data.load.iter().zip(&step.dv).map(|(a, b)| a * b).sum::<f64>()
                 - nu * violation(&w.gap);
             let mut alpha = 1.0;
             // below round-off of J the test is noise: take the full step
@@ -655,7 +656,7 @@ impl<'a> Run<'a> {
                 axpy_into(&mut w.u_trial, &s.u, alpha, &step.du);
                 axpy_into(&mut w.v_trial, &s.v, alpha, &step.dv);
                 rows.gap(&w.u_trial, &w.v_trial, &mut w.g_trial);
-                let j = l.energy(&w.u_trial, &w.v_trial, &mut w.ws) + nu * violation(&w.g_trial);
+                let j = energy(l, &w.u_trial, &w.v_trial, &mut w.ws) + nu * violation(&w.g_trial);
                 if j <= j0 + ARMIJO * alpha * slope {
                     break;
                 }
@@ -727,7 +728,7 @@ impl<'a> Run<'a> {
             counters,
             warnings: Vec::new(),
         };
-        Solution { u, extras: v, stress, lambda, report }
+        Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }
     }
 }
 
@@ -738,23 +739,23 @@ impl<'a> Run<'a> {
 /// contact row for the Delassus matrix G K⁻¹ Gᵀ (in blocks of columns) and a dense QP over the
 /// rows. Returns the start and the triangular solves spent; errors name `solver`.
 fn elastic_contact_start(
-    l: &dyn Lagrangian,
+    l: &Lagrangian<'_>,
     chol: &mut SparseCholesky,
     solver: &str,
 ) -> Result<(Start, usize), SolveError> {
-    let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.constraints().n_rows());
-    let c = l.elasticity().stiffness_matrix();
+    let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.data.rows.n_rows());
+    let c = l.data.elasticity.stiffness_matrix();
     chol.factorise(&l.stiffness(Material::Uniform(&c))).in_solver(solver)?;
     // z = K⁻¹(f_u + BᵀCε_p) (zero without loads on u and without a step's plastic strain):
     // the elastic response from the state, σ = C(ε − ε_p), balances f_u when Kz = f_u + BᵀCε_p
     let mut z = vec![0.0; n];
-    let f_u = l.nodal_load();
+    let f_u = l.data.nodal_load;
     if !f_u.is_empty() {
         z.copy_from_slice(f_u);
     }
-    if let Some(st) = l.state() {
+    if let Some(st) = l.data.state {
         let mut f0 = vec![0.0; n];
-        locked_in_forces(l, st, &mut f0);
+        locked_in_forces(l.ops, l.data.elasticity, st, &mut f0);
         for (zi, f) in z.iter_mut().zip(&f0) {
             *zi += f;
         }
@@ -762,8 +763,8 @@ fn elastic_contact_start(
     if z.iter().any(|f| *f != 0.0) {
         chol.solve(&mut z);
     }
-    let rows = l.constraints();
-    let mut projection = MetricProjection::new(rows, chol, 0.0, 1.0, l.load(), solver)?;
+    let rows = l.data.rows;
+    let mut projection = MetricProjection::new(rows, chol, 0.0, 1.0, l.data.load, solver)?;
     let (mut u, mut extras, mut lambda) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
     let solves = projection.setup_solves + projection.project(rows, chol, &z, &mut extras, &mut u, &mut lambda)?;
     Ok((Start { u, extras, lambda }, solves))

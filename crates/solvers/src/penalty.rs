@@ -111,9 +111,11 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::linalg::SparseCholesky;
-use saddle_core::problem::lagrangian::{
-    Iterate, KktResiduals, Lagrangian, Material, StressField, Workspace, max_abs, norm,
-};
+use saddle_core::problem::energies::energy;
+use saddle_core::problem::fields::StressField;
+use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress, max_abs, norm};
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
+use saddle_core::problem::operators::Material;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, Start, StopReason};
 use saddle_core::{Sym, SymOp};
 use serde::{Deserialize, Serialize};
@@ -192,7 +194,7 @@ impl Solver for Penalty {
         self.tol
     }
 
-    fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
         let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
@@ -201,7 +203,7 @@ impl Solver for Penalty {
 
     /// Newton on J_μ from the previous step's (u, V), without the elastic iteration (theory
     /// §11.2).
-    fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         start.check(l, "penalty")?;
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
@@ -287,10 +289,10 @@ struct Direction<'a> {
 impl PenaltySystem {
     /// The penalty scales from the elastic stiffness diagonal, and the symbolic analysis of L's
     /// pattern (once).
-    pub fn new(l: &dyn Lagrangian, mu: f64) -> Result<Self, SolveError> {
-        let rows = l.constraints();
+    pub fn new(l: &Lagrangian<'_>, mu: f64) -> Result<Self, SolveError> {
+        let rows = l.data.rows;
         let slaves = RowBasis::new(rows, l.n_dofs(), l.pattern(), "penalty")?;
-        let c_el = l.elasticity().stiffness_matrix();
+        let c_el = l.data.elasticity.stiffness_matrix();
         let mut kprime = l.stiffness(Material::Uniform(&c_el));
         let k: Vec<f64> = slaves.row_stiffness(l.pattern(), &kprime).iter().map(|k| k / mu).collect();
         if let Some(i) = k.iter().position(|k| !k.is_finite()) {
@@ -299,7 +301,7 @@ impl PenaltySystem {
             return Err(ParameterError::new("solver.mu", mu, why).into());
         }
         let ne = l.n_extras();
-        let body_stiffness = l.elasticity().young * l.weights().iter().sum::<f64>().cbrt();
+        let body_stiffness = l.data.elasticity.young * l.weights().iter().sum::<f64>().cbrt();
         let k_v: Vec<f64> = (0..ne)
             .map(|kx| {
                 let h2: Vec<f64> =
@@ -308,7 +310,7 @@ impl PenaltySystem {
             })
             .collect();
         for (kx, kv) in k_v.iter().enumerate() {
-            if *kv <= 0.0 && l.load()[kx] != 0.0 {
+            if *kv <= 0.0 && l.data.load[kx] != 0.0 {
                 return Err(SolveError::Unsupported {
                     solver: "penalty".into(),
                     message: format!("extra unknown {kx} carries a load but no contact row acts on it"),
@@ -351,8 +353,8 @@ impl PenaltySystem {
     }
 
     /// J_μ(u, V) with the gaps `gap` = g(u, V); `ws.eps` holds ε(u) afterwards.
-    fn energy(&self, l: &dyn Lagrangian, u: &[f64], v: &[f64], gap: &[f64], ws: &mut Workspace) -> f64 {
-        let j = l.energy(u, v, ws);
+    fn energy(&self, l: &Lagrangian<'_>, u: &[f64], v: &[f64], gap: &[f64], ws: &mut Workspace) -> f64 {
+        let j = energy(l, u, v, ws);
         let c = &self.c_el;
         let reg: f64 = ws.eps.par_iter().zip(l.weights().par_iter()).map(|(e, w)| w * e.dot(&(c * e))).sum();
         let pen: f64 = gap.iter().zip(&self.k).map(|(g, k)| k * (-g).max(0.0).powi(2)).sum();
@@ -366,7 +368,7 @@ impl PenaltySystem {
     /// J_μ, d is the plain semismooth Newton direction (A = {g < 0}), else the last sweep's.
     fn model_step(
         &mut self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         model: &mut [bool],
         at: &Point<'_>,
         d: &mut Direction<'_>,
@@ -403,13 +405,13 @@ impl PenaltySystem {
     /// (formulas in the type's docs), and the gaps ĝ after it.
     fn step(
         &mut self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         active: &[bool],
         at: &Point<'_>,
         d: &mut Direction<'_>,
     ) -> Result<(), SolveError> {
         let p = self.slaves.pattern(l.pattern());
-        let rows = l.constraints();
+        let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let nc = 1 + ne;
         // K' and r in the rows' coordinates (transformed once per Newton step, [`Self::model_step`])
@@ -452,7 +454,7 @@ impl PenaltySystem {
             let mut b = DVector::<f64>::zeros(ne);
             for kx in 0..ne {
                 s[(kx, kx)] = self.mu * self.k_v[kx];
-                b[kx] = l.load()[kx] - self.mu * self.k_v[kx] * at.v[kx];
+                b[kx] = l.data.load[kx] - self.mu * self.k_v[kx] * at.v[kx];
             }
             for i in (0..nr).filter(|&i| active[i]) {
                 let (sd, ka) = (self.slaves.dof[i], self.k[i] * self.slaves.coef[i]);
@@ -497,7 +499,7 @@ impl Penalty {
     /// Newton on J_μ (module docs, theory §4.3) in stages, then the honest report.
     fn newton(
         &self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         sys: PenaltySystem,
         start: Option<&Start>,
         monitor: &mut dyn Monitor,
@@ -609,7 +611,7 @@ struct Scratch {
 /// One penalty solve: what it reads, its Newton system, state, counters and scratch.
 struct Run<'a> {
     settings: &'a Penalty,
-    l: &'a dyn Lagrangian,
+    l: &'a Lagrangian<'a>,
     sys: PenaltySystem,
     /// P bounds the stresses (else no tangents are needed).
     plastic: bool,
@@ -626,15 +628,15 @@ struct Run<'a> {
 
 impl<'a> Run<'a> {
     /// The cold start u = 0, V = 0, g = c, every row in the model, and the scratch.
-    fn new(settings: &'a Penalty, l: &'a dyn Lagrangian, sys: PenaltySystem) -> Self {
-        let rows = l.constraints();
+    fn new(settings: &'a Penalty, l: &'a Lagrangian<'a>, sys: PenaltySystem) -> Self {
+        let rows = l.data.rows;
         let (n, ne, nr, np) = (l.n_dofs(), l.n_extras(), rows.n_rows(), l.n_points());
         let state = State {
             u: vec![0.0; n],
             v: vec![0.0; ne],
             gap: rows.offset.clone(),
             chi: vec![0.0; nr],
-            stress: StressField::new(np, l.hardening_dim()),
+            stress: StressField::new(np, l.data.hardening_dim()),
             model: vec![true; nr],
             previous: vec![true; nr],
             it: 0,
@@ -663,7 +665,7 @@ impl<'a> Run<'a> {
         Self {
             settings,
             l,
-            plastic: l.plasticity().is_some(),
+            plastic: l.data.plasticity().is_some(),
             c_el_mu,
             warm: false,
             sys,
@@ -683,7 +685,7 @@ impl<'a> Run<'a> {
     /// Starts from the previous step's (u, V) (theory §11.2): the gaps recomputed there, the
     /// model's rows those that penetrate.
     fn warm_start(&mut self, start: &Start) {
-        let rows = self.l.constraints();
+        let rows = self.l.data.rows;
         let s = &mut self.state;
         s.u.copy_from_slice(&start.u);
         s.v.copy_from_slice(&start.extras);
@@ -703,7 +705,7 @@ impl<'a> Run<'a> {
         self.sys.pressures(&s.gap, &mut s.chi);
         let law = timer.time("local law", || {
             l.strain(&s.u, &mut w.ws.eps);
-            l.local_law(&w.ws.eps, &mut s.stress, if want_tangents { Some(&mut w.tangents) } else { None })
+            l.data.local_law(&w.ws.eps, &mut s.stress, if want_tangents { Some(&mut w.tangents) } else { None })
         });
         self.count.return_mappings += law.projected;
     }
@@ -714,7 +716,7 @@ impl<'a> Run<'a> {
         let (l, s, w) = (self.l, &self.state, &mut self.work);
         timer.time("residual", || {
             w.ws.stress.clone_from(&s.stress);
-            l.kkt_with_stress(&Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.chi }, &mut w.ws)
+            kkt_with_stress(l, &Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.chi }, &mut w.ws)
         })
     }
 
@@ -724,12 +726,12 @@ impl<'a> Run<'a> {
         let elastic = self.elastic();
         let (l, sys, s, w) = (self.l, &self.sys, &mut self.state, &mut self.work);
         let (mu, c_el) = (self.settings.mu, sys.c_el);
-        let rows = l.constraints();
+        let rows = l.data.rows;
         timer.time("gradient", || {
             let eps = &w.ws.eps;
             if elastic {
                 // C(ε − ε_p) + μCε: the elastic response from the step's state (theory §11.1)
-                l.elastic_stress(eps, &mut w.sig_mu);
+                l.data.elastic_stress(eps, &mut w.sig_mu);
                 w.sig_mu.par_iter_mut().zip(eps.par_iter()).for_each(|(s, e)| *s += c_el * e * mu);
             } else {
                 let sigma = s.stress.sigma.par_iter();
@@ -737,7 +739,7 @@ impl<'a> Run<'a> {
             }
             l.divergence(&w.sig_mu, &mut w.r);
             // the loads on u belong to the smooth part
-            for (ri, f) in w.r.iter_mut().zip(l.nodal_load()) {
+            for (ri, f) in w.r.iter_mut().zip(l.data.nodal_load) {
                 *ri -= f;
             }
             w.gt_chi.iter_mut().for_each(|x| *x = 0.0);
@@ -747,12 +749,12 @@ impl<'a> Run<'a> {
                 *g = a - b;
             }
             for kx in 0..l.n_extras() {
-                w.grad_v[kx] = -l.load()[kx] - w.ht_chi[kx] + mu * sys.k_v[kx] * s.v[kx];
+                w.grad_v[kx] = -l.data.load[kx] - w.ht_chi[kx] + mu * sys.k_v[kx] * s.v[kx];
             }
         });
         let grad_norm = (norm(&w.grad_u).powi(2) + norm(&w.grad_v).powi(2)).sqrt();
         let grad_scale =
-            norm(&w.r).max(norm(&w.gt_chi)).max(norm(l.load())).max(norm(&w.ht_chi)).max(norm(l.nodal_load()));
+            norm(&w.r).max(norm(&w.gt_chi)).max(norm(l.data.load)).max(norm(&w.ht_chi)).max(norm(l.data.nodal_load));
         s.grad_rel = if grad_scale > 0.0 { grad_norm / grad_scale } else { grad_norm };
         if !s.grad_rel.is_finite() {
             return Err(non_finite("the gradient of J_μ", s.it));
@@ -821,7 +823,7 @@ impl<'a> Run<'a> {
     fn step_length(&mut self, timer: &mut PhaseTimer) -> f64 {
         let elastic = self.elastic();
         let (l, sys, s, w) = (self.l, &self.sys, &mut self.state, &mut self.work);
-        let offset = &l.constraints().offset;
+        let offset = &l.data.rows.offset;
         let slope = dot(&w.grad_u, &w.du) + dot(&w.grad_v, &w.dv);
         let x_scale = max_abs(&s.u).max(max_abs(&s.v)).max(max_abs(offset));
         let step_rel = max_abs(&w.du).max(max_abs(&w.dv)) / x_scale.max(f64::MIN_POSITIVE);
@@ -830,7 +832,7 @@ impl<'a> Run<'a> {
             return alpha;
         }
         let j0 = timer.time("line search", || sys.energy(l, &s.u, &s.v, &s.gap, &mut w.ws));
-        let j_scale = j0.abs().max(l.load().iter().zip(&s.v).map(|(f, v)| (f * v).abs()).sum());
+        let j_scale = j0.abs().max(l.data.load.iter().zip(&s.v).map(|(f, v)| (f * v).abs()).sum());
         s.decrement_rel = (-slope).max(0.0) / j_scale.max(f64::MIN_POSITIVE);
         if step_rel <= self.settings.step_tol {
             // the step is at the round-off of u: take it, re-evaluate, stop
@@ -885,7 +887,7 @@ impl<'a> Run<'a> {
     /// `converged`, the counters carry the penalty's error indicators.
     fn finish(mut self, end: End, kkt: KktResiduals, timer: PhaseTimer) -> Solution {
         let (l, sys, s, w, c) = (self.l, &self.sys, &self.state, &mut self.work, &self.count);
-        let rows = l.constraints();
+        let rows = l.data.rows;
         let mu = self.settings.mu;
         let inner_solved = end == End::Minimised;
         let converged = inner_solved && kkt.max() <= self.settings.tol;
@@ -898,7 +900,7 @@ impl<'a> Run<'a> {
         let x_scale = max_abs(&s.u).max(max_abs(&s.v)).max(max_abs(&rows.offset));
         let relative = |x: f64, scale: f64| if scale > 0.0 { x / scale } else { x };
         let max_pen = s.gap.iter().fold(0.0f64, |m, g| m.max(-g));
-        let load_def = l.load().iter().zip(&w.ht_chi).map(|(f, h)| (f + h).powi(2)).sum::<f64>().sqrt();
+        let load_def = l.data.load.iter().zip(&w.ht_chi).map(|(f, h)| (f + h).powi(2)).sum::<f64>().sqrt();
         rows.gap(&s.u, &s.v, &mut w.ws.gap);
         let drift = s.gap.iter().zip(&w.ws.gap).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         let mut counters = BTreeMap::new();
@@ -907,7 +909,7 @@ impl<'a> Run<'a> {
         put("max_penetration", max_pen);
         put("max_penetration_relative", relative(max_pen, x_scale));
         put("load_defect", load_def);
-        put("load_defect_relative", relative(load_def, norm(l.load())));
+        put("load_defect_relative", relative(load_def, norm(l.data.load)));
         put("condition_estimate", sys.condition_estimate);
         put("penalty_stiffness_max", sys.k.iter().copied().fold(0.0, f64::max));
         put("gap_drift_relative", relative(drift, x_scale));
@@ -938,7 +940,7 @@ impl<'a> Run<'a> {
             counters,
             warnings: Vec::new(),
         };
-        Solution { u, extras: v, stress, lambda: chi, report }
+        Solution { u, extras: v, stress, lambda: chi, report, undetermined: Vec::new() }
     }
 }
 

@@ -45,7 +45,9 @@ use clarabel::solver::{
     ZeroConeT,
 };
 use saddle_core::error::{ParameterError, check, join};
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, StressField, Workspace};
+use saddle_core::problem::fields::StressField;
+use saddle_core::problem::kkt::kkt_with_stress;
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::problem::stresses::{MAX_HARDENING_DIM, SocBlock};
 use saddle_core::problem::tensor::Sym;
@@ -152,7 +154,7 @@ impl Solver for Socp {
     }
 
     /// Builds the cone programme, runs Clarabel, recovers (u, V, σ̂, λ) and polishes them.
-    fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         let mut timer = PhaseTimer::default();
         monitor.phase("cone programme");
         let prog = timer.time("cone programme", || ConeProgramme::build(l))?;
@@ -170,8 +172,8 @@ impl Solver for Socp {
         let mut ws = Workspace::new(l);
         let (law, kkt) = timer.time("residual", || {
             l.strain(&u, &mut ws.eps);
-            let law = l.local_law(&ws.eps, &mut ws.stress, None);
-            (law, l.kkt_with_stress(&Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws))
+            let law = l.data.local_law(&ws.eps, &mut ws.stress, None);
+            (law, kkt_with_stress(l, &Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws))
         });
         stress.plastic.clone_from(&ws.stress.plastic);
         let r_ipm = kkt.max();
@@ -217,7 +219,7 @@ impl Solver for Socp {
                 counters,
                 warnings,
             };
-            return Ok(Solution { u, extras, stress, lambda, report });
+            return Ok(Solution { u, extras, stress, lambda, report, undetermined: Vec::new() });
         }
         let newton = Newton { tol: self.tol, max_iter: self.polish_max_iter, line_search: true, ..Newton::default() };
         let mut sol = newton.solve_from(l, Some(Start { u, extras, lambda }), monitor, &mut timer, NAME)?;
@@ -328,7 +330,7 @@ struct ConeProgramme {
 /// `examples/peers/`): `{"n", "m", "P": {"colptr", "rowval", "nzval"} (upper triangle, CSC),
 /// "q", "A": {…} (m × n, CSC), "b", "cones": [["zero" | "nonneg" | "soc", dim], …]}` for
 /// minimise ½xᵀPx + qᵀx subject to Ax + s = b, s in the cones (rows in order), non-dimensional.
-pub fn cone_programme_json(l: &dyn Lagrangian) -> Result<String, SolveError> {
+pub fn cone_programme_json(l: &Lagrangian<'_>) -> Result<String, SolveError> {
     let prog = ConeProgramme::build(l)?;
     let csc = |m: &CscMatrix<f64>| serde_json::json!({ "m": m.m, "n": m.n, "colptr": m.colptr, "rowval": m.rowval, "nzval": m.nzval });
     let cones: Vec<(&str, usize)> = prog
@@ -402,8 +404,8 @@ fn check_block(name: &str, k: usize, blk: &SocBlock, width: usize) -> Result<(),
 
 impl ConeProgramme {
     /// Builds the programme of theory §3 form 3 for `l`, non-dimensionalised.
-    fn build(l: &dyn Lagrangian) -> Result<Self, SolveError> {
-        let plasticity = l.plasticity();
+    fn build(l: &Lagrangian<'_>) -> Result<Self, SolveError> {
+        let plasticity = l.data.plasticity();
         let cone = match plasticity {
             Some(p) => Some(p.cone().ok_or_else(|| {
                 unsupported(format!(
@@ -416,7 +418,7 @@ impl ConeProgramme {
             None => None,
         };
         let blocks: &[SocBlock] = cone.as_ref().map_or(&[], |c| &c.blocks);
-        let q_dim = l.hardening_dim();
+        let q_dim = l.data.hardening_dim();
         let width = 6 + q_dim;
         let yield_name = plasticity.map_or("", |p| p.name());
         for (k, blk) in blocks.iter().enumerate() {
@@ -449,7 +451,7 @@ impl ConeProgramme {
                 .collect(),
             None => vec![],
         };
-        let rows = l.constraints();
+        let rows = l.data.rows;
         let layout = Layout {
             n_points: l.n_points(),
             q_dim,
@@ -462,7 +464,7 @@ impl ConeProgramme {
         let nq = layout.free_q.len();
 
         // units
-        let law = *l.elasticity();
+        let law = *l.data.elasticity;
         let w = l.weights();
         let volume: f64 = w.iter().sum();
         if !(volume.is_finite() && volume > 0.0) {
@@ -470,7 +472,7 @@ impl ConeProgramme {
         }
         let length = volume.cbrt();
         let offsets = blocks.iter().flat_map(|b| b.offset.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
-        let fmax = l.load().iter().chain(l.nodal_load()).fold(0.0f64, |m, v| m.max(v.abs()));
+        let fmax = l.data.load.iter().chain(l.data.nodal_load).fold(0.0f64, |m, v| m.max(v.abs()));
         let stress = if offsets > 0.0 {
             offsets
         } else if fmax > 0.0 {
@@ -526,7 +528,7 @@ impl ConeProgramme {
         }
         // a load step's state (theory §11.1): the objective ½Aσ:σ + ½(q − q_n)·H⁻¹(q − q_n) +
         // (ε_p, σ) adds the linear terms w ε_p·σ and −w q_n·H⁻¹q (scaled as P above)
-        if let Some(st) = l.state() {
+        if let Some(st) = l.data.state {
             for (t, wt) in w.iter().enumerate() {
                 let wt = wt / vol_scale;
                 for c in 0..6 {
@@ -595,10 +597,10 @@ impl ConeProgramme {
         }
         let mut b = vec![0.0; m];
         // equilibrium Σ w Bᵀσ − Gᵀλ = f_u (tractions, body forces); load −Hᵀλ = f
-        for (j, f) in l.nodal_load().iter().enumerate() {
+        for (j, f) in l.data.nodal_load.iter().enumerate() {
             b[j] = f / s_f;
         }
-        for (k, f) in l.load().iter().enumerate() {
+        for (k, f) in l.data.load.iter().enumerate() {
             b[n + k] = f / s_f;
         }
         let cone_row0 = n + ne + nr;
@@ -612,7 +614,7 @@ impl ConeProgramme {
             let mut r0 = row0;
             // a fixed hardening variable keeps its state value q_n (0 without a state): its
             // column of the map moves to the offset
-            let fixed: Vec<(usize, f64)> = match l.state() {
+            let fixed: Vec<(usize, f64)> = match l.data.state {
                 Some(st) => (0..q_dim).filter(|k| !layout.free_q.contains(k)).map(|k| (k, st.q(t)[k])).collect(),
                 None => Vec::new(),
             };
@@ -671,14 +673,14 @@ impl ConeProgramme {
 
     /// (u, V, σ̂, λ) in the units of `l` from Clarabel's x and z: σ̂ and λ from x, u = −z_eq and
     /// V = −z_load (module docs). The plastic flags are left false.
-    fn recover(&self, l: &dyn Lagrangian, r: &IpmResult) -> (Vec<f64>, Vec<f64>, StressField, Vec<f64>) {
+    fn recover(&self, l: &Lagrangian<'_>, r: &IpmResult) -> (Vec<f64>, Vec<f64>, StressField, Vec<f64>) {
         let lay = &self.layout;
         let (s, d, f) = (self.scales.stress, self.scales.displacement(), self.scales.force());
         let u: Vec<f64> = r.z[..lay.n_dofs].iter().map(|z| -d * z).collect();
         let extras: Vec<f64> = r.z[lay.n_dofs..lay.n_dofs + lay.n_extras].iter().map(|z| -d * z).collect();
         let lambda: Vec<f64> = (0..lay.n_rows).map(|i| f * r.x[lay.lambda_col(i)]).collect();
         let mut stress = StressField::new(l.n_points(), lay.q_dim);
-        let stride = stress.stride();
+        let stride = stress.q.stride();
         for t in 0..lay.n_points {
             for c in 0..6 {
                 stress.sigma[t][c] = s * r.x[lay.point_col(t, c)];
@@ -687,7 +689,7 @@ impl ConeProgramme {
                 stress.q[t * stride + k] = s * r.x[lay.point_col(t, 6 + kk)];
             }
             // fixed hardening variables stay at the state's value (theory §11.1)
-            if let Some(st) = l.state() {
+            if let Some(st) = l.data.state {
                 for k in (0..lay.q_dim).filter(|k| !lay.free_q.contains(k)) {
                     stress.q[t * stride + k] = st.q(t)[k];
                 }

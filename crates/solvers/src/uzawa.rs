@@ -21,7 +21,10 @@ use crate::linear::{self, InSolver};
 use crate::residual;
 use saddle_core::SymOp;
 use saddle_core::error::{ParameterError, check};
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Material, StressField, Workspace};
+use saddle_core::problem::fields::StressField;
+use saddle_core::problem::kkt::kkt_with_stress;
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
+use saddle_core::problem::operators::Material;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, Start, StopReason};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -97,12 +100,12 @@ impl Solver for Uzawa {
         self.tol
     }
 
-    fn solve(&self, l: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         self.iterate(l, None, monitor)
     }
 
     /// The iteration from the previous step's (u, V, λ) (theory §11.2).
-    fn solve_warm(&self, l: &dyn Lagrangian, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+    fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         start.check(l, "uzawa")?;
         let mut sol = self.iterate(l, Some(start), monitor)?;
         sol.report.counters.insert("warm_start".into(), 1.0);
@@ -114,12 +117,12 @@ impl Uzawa {
     /// The iteration of theory §4.1 from `start` (zero if `None`).
     fn iterate(
         &self,
-        l: &dyn Lagrangian,
+        l: &Lagrangian<'_>,
         start: Option<&Start>,
         monitor: &mut dyn Monitor,
     ) -> Result<Solution, SolveError> {
         let mut timer = PhaseTimer::default();
-        let law = *l.elasticity();
+        let law = *l.data.elasticity;
         // M and its Lipschitz bound L
         let (metric, lip) = match self.metric {
             UzawaMetric::Energy => (law.stiffness_matrix(), 1.0),
@@ -138,11 +141,11 @@ impl Uzawa {
         })?;
         drop(m_values);
         // without contact rows step (ii) is a plain gradient step: no contact structures at all
-        let rows = l.constraints();
+        let rows = l.data.rows;
         let mut proj = if rows.n_rows() > 0 {
             monitor.phase("contact set-up");
             Some(timer.time("contact set-up", || {
-                MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.load(), "uzawa")
+                MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.data.load, "uzawa")
             })?)
         } else {
             None
@@ -164,7 +167,7 @@ impl Uzawa {
         }
         let mut z = vec![0.0; n];
         let mut ws = Workspace::new(l);
-        let mut stress = StressField::new(l.n_points(), l.hardening_dim());
+        let mut stress = StressField::new(l.n_points(), l.data.hardening_dim());
         let mut history = Vec::new();
         let mut solves = 0usize;
         // Divergence: for ρ < 2 the iteration map is averaged in diag(M, m), so the step length
@@ -183,13 +186,13 @@ impl Uzawa {
             // (i) σ̂ⁿ⁺¹ = P_D(Cε(uⁿ), 0); the KKT residual of the iterate (uⁿ, Vⁿ, σ̂ⁿ⁺¹, λⁿ)
             let law = timer.time("local law", || {
                 l.strain(&u, &mut ws.eps);
-                let law = l.local_law(&ws.eps, &mut stress, None);
+                let law = l.data.local_law(&ws.eps, &mut stress, None);
                 ws.stress.clone_from(&stress);
                 law
             });
             return_mappings += law.projected;
             let kkt = timer.time("residual", || {
-                l.kkt_with_stress(&Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
+                kkt_with_stress(l, &Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
             });
             let r = kkt.max();
             residual::record("uzawa", it, r, self.tol, &mut history, monitor)?;
@@ -279,7 +282,7 @@ impl Uzawa {
             counters,
             warnings: Vec::new(),
         };
-        Ok(Solution { u, extras: v, stress, lambda, report })
+        Ok(Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() })
     }
 }
 

@@ -6,10 +6,11 @@
 //! same — an exact answer that a wrong change of basis or a wrong general-row step cannot meet.
 
 use saddle_contact::zone::candidate_nodes;
+use saddle_core::P1P0Element;
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleDisplacements, BoxMesh, ConstraintRows, ContactReport, Dirichlet, DofMap, Elasticity, Lagrangian,
-    P1P0Lagrangian, Region, SceneError, Solution, Solver, TetMesh, contact_set,
+    AdmissibleDisplacements, BoxMesh, ConstraintRows, ContactReport, Dirichlet, DiscreteProblem, DofMap, Elasticity,
+    Region, SceneError, Solution, Solver, TetMesh, contact_set,
 };
 use saddle_solvers::{LinearSolver, Newton, Penalty, Uzawa};
 use saddle_yield::VonMises;
@@ -89,27 +90,27 @@ fn rotation() -> [[f64; 3]; 3] {
 /// The punch scene on (−1,1)²×(0,1) with 8×8×4 cells, clamped except on the bottom face, von
 /// Mises k₀ = 1, h = 5, E = 100, ν = 0.3, F = 0.3, R = 5; rotated by `q` (identity: the
 /// axis-aligned problem).
-fn scene(q: [[f64; 3]; 3]) -> P1P0Lagrangian {
+fn scene(q: [[f64; 3]; 3]) -> DiscreteProblem {
     let mut mesh = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [8, 8, 4]).graded([0.0; 3], 2.0).mesh().unwrap();
     for x in &mut mesh.nodes {
         *x = [0, 1, 2].map(|i| (0..3).map(|k| q[i][k] * x[k]).sum());
     }
     let clamped = Dirichlet::clamped(Region::Not(Box::new(Region::Group("zmin".into()))));
-    let p = VonMises::new(1.0, 5.0);
-    P1P0Lagrangian::new(
-        mesh,
-        &[clamped],
+    let p = VonMises::new(1.0, 5.0).unwrap();
+    DiscreteProblem::new(
+        Box::new(P1P0Element::new(mesh, &[clamped]).unwrap()),
         Elasticity::new(100.0, 0.3).unwrap(),
         Some(Box::new(p)),
         saddle_core::Obstacles::one(Box::new(RotatedPunch { q, r: 5.0, f: 0.3 })),
+        &[],
     )
     .unwrap()
 }
 
 const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-fn solve(s: &dyn Solver, l: &P1P0Lagrangian) -> Solution {
-    let sol = s.solve(l, &mut saddle_core::Silent).unwrap_or_else(|e| panic!("{}: {e}", s.name()));
+fn solve(s: &dyn Solver, l: &DiscreteProblem) -> Solution {
+    let sol = s.solve(&l.lagrangian(), &mut saddle_core::Silent).unwrap_or_else(|e| panic!("{}: {e}", s.name()));
     assert!(sol.report.converged, "{}: {:?}", s.name(), sol.report.stop_reason);
     sol
 }
@@ -121,7 +122,7 @@ fn every_solver_solves_the_rotated_punch_as_the_axis_aligned_one() {
     assert!(plastic_ref > 0, "the scene must be plastic to test the tangent");
     let l = scene(rotation());
     // every row acts on three dofs
-    assert!((0..l.constraints().n_rows()).all(|i| l.constraints().row(i).0.len() == 3));
+    assert!((0..l.lagrangian().data.rows.n_rows()).all(|i| l.lagrangian().data.rows.row(i).0.len() == 3));
     let solvers: Vec<(Box<dyn Solver>, f64)> = vec![
         (Box::new(Newton { tol: 1e-11, linear: LinearSolver::Direct, ..Newton::default() }), 1e-9),
         (Box::new(Newton { tol: 1e-11, linear: LinearSolver::Amg, ..Newton::default() }), 1e-9),

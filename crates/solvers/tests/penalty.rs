@@ -5,23 +5,22 @@
 //! The μ study: `cargo test --release -p saddle-solvers --test penalty -- --ignored --nocapture mu_table`.
 
 use saddle_contact::{Paraboloid, RigidPunchDisplacement};
-use saddle_core::{
-    Lagrangian, P1P0Lagrangian, Silent, Solution, SolveError, Solver, StopReason, StressField, contact_set,
-};
+use saddle_core::stress_energy;
+use saddle_core::{DiscreteProblem, Silent, Solution, SolveError, Solver, StopReason, StressField, contact_set};
 use saddle_solvers::{Newton, Penalty};
 
 mod common;
 use common::{SCALED, homogeneous};
 
 /// The default scene of theory §6 on a coarse graded mesh.
-fn johnson() -> P1P0Lagrangian {
+fn johnson() -> DiscreteProblem {
     common::johnson([10, 10, 5], Some((1.0, 5.0)), SCALED)
 }
 
 /// The default scene with the punch moved by a prescribed U (no extra unknown).
-fn johnson_prescribed(u: f64) -> P1P0Lagrangian {
+fn johnson_prescribed(u: f64) -> DiscreteProblem {
     common::johnson_with([10, 10, 5], Some((1.0, 5.0)), SCALED, |zone, _, radius| {
-        Box::new(RigidPunchDisplacement::new(u, zone, Box::new(Paraboloid::new(radius))))
+        Box::new(RigidPunchDisplacement::new(u, zone, Box::new(Paraboloid::new(radius))).unwrap())
     })
 }
 
@@ -37,13 +36,13 @@ fn penalty(mu: f64) -> Penalty {
     Penalty { mu, ..Penalty::default() }
 }
 
-fn solve(p: &Penalty, l: &P1P0Lagrangian) -> Solution {
-    p.solve(l, &mut Silent).unwrap_or_else(|e| panic!("mu = {}: {e}", p.mu))
+fn solve(p: &Penalty, l: &DiscreteProblem) -> Solution {
+    p.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("mu = {}: {e}", p.mu))
 }
 
 /// Newton at tol 1e-12: the discrete solution of theory §3.
-fn reference(l: &P1P0Lagrangian) -> Solution {
-    let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(l, &mut Silent).unwrap();
+fn reference(l: &DiscreteProblem) -> Solution {
+    let sol = Newton { tol: 1e-12, ..Newton::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(sol.report.converged, "reference: {:?}", sol.report.stop_reason);
     sol
 }
@@ -53,7 +52,7 @@ fn u_error(a: &Solution, reference: &Solution) -> f64 {
 }
 
 /// [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} (theory §5).
-fn stress_error(l: &P1P0Lagrangian, a: &StressField, reference: &StressField) -> f64 {
+fn stress_error(l: &DiscreteProblem, a: &StressField, reference: &StressField) -> f64 {
     let mut diff = reference.clone();
     for (d, s) in diff.sigma.iter_mut().zip(&a.sigma) {
         *d -= s;
@@ -61,7 +60,7 @@ fn stress_error(l: &P1P0Lagrangian, a: &StressField, reference: &StressField) ->
     for (d, q) in diff.q.iter_mut().zip(&a.q) {
         *d -= q;
     }
-    (l.stress_energy(&diff) / l.stress_energy(reference)).sqrt()
+    (stress_energy(&l.lagrangian(), &diff) / stress_energy(&l.lagrangian(), reference)).sqrt()
 }
 
 fn all_finite(s: &Solution) -> bool {
@@ -86,7 +85,7 @@ fn homogeneous_compression_error_is_proportional_to_mu() {
         .map(|&mu| {
             let s = solve(&penalty(mu), &l);
             assert_eq!(s.report.counters["inner_converged"], 1.0);
-            assert_eq!(s.stress.n_plastic(), l.n_points(), "mu = {mu}: the whole cube yields");
+            assert_eq!(s.stress.n_plastic(), l.element.n_points(), "mu = {mu}: the whole cube yields");
             // σ₃₃ = −F everywhere, to O(μ)
             for sigma in &s.stress.sigma {
                 assert!((sigma[2] + f).abs() <= 1e3 * mu * f + 1e-12, "mu = {mu}: σ = {sigma:?}");
@@ -199,21 +198,21 @@ fn tiny_mu_never_gives_nan() {
     for (l, exact) in [(johnson(), None), (homogeneous(2.0), Some(homogeneous_u(2.0)))] {
         let exact = exact.unwrap_or_else(|| reference(&l).extras[0]);
         for mu in [1e-14, 1e-16, 1e-100, 1e-300] {
-            let s = penalty(mu).solve(&l, &mut Silent).unwrap_or_else(|e| panic!("mu = {mu}: {e}"));
+            let s = penalty(mu).solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("mu = {mu}: {e}"));
             assert!(all_finite(&s), "mu = {mu}: NaN in the solution");
             assert!(s.report.converged, "mu = {mu}: {:?}, KKT {:?}", s.report.stop_reason, s.report.kkt);
             assert!((s.extras[0] - exact).abs() <= 1e-10 * exact, "mu = {mu}: U = {} vs {exact}", s.extras[0]);
         }
     }
     // a μ whose penalty stiffness overflows is named, not turned into Inf
-    let e = penalty(1e-310).solve(&johnson(), &mut Silent).expect_err("overflowing stiffness");
+    let e = penalty(1e-310).solve(&johnson().lagrangian(), &mut Silent).expect_err("overflowing stiffness");
     assert!(matches!(e, SolveError::Parameter(_)) && e.to_string().contains("solver.mu"), "{e}");
 }
 
 #[test]
 fn the_iteration_budget_is_reported_not_hidden() {
     let l = johnson();
-    let s = Penalty { max_iter: 2, ..Penalty::default() }.solve(&l, &mut Silent).unwrap();
+    let s = Penalty { max_iter: 2, ..Penalty::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(!s.report.converged);
     assert_eq!(s.report.stop_reason, StopReason::MaxIterations);
     assert_eq!(s.report.counters["inner_converged"], 0.0);

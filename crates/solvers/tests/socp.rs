@@ -4,36 +4,36 @@
 //! the equality duals, invariance to units, perfect plasticity, and parameter errors.
 
 use saddle_contact::{Flat, RigidPunch};
-use saddle_core::error::ParameterError;
 use saddle_core::problem::elasticity::Elasticity;
-use saddle_core::problem::stresses::AdmissibleStresses;
-use saddle_core::problem::tensor::{Sym, SymOp, deviator};
+use saddle_core::problem::tensor::{Sym, deviator};
 use saddle_core::{
-    BoxMesh, Dirichlet, Lagrangian, P1P0Lagrangian, Region, Silent, Solution, SolveError, Solver, StopReason,
-    StressField, Workspace, contact_set,
+    BoxMesh, Dirichlet, DiscreteProblem, Region, Silent, Solution, SolveError, Solver, StopReason, StressField,
+    Workspace, contact_set,
 };
+use saddle_core::{P1P0Element, kkt, stress_energy};
 use saddle_solvers::{Newton, Socp};
 use saddle_yield::VonMises;
-use serde::{Deserialize, Serialize};
+use saddle_yield::mutant::Mutant;
 
 mod common;
 use common::{SCALED, Units, homogeneous, johnson};
 
 /// The plastic default scene (k₀ = 1, h = 5) on the small mesh [10, 10, 5].
-fn small_johnson() -> P1P0Lagrangian {
+fn small_johnson() -> DiscreteProblem {
     johnson([10, 10, 5], Some((1.0, 5.0)), SCALED)
 }
 
 /// Newton to 1e-12: the reference.
-fn newton(l: &P1P0Lagrangian) -> Solution {
-    let sol =
-        Newton { tol: 1e-12, max_iter: 60, line_search: true, ..Newton::default() }.solve(l, &mut Silent).unwrap();
+fn newton(l: &DiscreteProblem) -> Solution {
+    let sol = Newton { tol: 1e-12, max_iter: 60, line_search: true, ..Newton::default() }
+        .solve(&l.lagrangian(), &mut Silent)
+        .unwrap();
     assert!(sol.report.converged, "reference Newton: {:?}", sol.report.stop_reason);
     sol
 }
 
 /// [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} (theory §5).
-fn energy_error(l: &P1P0Lagrangian, s: &StressField, reference: &StressField) -> f64 {
+fn energy_error(l: &DiscreteProblem, s: &StressField, reference: &StressField) -> f64 {
     let mut d = reference.clone();
     for (a, b) in d.sigma.iter_mut().zip(&s.sigma) {
         *a -= b;
@@ -41,7 +41,7 @@ fn energy_error(l: &P1P0Lagrangian, s: &StressField, reference: &StressField) ->
     for (a, b) in d.q.iter_mut().zip(&s.q) {
         *a -= b;
     }
-    (l.stress_energy(&d) / l.stress_energy(reference)).sqrt()
+    (stress_energy(&l.lagrangian(), &d) / stress_energy(&l.lagrangian(), reference)).sqrt()
 }
 
 /// ‖a − b‖ / ‖b‖.
@@ -71,7 +71,7 @@ fn homogeneous_compression_matches_the_closed_form() {
     let (e, k0, h) = (100.0, 1.0, 5.0);
     for f in [2.0, 1.0] {
         let l = homogeneous(f);
-        let sol = Socp::default().solve(&l, &mut Silent).unwrap();
+        let sol = Socp::default().solve(&l.lagrangian(), &mut Silent).unwrap();
         print_report(&format!("homogeneous F = {f}"), &sol);
         assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
         let s_norm = (2.0f64 / 3.0).sqrt() * f;
@@ -89,7 +89,7 @@ fn homogeneous_compression_matches_the_closed_form() {
             assert!((s - exact).norm() <= 1e-8 * f, "F = {f}, element {i}: σ = {s:?}");
             assert!((sol.stress.q(i)[0] - xi).abs() <= 1e-8 * f, "F = {f}, element {i}: ξ = {}", sol.stress.q(i)[0]);
         }
-        assert_eq!(sol.stress.n_plastic(), if xi > 0.0 { l.n_points() } else { 0 });
+        assert_eq!(sol.stress.n_plastic(), if xi > 0.0 { l.element.n_points() } else { 0 });
     }
 }
 
@@ -97,13 +97,13 @@ fn homogeneous_compression_matches_the_closed_form() {
 fn small_default_scene_agrees_with_newton() {
     let l = small_johnson();
     let reference = newton(&l);
-    let sol = Socp::default().solve(&l, &mut Silent).unwrap();
+    let sol = Socp::default().solve(&l.lagrangian(), &mut Silent).unwrap();
     print_report("small default scene", &sol);
     let r = &sol.report;
     assert!(r.converged && r.kkt.max() <= 1e-10, "{:?}, KKT {:e}", r.stop_reason, r.kkt.max());
     assert_eq!(r.solver, "socp");
     // the recomputed residual meets the tolerance
-    assert!(l.kkt(&sol.iterate(), &mut Workspace::new(&l)).max() <= 1e-10);
+    assert!(kkt(&l.lagrangian(), &sol.iterate(), &mut Workspace::new(&l.lagrangian())).max() <= 1e-10);
     let (u0, u1) = (reference.extras[0], sol.extras[0]);
     assert!((u1 - u0).abs() <= 1e-8 * u0, "U = {u1:.12e} vs Newton {u0:.12e}");
     let es = energy_error(&l, &sol.stress, &reference.stress);
@@ -131,7 +131,7 @@ fn ipm_displacements_from_the_equality_duals_have_the_right_sign() {
     // u = −z_eq, V = −z_load: the interior point solution alone, before polishing, against Newton
     let l = small_johnson();
     let reference = newton(&l);
-    let sol = Socp { polish: false, ipm_tol: 1e-8, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let sol = Socp { polish: false, ipm_tol: 1e-8, ..Socp::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     print_report("IPM only", &sol);
     let (u0, u1) = (reference.extras[0], sol.extras[0]);
     eprintln!(
@@ -152,7 +152,9 @@ fn ipm_displacements_from_the_equality_duals_have_the_right_sign() {
     assert_eq!(r.counters["polish_iterations"], 0.0);
     assert_eq!(r.iterations, r.counters["ipm_iterations"] as usize);
     // a loose tolerance is met by the interior point alone
-    let loose = Socp { polish: false, tol: 1e-3, ipm_tol: 1e-8, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let loose = Socp { polish: false, tol: 1e-3, ipm_tol: 1e-8, ..Socp::default() }
+        .solve(&l.lagrangian(), &mut Silent)
+        .unwrap();
     assert!(loose.report.converged);
 }
 
@@ -161,11 +163,11 @@ fn elastic_scene_is_a_qp() {
     // Hertz-like: no yield, the programme has no cones beyond λ ≥ 0
     let l = johnson([10, 10, 5], None, SCALED);
     let reference = newton(&l);
-    let sol = Socp::default().solve(&l, &mut Silent).unwrap();
+    let sol = Socp::default().solve(&l.lagrangian(), &mut Silent).unwrap();
     print_report("elastic", &sol);
     assert!(sol.report.converged);
     assert_eq!(sol.report.counters["ipm_soc_cones"], 0.0);
-    assert_eq!(sol.stress.q_dim, 0);
+    assert_eq!(sol.stress.q.dim(), 0);
     assert_eq!(sol.stress.n_plastic(), 0);
     let (u0, u1) = (reference.extras[0], sol.extras[0]);
     assert!((u1 - u0).abs() <= 1e-8 * u0, "U = {u1:e} vs {u0:e}");
@@ -180,7 +182,7 @@ fn results_do_not_depend_on_the_units() {
     let (a, b) = (johnson([6, 6, 3], Some((1.0, 5.0)), SCALED), johnson([6, 6, 3], Some((1.0, 5.0)), units));
     for polish in [false, true] {
         let s = Socp { polish, ..Socp::default() };
-        let (sa, sb) = (s.solve(&a, &mut Silent).unwrap(), s.solve(&b, &mut Silent).unwrap());
+        let (sa, sb) = (s.solve(&a.lagrangian(), &mut Silent).unwrap(), s.solve(&b.lagrangian(), &mut Silent).unwrap());
         print_report("units 1", &sa);
         print_report("units 2", &sb);
         let (ua, ub) = (sa.extras[0], sb.extras[0] / units.length);
@@ -201,63 +203,35 @@ fn results_do_not_depend_on_the_units() {
 fn perfect_plasticity_fixes_the_hardening_variable() {
     // h = 0: ξ has an infinite metric and is fixed at 0; |dev σ| ≤ k₀ everywhere
     let l = johnson([8, 8, 4], Some((1.0, 0.0)), SCALED);
-    let sol = Socp::default().solve(&l, &mut Silent).unwrap();
+    let sol = Socp::default().solve(&l.lagrangian(), &mut Silent).unwrap();
     print_report("h = 0", &sol);
     assert_eq!(sol.report.counters["ipm_fixed_hardening_variables"], 1.0);
     assert!(sol.stress.q.iter().all(|q| *q == 0.0));
     assert!(sol.stress.sigma.iter().all(|s| deviator(s).norm() <= 1.0 + 1e-8));
     assert!(sol.stress.n_plastic() > 0);
     // the stresses are unique even at h = 0 (theory §1): the interior point ones agree
-    let ipm = Socp { polish: false, ipm_tol: 1e-8, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let ipm = Socp { polish: false, ipm_tol: 1e-8, ..Socp::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(energy_error(&l, &ipm.stress, &sol.stress) <= 1e-4);
     assert!(sol.report.converged, "{:?}: KKT {:e}", sol.report.stop_reason, sol.report.kkt.max());
-}
-
-/// Von Mises without its cone description.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct NoCone(VonMises);
-
-#[typetag::serde(name = "test_von_mises_without_cone")]
-impl AdmissibleStresses for NoCone {
-    fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        self.0.validate(path)
-    }
-    fn hardening_dim(&self) -> usize {
-        1
-    }
-    fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-        self.0.hardening_inner(q, r)
-    }
-    fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
-        self.0.contains(sigma, q, tol)
-    }
-    fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-        self.0.project(law, sigma, q)
-    }
-    fn local_law(&self, law: &Elasticity, eps: &Sym, sigma: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>) -> bool {
-        self.0.local_law(law, eps, sigma, q, t)
-    }
 }
 
 #[test]
 fn a_yield_surface_without_cones_is_unsupported() {
     let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
-    let l = P1P0Lagrangian::new(
-        mesh,
-        &[Dirichlet::clamped(Region::Group("zmax".into()))],
+    let l = DiscreteProblem::new(
+        Box::new(P1P0Element::new(mesh, &[Dirichlet::clamped(Region::Group("zmax".into()))]).unwrap()),
         Elasticity::new(100.0, 0.3).unwrap(),
-        Some(Box::new(NoCone(VonMises::new(1.0, 5.0)))),
-        saddle_core::Obstacles::one(Box::new(RigidPunch::new(
-            1.0,
-            Region::Group("zmin".into()),
-            Box::new(Flat::default()),
-        ))),
+        Some(Box::new(Mutant::of(VonMises::new(1.0, 5.0).unwrap()).with_cone(|_| None))),
+        saddle_core::Obstacles::one(Box::new(
+            RigidPunch::new(1.0, Region::Group("zmin".into()), Box::new(Flat::default())).unwrap(),
+        )),
+        &[],
     )
     .unwrap();
-    match Socp::default().solve(&l, &mut Silent) {
+    match Socp::default().solve(&l.lagrangian(), &mut Silent) {
         Err(SolveError::Unsupported { solver, message }) => {
             assert_eq!(solver, "socp");
-            assert!(message.contains("test_von_mises_without_cone") && message.contains("cone"), "{message}");
+            assert!(message.contains("von_mises") && message.contains("cone"), "{message}");
         }
         other => panic!("expected Unsupported, got {:?}", other.map(|s| s.report)),
     }
@@ -291,17 +265,18 @@ fn an_interior_point_cut_short_is_reported_and_polished() {
     let l = small_johnson();
     let warned =
         |s: &saddle_core::Solution| s.report.warnings.iter().any(|w| w.contains("ended MaxIterations (status 7)"));
-    let raw = Socp { ipm_max_iter: 3, polish: false, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let raw = Socp { ipm_max_iter: 3, polish: false, ..Socp::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     let r = &raw.report;
     assert!(!r.converged && r.stop_reason == StopReason::MaxIterations);
     assert_eq!(r.counters["ipm_status"], 7.0);
     assert!(warned(&raw), "{:?}", r.warnings);
     assert!(r.kkt.max() > 1e-2);
     // polishing still starts from that iterate; Newton's budget decides
-    let short = Socp { ipm_max_iter: 3, polish_max_iter: 2, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let short =
+        Socp { ipm_max_iter: 3, polish_max_iter: 2, ..Socp::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     assert!(!short.report.converged && short.report.stop_reason == StopReason::MaxIterations);
     assert!(warned(&short));
-    let sol = Socp { ipm_max_iter: 3, ..Socp::default() }.solve(&l, &mut Silent).unwrap();
+    let sol = Socp { ipm_max_iter: 3, ..Socp::default() }.solve(&l.lagrangian(), &mut Silent).unwrap();
     print_report("cut short, polished", &sol);
     assert!(sol.report.converged && warned(&sol));
     assert!(sol.report.counters["polish_iterations"] > 3.0);

@@ -983,8 +983,8 @@ fn show_sym(s: &Sym) -> String {
 mod tests {
     use super::*;
     use crate::VonMises;
-    use saddle_core::error::ParameterError;
-    use saddle_core::problem::stresses::ConeDescription;
+    use crate::mutant::Mutant;
+    use saddle_core::problem::stresses::step_law_by_differences;
     use serde::{Deserialize, Serialize};
 
     /// Ways to break von Mises, each aimed at one check.
@@ -1018,134 +1018,82 @@ mod tests {
         StepEnergyIgnoresHardening,
     }
 
-    #[derive(Clone, Debug, Serialize, Deserialize)]
-    struct Broken {
-        vm: VonMises,
-        how: Breakage,
-    }
-
-    #[typetag::serde(name = "conformance_test_broken")]
-    impl AdmissibleStresses for Broken {
-        fn validate(&self, path: &str) -> Result<(), ParameterError> {
-            self.vm.validate(path)
-        }
-        fn hardening_dim(&self) -> usize {
-            1
-        }
-        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-            self.vm.hardening_inner(q, r)
-        }
-        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
-            self.vm.contains(sigma, q, tol)
-        }
-        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-            let mean = identity() * (saddle_core::problem::tensor::trace(sigma) / 3.0);
-            match self.how {
-                Breakage::WrongMetric => VonMises::new(self.vm.k0, 10.0 * self.vm.h).project(law, sigma, q),
-                Breakage::Overshoots => {
-                    let out = self.vm.project(law, sigma, q);
+    /// Von Mises (k₀ = 1, h = 5) broken as `how` says.
+    fn broken(how: Breakage) -> Mutant {
+        let vm = VonMises::new(1.0, 5.0).unwrap();
+        let m = Mutant::of(vm);
+        match how {
+            Breakage::Overshoots => m
+                .with_project(move |_, law, sigma, q| {
+                    let out = vm.project(law, sigma, q);
                     if out {
-                        *sigma = mean + deviator(sigma) * 1.1;
+                        *sigma =
+                            identity() * (saddle_core::problem::tensor::trace(sigma) / 3.0) + deviator(sigma) * 1.1;
                     }
                     out
-                }
-                Breakage::NotIdempotent => {
-                    let out = self.vm.project(law, sigma, q);
+                })
+                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+            Breakage::NotIdempotent => m
+                .with_project(move |_, law, sigma, q| {
+                    let out = vm.project(law, sigma, q);
                     let s = deviator(sigma);
-                    if s.norm() > 0.5 * (self.vm.k0 + q[0]) {
-                        *sigma = mean + s * 0.9;
+                    if s.norm() > 0.5 * (vm.k0 + q[0]) {
+                        *sigma = identity() * (saddle_core::problem::tensor::trace(sigma) / 3.0) + s * 0.9;
                     }
                     out
-                }
-                Breakage::DoublesPressure => {
-                    let out = self.vm.project(law, sigma, q);
+                })
+                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+            Breakage::WrongMetric => m
+                .with_project(move |_, law, sigma, q| VonMises { k0: vm.k0, h: 10.0 * vm.h }.project(law, sigma, q))
+                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+            Breakage::DoublesPressure => m
+                .with_project(move |_, law, sigma, q| {
+                    let mean = identity() * (saddle_core::problem::tensor::trace(sigma) / 3.0);
+                    let out = vm.project(law, sigma, q);
                     if out {
                         *sigma += mean;
                     }
                     out
+                })
+                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+            Breakage::ElasticEnergy => m.with_energy(|_, law, eps| 0.5 * eps.dot(&law.stress(eps))),
+            Breakage::ElasticTangent => m.with_local_law(move |_, law, eps, s, q, t| {
+                let plastic = vm.local_law(law, eps, s, q, None);
+                if let Some(t) = t {
+                    *t = law.stiffness_matrix();
                 }
-                _ => self.vm.project(law, sigma, q),
+                plastic
+            }),
+            Breakage::ConcaveEnergy => m.with_energy(move |_, law, eps| {
+                let elastic = 0.5 * eps.dot(&law.stress(eps));
+                elastic + 3.0 * (vm.energy(law, eps) - elastic)
+            }),
+            Breakage::LocalLawOfOtherH => {
+                let other = VonMises { k0: vm.k0, h: 2.0 * vm.h };
+                m.with_local_law(move |_, law, eps, s, q, t| other.local_law(law, eps, s, q, t))
+                    .with_energy(move |_, law, eps| other.energy(law, eps))
             }
-        }
-        fn local_law(
-            &self,
-            law: &Elasticity,
-            eps: &Sym,
-            sigma: &mut Sym,
-            q: &mut [f64],
-            tangent: Option<&mut SymOp>,
-        ) -> bool {
-            match self.how {
-                Breakage::LocalLawOfOtherH => {
-                    VonMises::new(self.vm.k0, 2.0 * self.vm.h).local_law(law, eps, sigma, q, tangent)
-                }
-                Breakage::ElasticTangent => {
-                    let plastic = self.vm.local_law(law, eps, sigma, q, None);
-                    if let Some(t) = tangent {
-                        *t = law.stiffness_matrix();
-                    }
-                    plastic
-                }
-                Breakage::NotIdempotent | Breakage::Overshoots | Breakage::WrongMetric | Breakage::DoublesPressure => {
-                    // consistent with the (broken) projection, as a careless author would write it
-                    *sigma = law.stress(eps);
-                    q[0] = 0.0;
-                    let plastic = self.project(law, sigma, q);
-                    if let Some(t) = tangent {
-                        let mut dummy = (Sym::zeros(), [0.0]);
-                        self.vm.local_law(law, eps, &mut dummy.0, &mut dummy.1, Some(t));
-                    }
-                    plastic
-                }
-                _ => self.vm.local_law(law, eps, sigma, q, tangent),
-            }
-        }
-        fn step_law(
-            &self,
-            law: &Elasticity,
-            eps: &Sym,
-            plastic_strain: &Sym,
-            q_n: &[f64],
-            sigma: &mut Sym,
-            q: &mut [f64],
-            tangent: Option<&mut SymOp>,
-        ) -> bool {
-            match self.how {
-                Breakage::StepIgnoresHardening => self.vm.step_law(law, eps, plastic_strain, &[0.0], sigma, q, tangent),
-                Breakage::StepElasticTangent => {
-                    let plastic = self.vm.step_law(law, eps, plastic_strain, q_n, sigma, q, None);
-                    if let Some(t) = tangent {
-                        *t = law.stiffness_matrix();
-                    }
-                    plastic
-                }
-                _ => self.vm.step_law(law, eps, plastic_strain, q_n, sigma, q, tangent),
-            }
-        }
-        fn step_energy(&self, law: &Elasticity, eps: &Sym, plastic_strain: &Sym, q_n: &[f64]) -> f64 {
-            match self.how {
-                Breakage::StepEnergyIgnoresHardening => self.vm.step_energy(law, eps, plastic_strain, &[0.0]),
-                _ => self.vm.step_energy(law, eps, plastic_strain, q_n),
-            }
-        }
-        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
-            let elastic = 0.5 * eps.dot(&law.stress(eps));
-            match self.how {
-                Breakage::ElasticEnergy => elastic,
-                Breakage::ConcaveEnergy => elastic + 3.0 * (self.vm.energy(law, eps) - elastic),
-                Breakage::LocalLawOfOtherH => VonMises::new(self.vm.k0, 2.0 * self.vm.h).energy(law, eps),
-                Breakage::EnergyOffset => self.vm.energy(law, eps) + 1e-3,
-                _ => self.vm.energy(law, eps),
-            }
-        }
-        fn cone(&self) -> Option<ConeDescription> {
-            let mut c = self.vm.cone()?;
-            if self.how == Breakage::NarrowCone {
+            Breakage::NarrowCone => m.with_cone(move |_| {
+                let mut c = vm.cone()?;
                 for v in &mut c.blocks[0].map[7..] {
                     *v /= 0.9;
                 }
+                Some(c)
+            }),
+            Breakage::EnergyOffset => m.with_energy(move |_, law, eps| vm.energy(law, eps) + 1e-3),
+            Breakage::StepIgnoresHardening => {
+                m.with_step_law(move |_, law, eps, ep, _, s, q, t| vm.step_law(law, eps, ep, &[0.0], s, q, t))
             }
-            Some(c)
+            Breakage::StepElasticTangent => m.with_step_law(move |_, law, eps, ep, q_n, s, q, t| {
+                let plastic = vm.step_law(law, eps, ep, q_n, s, q, None);
+                if let Some(t) = t {
+                    *t = law.stiffness_matrix();
+                }
+                plastic
+            }),
+            Breakage::StepEnergyIgnoresHardening => {
+                m.with_step_energy(move |_, law, eps, ep, _| vm.step_energy(law, eps, ep, &[0.0]))
+            }
         }
     }
 
@@ -1173,12 +1121,12 @@ mod tests {
         ];
         let cfg = cfg();
         for (how, name, check) in cases {
-            let p = Broken { vm: VonMises::new(1.0, 5.0), how };
+            let p = broken(how);
             let e = check(&p, &cfg).expect_err(name);
             assert_eq!(e.check, name, "{how:?}: {e}");
             assert!(e.to_string().starts_with(&format!("conformance check `{name}` failed: sample ")), "{e}");
             // the check itself passes for the unbroken plugin
-            check(&VonMises::new(1.0, 5.0), &cfg).unwrap();
+            check(&VonMises::new(1.0, 5.0).unwrap(), &cfg).unwrap();
         }
     }
 
@@ -1198,68 +1146,36 @@ mod tests {
             (Breakage::StepElasticTangent, names::STEP_TANGENT),
             (Breakage::StepEnergyIgnoresHardening, names::STEP_ENERGY_GRADIENT),
         ] {
-            let e = check_all(&Broken { vm: VonMises::new(1.0, 5.0), how }, &cfg).unwrap_err();
+            let e = check_all(&broken(how), &cfg).unwrap_err();
             assert_eq!(e.check, first, "{how:?}: {e}");
         }
     }
 
-    /// A plugin without a closed-form step law: the trait's default (`local_law` at ε − ε_p for
-    /// q_n = 0, else projection with a tangent by differences) must pass the kit too.
-    #[derive(Clone, Debug, Serialize, Deserialize)]
-    struct DefaultStep(Box<dyn AdmissibleStresses>);
-
-    #[typetag::serde(name = "conformance_test_default_step")]
-    impl AdmissibleStresses for DefaultStep {
-        fn validate(&self, path: &str) -> Result<(), ParameterError> {
-            self.0.validate(path)
-        }
-        fn hardening_dim(&self) -> usize {
-            self.0.hardening_dim()
-        }
-        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-            self.0.hardening_inner(q, r)
-        }
-        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
-            self.0.contains(sigma, q, tol)
-        }
-        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-            self.0.project(law, sigma, q)
-        }
-        fn local_law(
-            &self,
-            law: &Elasticity,
-            eps: &Sym,
-            sigma: &mut Sym,
-            q: &mut [f64],
-            tangent: Option<&mut SymOp>,
-        ) -> bool {
-            self.0.local_law(law, eps, sigma, q, tangent)
-        }
-        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
-            self.0.energy(law, eps)
-        }
-        fn cone(&self) -> Option<ConeDescription> {
-            self.0.cone()
-        }
+    /// `p` with the step law by differences of its projection
+    /// ([`step_law_by_differences`]), as a plugin without a closed form gives it.
+    fn by_differences(p: Box<dyn AdmissibleStresses>) -> Mutant {
+        Mutant::boxed(p).with_step_law(|m, law, eps, ep, q_n, s, q, t| {
+            step_law_by_differences(m.inner.as_ref(), law, eps, ep, q_n, s, q, t)
+        })
     }
 
     #[test]
-    fn default_step_law_passes_the_kit_and_agrees_with_the_closed_forms() {
+    fn step_law_by_differences_passes_the_kit_and_agrees_with_the_closed_forms() {
         let cfg = cfg();
         let plugins: [Box<dyn AdmissibleStresses>; 5] = [
-            Box::new(VonMises::new(1.0, 5.0)),
-            Box::new(VonMises::new(1.0, 0.0)),
-            Box::new(crate::VonMisesKinematic::new(1.0, 5.0, 3.0)),
-            Box::new(crate::DruckerPrager::new(1.0, 0.3, 5.0)),
-            Box::new(crate::Tresca::new(1.0, 5.0)),
+            Box::new(VonMises::new(1.0, 5.0).unwrap()),
+            Box::new(VonMises::new(1.0, 0.0).unwrap()),
+            Box::new(crate::VonMisesKinematic::new(1.0, 5.0, 3.0).unwrap()),
+            Box::new(crate::DruckerPrager::new(1.0, 0.3, 5.0).unwrap()),
+            Box::new(crate::Tresca::new(1.0, 5.0).unwrap()),
         ];
         for p in plugins {
             let name = p.name();
-            check_all(&DefaultStep(p.clone()), &cfg).unwrap_or_else(|e| panic!("{name} with the default: {e}"));
+            check_all(&by_differences(p.clone()), &cfg).unwrap_or_else(|e| panic!("{name} by differences: {e}"));
             // the closed form and the default at the same states: same σ̂, tangents to the
             // accuracy of the default's differences
             let mut kit = Kit::new(p.as_ref(), &cfg, "test").unwrap();
-            let default = DefaultStep(p.clone());
+            let default = by_differences(p.clone());
             let (mut plastic, mut worst) = (0, 0.0f64);
             for i in 0..200 {
                 let (ep, qn) = kit.step_state(i % 4);
@@ -1284,7 +1200,7 @@ mod tests {
 
     #[test]
     fn not_idempotent_failure_reports_the_numbers() {
-        let e = idempotent(&Broken { vm: VonMises::new(1.0, 5.0), how: Breakage::NotIdempotent }, &cfg()).unwrap_err();
+        let e = idempotent(&broken(Breakage::NotIdempotent), &cfg()).unwrap_err();
         // P(Px) is 0.9 Px in the deviator: the distance 0.1 |dev Px| / √(2G) is far above the
         // round-off tolerance the kit reports next to it
         let number_after = |key: &str| -> f64 {
@@ -1298,24 +1214,24 @@ mod tests {
     #[test]
     fn setup_rejects_bad_plugins_and_configurations() {
         let cfg = cfg();
-        let e = check_all(&VonMises::new(-1.0, 5.0), &cfg).unwrap_err();
+        let e = check_all(&VonMises { k0: -1.0, h: 5.0 }, &cfg).unwrap_err();
         assert_eq!(e.check, names::SETUP);
         assert!(e.message.contains("yield.k0 = -1"), "{e}");
         let mut bad = cfg;
         bad.stress_scale = 0.0;
-        let e = check_all(&VonMises::new(1.0, 5.0), &bad).unwrap_err();
+        let e = check_all(&VonMises::new(1.0, 5.0).unwrap(), &bad).unwrap_err();
         assert!(e.check == names::SETUP && e.message.contains("stress_scale = 0"), "{e}");
         // a single check reports under its own name, with the setup message
-        let e = tangent(&VonMises::new(1.0, 5.0), &bad).unwrap_err();
+        let e = tangent(&VonMises::new(1.0, 5.0).unwrap(), &bad).unwrap_err();
         assert!(e.check == names::TANGENT && e.message.contains("stress_scale"), "{e}");
-        let e = check_all(&VonMises::new(1.0, 5.0), &cfg.with_samples(0)).unwrap_err();
+        let e = check_all(&VonMises::new(1.0, 5.0).unwrap(), &cfg.with_samples(0)).unwrap_err();
         assert_eq!(e.check, names::SETUP);
     }
 
     #[test]
     fn samples_span_both_regimes() {
         // the local law sees elastic and plastic points, and projections meet the apex
-        let vm = VonMises::new(1.0, 5.0);
+        let vm = VonMises::new(1.0, 5.0).unwrap();
         let cfg = cfg();
         let mut kit = Kit::new(&vm, &cfg, "test").unwrap();
         let (mut plastic, mut apex, mut inside) = (0, 0, 0);

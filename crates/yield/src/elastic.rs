@@ -2,6 +2,7 @@
 
 use saddle_core::error::ParameterError;
 use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::return_mapping::elastic_step;
 use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription};
 use saddle_core::problem::tensor::{Sym, SymOp};
 use serde::{Deserialize, Serialize};
@@ -45,20 +46,18 @@ impl AdmissibleStresses for Elastic {
         false
     }
 
-    /// σ = Cε, tangent C (theory §2 with D the whole space).
-    fn local_law(
+    /// σ = C(ε − ε_p), tangent C (theory §11.1 with D the whole space).
+    fn step_law(
         &self,
         law: &Elasticity,
         eps: &Sym,
+        plastic_strain: &Sym,
+        q_n: &[f64],
         sigma: &mut Sym,
-        _q: &mut [f64],
+        q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
-        *sigma = law.stress(eps);
-        if let Some(c) = tangent {
-            *c = law.stiffness_matrix();
-        }
-        false
+        elastic_step(law, law.stress(&(eps - plastic_strain)), q_n, sigma, q, tangent)
     }
 
     /// ψ(ε) = ½Cε:ε.

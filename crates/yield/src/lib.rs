@@ -32,7 +32,8 @@
 //!
 //! ```
 //! use saddle_core::error::{ParameterError, check};
-//! use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+//! use saddle_core::problem::return_mapping::{DeviatoricTrial, elastic_step, radial_tangent};
+//! use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity, trace};
 //! use saddle_core::{AdmissibleStresses, Elasticity};
 //! use saddle_yield::conformance::{KitConfig, check_all};
 //! use serde::{Deserialize, Serialize};
@@ -66,20 +67,18 @@
 //!         *sigma = identity() * (trace(sigma) / 3.0) + s * (self.k / r);
 //!         true
 //!     }
-//!     fn local_law(&self, law: &Elasticity, eps: &Sym, sigma: &mut Sym, q: &mut [f64], tangent: Option<&mut SymOp>) -> bool {
-//!         *sigma = law.stress(eps);
-//!         let plastic = self.project(law, sigma, q);
-//!         if let Some(t) = tangent {
-//!             *t = law.stiffness_matrix();
-//!             if plastic {
-//!                 let s_tr = deviator(&law.stress(eps));
-//!                 let (r, g2) = (s_tr.norm(), 2.0 * law.shear_modulus());
-//!                 let n = s_tr / r;
-//!                 *t = volumetric_projector() * (3.0 * law.bulk_modulus())
-//!                     + (deviatoric_projector() - n * n.transpose()) * (g2 * self.k / r);
-//!             }
+//!     /// The radial return from the trial C(ε − ε_p) (theory §11.1) and its tangent.
+//!     fn step_law(&self, law: &Elasticity, eps: &Sym, ep: &Sym, q_n: &[f64], sigma: &mut Sym, q: &mut [f64],
+//!                 tangent: Option<&mut SymOp>) -> bool {
+//!         let trial = DeviatoricTrial::new(law, eps, ep);
+//!         if trial.r <= self.k {
+//!             return elastic_step(law, trial.stress(), q_n, sigma, q, tangent);
 //!         }
-//!         plastic
+//!         *sigma = trial.s * (self.k / trial.r) + identity() * trial.p;
+//!         if let Some(t) = tangent {
+//!             *t = radial_tangent(trial.kb, &(trial.s / trial.r), trial.g2 * self.k / trial.r, 0.0);
+//!         }
+//!         true
 //!     }
 //! }
 //!
@@ -97,9 +96,11 @@
 //! ε:σ − ½[σ̂, σ̂], and that the local law is the projection of (Cε, 0); that the cone
 //! description, if any, describes D; and that the step law of a load step (theory §11.1) is the
 //! projection of (C(ε − ε_p), q_n), with its tangent and ∂ψ_n/∂ε = σ checked by finite
-//! differences. A plugin with hardening variables should override `step_law` with its closed
-//! form (the default differentiates projections numerically). Also give `energy` a closed form
-//! where one is known, and `warnings` for legal but delicate parameters.
+//! differences. The step law is the one law a plugin provides (the local law is the step law
+//! from the zero state); without a closed form it may call
+//! `saddle_core::problem::stresses::step_law_by_differences`, which differentiates projections
+//! numerically. Also give `energy` a closed form where one is known, and `warnings` for legal
+//! but delicate parameters.
 //!
 //! A binary reads plugins by name only if this crate is linked into it: refer to it somewhere
 //! (e.g. `use saddle_yield as _;`), or the `von_mises` / `elastic` names are unknown.
@@ -107,6 +108,7 @@
 pub mod conformance;
 mod drucker_prager;
 mod elastic;
+pub mod mutant;
 mod tresca;
 mod von_mises;
 mod von_mises_kinematic;

@@ -64,6 +64,7 @@
 use nalgebra::{Matrix3, Vector3};
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::return_mapping::elastic_step;
 use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription};
 use saddle_core::problem::tensor::{SQRT2, Sym, SymOp, from_matrix, identity, to_matrix, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
@@ -141,9 +142,12 @@ impl Tresca {
     /// which σ(ε) does not change.
     pub const EDGE_REGULARISATION: f64 = 1e-8;
 
-    /// Tresca with yield stress `sigma0` and hardening modulus `h` (not validated).
-    pub fn new(sigma0: f64, h: f64) -> Self {
-        Self { sigma0, h }
+    /// Tresca with yield stress `sigma0` and hardening modulus `h`, validated (errors name
+    /// `yield.sigma0`, `yield.h`).
+    pub fn new(sigma0: f64, h: f64) -> Result<Self, ParameterError> {
+        let p = Self { sigma0, h };
+        p.validate("yield")?;
+        Ok(p)
     }
 
     /// Where the local law at ε returns the trial (Cε, 0): elastic, face or edge (module docs).
@@ -361,19 +365,6 @@ impl AdmissibleStresses for Tresca {
         true
     }
 
-    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
-    /// closed form follows.
-    fn local_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        self.step_law(law, eps, &Sym::zeros(), &[0.0; 1], sigma, q, tangent)
-    }
-
     /// σ̂ = P_D(C(ε − ε_p), ξ_n) (theory §11.1): the local law's return of the trial
     /// C(ε − ε_p) with ξ_n (frozen for h = 0), and its tangent, which depends only on the
     /// return's geometry; at the apex (only from ξ_n < −σ₀) σ is the trial's mean stress and the
@@ -392,14 +383,7 @@ impl AdmissibleStresses for Tresca {
         let p = principal(&trial);
         let r = self.principal_return(2.0 * law.shear_modulus(), &p.values, q_n[0]);
         match r.kind {
-            TrescaReturn::Elastic => {
-                *sigma = trial;
-                q[0] = q_n[0];
-                if let Some(t) = tangent {
-                    *t = law.stiffness_matrix();
-                }
-                return false;
-            }
+            TrescaReturn::Elastic => return elastic_step(law, trial, q_n, sigma, q, tangent),
             TrescaReturn::Apex => {
                 *sigma = identity() * (trace(&trial) / 3.0);
                 if let Some(t) = tangent {
@@ -461,6 +445,7 @@ impl AdmissibleStresses for Tresca {
 mod tests {
     use super::*;
     use crate::conformance::{self, KitConfig, names};
+    use crate::mutant::Mutant;
     use nalgebra::Matrix3;
     use std::sync::{Arc, Mutex};
 
@@ -504,7 +489,7 @@ mod tests {
     #[test]
     fn face_and_edge_returns_match_points_worked_by_hand() {
         let law = hand_law();
-        let t = Tresca::new(4.0, 40.0);
+        let t = Tresca::new(4.0, 40.0).unwrap();
         let near = |a: f64, b: f64| (a - b).abs() <= 1e-13;
         let same = |a: &Sym, b: &Sym| (a - b).amax() <= 1e-13;
         for (strain, expected, xi, psi, kind) in [
@@ -550,7 +535,7 @@ mod tests {
     fn projection_of_general_points() {
         let law = law();
         let g2 = 2.0 * law.shear_modulus();
-        let t = Tresca::new(1.0, 5.0);
+        let t = Tresca::new(1.0, 5.0).unwrap();
         // inside, with ξ > 0: unchanged
         let inside = turned([1.2, 0.5, 0.0]);
         let (mut s, mut q) = (inside, [0.3]);
@@ -572,7 +557,7 @@ mod tests {
         assert_ne!(t.projection_kind(&law, &s, &q), TrescaReturn::Apex);
         assert!(t.project(&law, &mut s, &mut q) && t.contains(&s, &q, 1e-12) && q[0] > -1.0);
         // h = 0: ξ frozen; apex iff σ₀ + ξ ≤ 0
-        let pp = Tresca::new(1.0, 0.0);
+        let pp = Tresca::new(1.0, 0.0).unwrap();
         let (mut s, mut q) = (turned([3.0, 0.0, -1.0]), [0.25]);
         assert!(pp.project(&law, &mut s, &mut q) && q[0] == 0.25);
         let v = principal(&s).values;
@@ -584,74 +569,38 @@ mod tests {
         assert!(t.hardening_inner(&[2.0], &[3.0]) == 1.2);
     }
 
-    /// Counts the kinds of the returns the kit's samples reach (local law and projections).
-    #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-    struct Counting {
-        t: Option<Tresca>,
-        /// Returns of the local law (row 0), of projections of general points (row 1) and of
-        /// the step law (row 2).
-        #[serde(skip)]
-        counts: Arc<Mutex<[[usize; 4]; 3]>>,
-    }
+    /// Counts of the kinds of the returns the kit's samples reach: of the local law (row 0), of
+    /// projections of general points (row 1) and of the step law (row 2).
+    type Counts = Arc<Mutex<[[usize; 4]; 3]>>;
 
-    impl Counting {
-        fn t(&self) -> &Tresca {
-            self.t.as_ref().unwrap()
-        }
-        fn count(&self, row: usize, k: TrescaReturn) {
-            self.counts.lock().unwrap()[row][k as usize] += 1;
-        }
-    }
-
-    #[typetag::serde(name = "tresca_test_counting")]
-    impl AdmissibleStresses for Counting {
-        fn validate(&self, path: &str) -> Result<(), ParameterError> {
-            self.t().validate(path)
-        }
-        fn hardening_dim(&self) -> usize {
-            1
-        }
-        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-            self.t().hardening_inner(q, r)
-        }
-        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
-            self.t().contains(sigma, q, tol)
-        }
-        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-            self.count(1, self.t().projection_kind(law, sigma, q));
-            self.t().project(law, sigma, q)
-        }
-        fn local_law(&self, law: &Elasticity, eps: &Sym, s: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>) -> bool {
-            self.count(0, self.t().return_kind(law, eps));
-            self.t().local_law(law, eps, s, q, t)
-        }
-        fn step_law(
-            &self,
-            law: &Elasticity,
-            eps: &Sym,
-            ep: &Sym,
-            q_n: &[f64],
-            s: &mut Sym,
-            q: &mut [f64],
-            t: Option<&mut SymOp>,
-        ) -> bool {
-            self.count(2, self.t().projection_kind(law, &law.stress(&(eps - ep)), q_n));
-            self.t().step_law(law, eps, ep, q_n, s, q, t)
-        }
-        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
-            self.t().energy(law, eps)
-        }
+    /// `t`, counting the kinds of its returns into `counts`.
+    fn counting(t: Tresca, counts: &Counts) -> Mutant {
+        let count = |c: &Counts, row: usize, k: TrescaReturn| c.lock().unwrap()[row][k as usize] += 1;
+        let (c0, c1, c2) = (counts.clone(), counts.clone(), counts.clone());
+        Mutant::of(t)
+            .with_project(move |_, law, sigma, q| {
+                count(&c1, 1, t.projection_kind(law, sigma, q));
+                t.project(law, sigma, q)
+            })
+            .with_local_law(move |_, law, eps, s, q, tg| {
+                count(&c0, 0, t.return_kind(law, eps));
+                t.local_law(law, eps, s, q, tg)
+            })
+            .with_step_law(move |_, law, eps, ep, q_n, s, q, tg| {
+                count(&c2, 2, t.projection_kind(law, &law.stress(&(eps - ep)), q_n));
+                t.step_law(law, eps, ep, q_n, s, q, tg)
+            })
     }
 
     #[test]
     fn kit_passes_for_several_parameter_sets_and_reaches_faces_and_edges() {
         for &(sigma0, h) in &[(1.0f64, 5.0), (1.0, 0.0), (1.0, 1e-4), (0.5, 2000.0), (2.0, 30.0)] {
             let cfg = KitConfig::new(law(), sigma0).with_samples(150).with_seed(7);
-            let c = Counting { t: Some(Tresca::new(sigma0, h)), ..Counting::default() };
-            if let Err(e) = conformance::check_all(&c, &cfg) {
+            let counts = Counts::default();
+            if let Err(e) = conformance::check_all(&counting(Tresca::new(sigma0, h).unwrap(), &counts), &cfg) {
                 panic!("σ₀ = {sigma0}, h = {h}: {e}");
             }
-            let [law_counts, proj_counts, step_counts] = *c.counts.lock().unwrap();
+            let [law_counts, proj_counts, step_counts] = *counts.lock().unwrap();
             println!(
                 "σ₀ = {sigma0}, h = {h}: kit's local law elastic/face/edge/apex {law_counts:?}, projections \
                  {proj_counts:?}, step law {step_counts:?}"
@@ -666,12 +615,12 @@ mod tests {
         for seed in 0..4 {
             let cfg = KitConfig::new(law(), 1.0).with_seed(seed);
             for h in [5.0, 0.0] {
-                conformance::check_all(&Tresca::new(1.0, h), &cfg)
+                conformance::check_all(&Tresca::new(1.0, h).unwrap(), &cfg)
                     .unwrap_or_else(|e| panic!("seed {seed}, h = {h}: {e}"));
             }
         }
         let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
-        conformance::check_all(&Tresca::new(300.0, 1e3), &cfg).unwrap();
+        conformance::check_all(&Tresca::new(300.0, 1e3).unwrap(), &cfg).unwrap();
     }
 
     /// Ways to get the edge return wrong.
@@ -687,87 +636,61 @@ mod tests {
         EdgeWithFaceTangent,
     }
 
-    #[derive(Clone, Debug, Serialize, Deserialize)]
-    struct Broken {
-        t: Tresca,
-        how: Breakage,
-    }
-
-    #[typetag::serde(name = "tresca_test_broken")]
-    impl AdmissibleStresses for Broken {
-        fn validate(&self, path: &str) -> Result<(), ParameterError> {
-            self.t.validate(path)
-        }
-        fn hardening_dim(&self) -> usize {
-            1
-        }
-        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-            self.t.hardening_inner(q, r)
-        }
-        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
-            self.t.contains(sigma, q, tol)
-        }
-        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-            let g2 = 2.0 * law.shear_modulus();
-            let p = principal(sigma);
-            let r = self.t.principal_return(g2, &p.values, q[0]);
-            if r.kind != TrescaReturn::Edge || self.how == Breakage::EdgeWithFaceTangent {
-                return self.t.project(law, sigma, q);
-            }
-            let [s1, s2, s3] = p.values;
-            let da = s1 - s3 - self.t.sigma0 - q[0];
-            let gamma = da / (2.0 * g2 + self.t.h);
-            let xi = q[0] + self.t.h * gamma;
-            let new = match self.how {
-                Breakage::AlwaysFace => [s1 - g2 * gamma, s2, s3 + g2 * gamma],
-                _ => {
-                    // keep the edge's shape and the trace, with the face's ξ (not below −σ₀)
-                    let t = (self.t.sigma0 + xi).max(0.0);
-                    let xi = t - self.t.sigma0;
-                    q[0] = xi;
-                    if r.sigma[0] == r.sigma[1] {
-                        let top = (s1 + s2 + s3 + t) / 3.0;
-                        [top, top, top - t]
-                    } else {
-                        let bottom = (s1 + s2 + s3 - t) / 3.0;
-                        [bottom + t, bottom, bottom]
-                    }
-                }
-            };
-            *sigma = Tresca::rebuild(sigma, &p, &new);
-            if self.how == Breakage::AlwaysFace {
-                q[0] = xi;
-            }
-            true
-        }
-        fn local_law(&self, law: &Elasticity, eps: &Sym, s: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>) -> bool {
-            if self.how == Breakage::EdgeWithFaceTangent {
-                let plastic = self.t.local_law(law, eps, s, q, None);
-                if let Some(t) = t {
+    /// `t` with its edge return broken as `how` says.
+    fn broken(t: Tresca, how: Breakage) -> Mutant {
+        let m = Mutant::of(t);
+        if how == Breakage::EdgeWithFaceTangent {
+            return m.with_local_law(move |_, law, eps, s, q, tg| {
+                let plastic = t.local_law(law, eps, s, q, None);
+                if let Some(tg) = tg {
                     let trial = law.stress(eps);
                     let p = principal(&trial);
-                    let mut r = self.t.principal_return(2.0 * law.shear_modulus(), &p.values, 0.0);
-                    *t = law.stiffness_matrix();
+                    let mut r = t.principal_return(2.0 * law.shear_modulus(), &p.values, 0.0);
+                    *tg = law.stiffness_matrix();
                     if r.kind != TrescaReturn::Elastic {
                         if r.kind == TrescaReturn::Edge {
                             r.n_active = 1;
                             r.sigma[1] = p.values[1];
                         }
-                        *t = self.t.tangent(law, &p, &r);
+                        *tg = t.tangent(law, &p, &r);
                     }
                 }
-                return plastic;
-            }
-            // consistent with the (broken) projection, as a careless author would write it
-            *s = law.stress(eps);
-            q[0] = 0.0;
-            let plastic = self.project(law, s, q);
-            if let Some(t) = t {
-                let mut dummy = (Sym::zeros(), [0.0]);
-                self.t.local_law(law, eps, &mut dummy.0, &mut dummy.1, Some(t));
-            }
-            plastic
+                plastic
+            });
         }
+        m.with_project(move |_, law, sigma, q| {
+            let g2 = 2.0 * law.shear_modulus();
+            let p = principal(sigma);
+            let r = t.principal_return(g2, &p.values, q[0]);
+            if r.kind != TrescaReturn::Edge {
+                return t.project(law, sigma, q);
+            }
+            let [s1, s2, s3] = p.values;
+            let da = s1 - s3 - t.sigma0 - q[0];
+            let gamma = da / (2.0 * g2 + t.h);
+            let xi = q[0] + t.h * gamma;
+            let new = match how {
+                Breakage::AlwaysFace => [s1 - g2 * gamma, s2, s3 + g2 * gamma],
+                _ => {
+                    // keep the edge's shape and the trace, with the face's ξ (not below −σ₀)
+                    let top = (t.sigma0 + xi).max(0.0);
+                    q[0] = top - t.sigma0;
+                    if r.sigma[0] == r.sigma[1] {
+                        let upper = (s1 + s2 + s3 + top) / 3.0;
+                        [upper, upper, upper - top]
+                    } else {
+                        let bottom = (s1 + s2 + s3 - top) / 3.0;
+                        [bottom + top, bottom, bottom]
+                    }
+                }
+            };
+            *sigma = Tresca::rebuild(sigma, &p, &new);
+            if how == Breakage::AlwaysFace {
+                q[0] = xi;
+            }
+            true
+        })
+        .with_local_law(|m, law, eps, s, q, tg| m.local_law_from_projection(law, eps, s, q, tg))
     }
 
     #[test]
@@ -781,14 +704,13 @@ mod tests {
             (Breakage::EdgeWithFaceTangent, names::TANGENT, &[5.0, 0.0][..]),
         ] {
             for &h in hs {
-                let e = conformance::check_all(&Broken { t: Tresca::new(1.0, h), how }, &cfg).unwrap_err();
+                let e = conformance::check_all(&broken(Tresca::new(1.0, h).unwrap(), how), &cfg).unwrap_err();
                 println!("{how:?}, h = {h}: {e}");
                 assert_eq!(e.check, name, "{how:?}, h = {h}: {e}");
             }
         }
-        conformance::check_all(&Broken { t: Tresca::new(1.0, 0.0), how: Breakage::EdgeWithFaceHardening }, &cfg)
-            .unwrap();
-        conformance::check_all(&Tresca::new(1.0, 5.0), &cfg).unwrap();
+        conformance::check_all(&broken(Tresca::new(1.0, 0.0).unwrap(), Breakage::EdgeWithFaceHardening), &cfg).unwrap();
+        conformance::check_all(&Tresca::new(1.0, 5.0).unwrap(), &cfg).unwrap();
     }
 
     /// Load steps from the state the face return of
@@ -810,7 +732,7 @@ mod tests {
     fn step_law_from_a_hardened_state_worked_by_hand() {
         use saddle_core::problem::stresses::step_law_by_differences;
         let law = hand_law();
-        let t = Tresca::new(4.0, 40.0);
+        let t = Tresca::new(4.0, 40.0).unwrap();
         let near = |a: f64, b: f64| (a - b).abs() <= 1e-13;
         let same = |a: &Sym, b: &Sym| (a - b).amax() <= 1e-13;
         let ep = turned([0.03, 0.0, -0.03]);
@@ -839,7 +761,7 @@ mod tests {
         assert!(same(&s, &turned([5.0, 1.0, -0.1])) && q[0] == 1.2 && c == law.stiffness_matrix());
         assert!(t.local_law(&law, &(eps - ep), &mut s, &mut q, None));
         // h = 0: ξ frozen
-        let pp = Tresca::new(4.0, 0.0);
+        let pp = Tresca::new(4.0, 0.0).unwrap();
         let eps = strain([6.0, 1.0, -4.0]);
         assert!(pp.step_law(&law, &eps, &ep, &[1.2], &mut s, &mut q, Some(&mut c)));
         assert!(same(&s, &turned([3.6, 1.0, -1.6])) && q[0] == 1.2, "σ = {}, ξ = {}", to_matrix(&s), q[0]);
@@ -865,7 +787,7 @@ mod tests {
         let g2 = 2.0 * law.shear_modulus();
         let cm = law.stiffness_matrix();
         for &(sigma0, h) in &[(1.0, 5.0), (1.0, 0.0), (0.5, 40.0)] {
-            let t = Tresca::new(sigma0, h);
+            let t = Tresca::new(sigma0, h).unwrap();
             for eps in [turned([0.03, 0.0, -0.02]), turned([0.02, 0.02, -0.03]), turned([0.03, -0.01, -0.01])] {
                 let trial = law.stress(&eps);
                 let p = principal(&trial);
@@ -885,18 +807,18 @@ mod tests {
 
     #[test]
     fn validation_warnings_cone_and_toml() {
-        let ok = Tresca::new(1.0, 5.0);
+        let ok = Tresca::new(1.0, 5.0).unwrap();
         assert!(ok.validate("yield").is_ok() && ok.warnings().is_empty());
-        let e = Tresca::new(0.0, 5.0).validate("yield").unwrap_err();
+        let e = Tresca::new(0.0, 5.0).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.sigma0", "0"));
         assert!(e.to_string().contains("> 0"), "{e}");
-        let e = Tresca::new(1.0, -0.5).validate("yield").unwrap_err();
+        let e = Tresca::new(1.0, -0.5).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.h", "-0.5"));
-        let e = Tresca::new(f64::NAN, 5.0).validate("yield").unwrap_err();
+        let e = Tresca::new(f64::NAN, 5.0).unwrap_err();
         assert!(e.field == "yield.sigma0" && e.to_string().contains("finite"), "{e}");
-        let e = Tresca::new(1.0, f64::INFINITY).validate("yield").unwrap_err();
+        let e = Tresca::new(1.0, f64::INFINITY).unwrap_err();
         assert_eq!(e.field, "yield.h");
-        let w = Tresca::new(1.0, 0.0).warnings();
+        let w = Tresca::new(1.0, 0.0).unwrap().warnings();
         assert!(w.len() == 1 && w[0].contains("yield.h = 0") && w[0].contains("unique"), "{w:?}");
         assert!(ok.cone().is_none());
         let why = ok.cone_unavailable();

@@ -23,8 +23,9 @@
 
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::return_mapping::{DeviatoricTrial, elastic_step, radial_tangent};
 use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
-use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
 /// Von Mises yield with linear isotropic hardening (theory §1): `D = {|dev σ| ≤ k₀ + ξ}`,
@@ -40,9 +41,12 @@ pub struct VonMises {
 }
 
 impl VonMises {
-    /// Von Mises with yield radius `k0` and hardening modulus `h` (not validated).
-    pub fn new(k0: f64, h: f64) -> Self {
-        Self { k0, h }
+    /// Von Mises with yield radius `k0` and hardening modulus `h`, validated (errors name
+    /// `yield.k0`, `yield.h`).
+    pub fn new(k0: f64, h: f64) -> Result<Self, ParameterError> {
+        let p = Self { k0, h };
+        p.validate("yield")?;
+        Ok(p)
     }
 
     /// The orthonormal basis of the deviatoric subspace of Mandel space used by [`Self::cone`]:
@@ -128,19 +132,6 @@ impl AdmissibleStresses for VonMises {
         true
     }
 
-    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
-    /// closed form follows.
-    fn local_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        self.step_law(law, eps, &Sym::zeros(), &[0.0; 1], sigma, q, tangent)
-    }
-
     /// theory §11.1 in closed form: σ̂ = P_D(C(ε − ε_p), ξ_n), the radial return of the module
     /// docs with `t₀ = k₀ + ξ_n`, and the consistent tangent
     /// `K_b I⊗I + 2G[(t/r)(I_dev − n⊗n) + h/(h+2G) n⊗n]` when on the cone (h = 0: ξ frozen, no
@@ -155,20 +146,11 @@ impl AdmissibleStresses for VonMises {
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
-        let g2 = 2.0 * law.shear_modulus();
-        let kb = law.bulk_modulus();
-        let e = eps - plastic_strain;
-        let s_tr = deviator(&e) * g2;
-        let r = s_tr.norm();
-        let p = kb * trace(&e);
+        let trial = DeviatoricTrial::new(law, eps, plastic_strain);
+        let DeviatoricTrial { g2, kb, s: s_tr, r, p } = trial;
         let t0 = self.k0 + q_n[0];
         if r <= t0 {
-            *sigma = s_tr + identity() * p;
-            q[0] = q_n[0];
-            if let Some(c) = tangent {
-                *c = law.stiffness_matrix();
-            }
-            return false;
+            return elastic_step(law, trial.stress(), q_n, sigma, q, tangent);
         }
         let t = if self.h > 0.0 { (g2 * t0 + self.h * r) / (g2 + self.h) } else { t0 };
         if t <= 0.0 {
@@ -183,11 +165,7 @@ impl AdmissibleStresses for VonMises {
         *sigma = s_tr * (t / r) + identity() * p;
         q[0] = if self.h > 0.0 { t - self.k0 } else { q_n[0] };
         if let Some(c) = tangent {
-            let n = s_tr / r;
-            let nn = n * n.transpose();
-            *c = volumetric_projector() * (3.0 * kb)
-                + (deviatoric_projector() - nn) * (g2 * t / r)
-                + nn * (g2 * self.h / (self.h + g2));
+            *c = radial_tangent(kb, &(s_tr / r), g2 * t / r, g2 * self.h / (self.h + g2));
         }
         true
     }
@@ -267,7 +245,7 @@ mod tests {
         use nalgebra::Matrix3;
         use saddle_core::problem::tensor::{from_matrix, to_matrix};
         let law = Elasticity::new(100.0, 0.25).unwrap();
-        let vm = VonMises::new(1.0, 20.0);
+        let vm = VonMises::new(1.0, 20.0).unwrap();
         let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
         let eps = from_matrix(&Matrix3::new(0.035, 0.0, 0.0, 0.0, -0.015, 0.025, 0.0, 0.025, 0.01));
         // every expected value is O(1); the inputs carry decimal rounding of ~1e-16
@@ -311,7 +289,7 @@ mod tests {
         let law = law();
         let cmat = law.stiffness_matrix();
         for &(k0, h) in &[(1.0, 5.0), (1.0, 0.0), (0.3, 40.0), (0.0, 2.0)] {
-            let vm = VonMises::new(k0, h);
+            let vm = VonMises::new(k0, h).unwrap();
             for eps in [
                 Sym::new(0.03, -0.01, -0.01, 0.0, 0.0, 0.0),
                 Sym::new(0.004, 0.001, -0.002, 0.01, -0.003, 0.002),
@@ -360,7 +338,7 @@ mod tests {
     fn projection_of_general_points() {
         let law = law();
         let g2 = 2.0 * law.shear_modulus();
-        let vm = VonMises::new(1.0, 5.0);
+        let vm = VonMises::new(1.0, 5.0).unwrap();
         let dir = deviator(&Sym::new(1.0, 0.2, -0.5, 0.3, 0.0, -0.4));
         let dir = dir / dir.norm();
         let vol = identity() * 0.7;
@@ -399,7 +377,7 @@ mod tests {
         assert!(ip <= 0.0, "{ip}");
 
         // h = 0: ξ frozen, radial return to k0 + ξ; apex when k0 + ξ < 0
-        let pp = VonMises::new(1.0, 0.0);
+        let pp = VonMises::new(1.0, 0.0).unwrap();
         let (mut s, mut q) = (vol + dir * 3.0, [0.25]);
         assert!(pp.project(&law, &mut s, &mut q));
         assert!(close(deviator(&s).norm(), 1.25, 1e-14) && q[0] == 0.25);
@@ -415,7 +393,7 @@ mod tests {
     #[test]
     fn projection_with_zero_xi_is_the_local_law() {
         let law = law();
-        let vm = VonMises::new(1.0, 5.0);
+        let vm = VonMises::new(1.0, 5.0).unwrap();
         let eps = Sym::new(0.02, -0.005, 0.001, 0.004, -0.002, 0.003);
         let (mut s1, mut q1) = (Sym::zeros(), [0.0]);
         let plastic = vm.local_law(&law, &eps, &mut s1, &mut q1, None);
@@ -435,7 +413,7 @@ mod tests {
         use nalgebra::Matrix3;
         use saddle_core::problem::tensor::from_matrix;
         let law = Elasticity::new(100.0, 0.25).unwrap();
-        let vm = VonMises::new(1.0, 20.0);
+        let vm = VonMises::new(1.0, 20.0).unwrap();
         let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
         let eps = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.025));
         let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
@@ -477,7 +455,7 @@ mod tests {
         use saddle_core::problem::stresses::step_law_by_differences;
         use saddle_core::problem::tensor::{from_matrix, to_matrix};
         let law = Elasticity::new(100.0, 0.25).unwrap();
-        let vm = VonMises::new(1.0, 20.0);
+        let vm = VonMises::new(1.0, 20.0).unwrap();
         let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
         let (m, i3) = (from_matrix(&mm), identity());
         let n = m * 0.5;
@@ -510,7 +488,7 @@ mod tests {
         assert!(vm.local_law(&law, &(small - ep), &mut s, &mut q, None), "r = 1.44 > k₀ = 1");
 
         // h = 0: ξ frozen at ξ_n, radial return to t₀
-        let pp = VonMises::new(1.0, 0.0);
+        let pp = VonMises::new(1.0, 0.0).unwrap();
         assert!(pp.step_law(&law, &eps, &ep, &[0.5], &mut s, &mut q, Some(&mut c)));
         assert!((s - (m * 0.75 + i3 * 2.0)).norm() <= tol && q[0] == 0.5, "σ = {s}, ξ = {}", q[0]);
         assert!(near(n.dot(&(c * n)), 0.0) && near(cross.dot(&(c * cross)), 20.0));
@@ -529,7 +507,7 @@ mod tests {
 
     #[test]
     fn cone_block_measures_the_deviator() {
-        let vm = VonMises::new(1.5, 5.0);
+        let vm = VonMises::new(1.5, 5.0).unwrap();
         let cone = vm.cone().unwrap();
         assert_eq!(cone.blocks.len(), 1);
         let b = &cone.blocks[0];
@@ -552,20 +530,20 @@ mod tests {
 
     #[test]
     fn validation_names_the_field_and_value() {
-        let ok = VonMises::new(1.0, 5.0);
+        let ok = VonMises::new(1.0, 5.0).unwrap();
         assert!(ok.validate("yield").is_ok() && ok.warnings().is_empty());
-        let e = VonMises::new(-1.0, 5.0).validate("yield").unwrap_err();
+        let e = VonMises::new(-1.0, 5.0).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.k0", "-1"));
-        let e = VonMises::new(1.0, -0.5).validate("yield").unwrap_err();
+        let e = VonMises::new(1.0, -0.5).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.h", "-0.5"));
         assert!(e.to_string().contains(">= 0"), "{e}");
-        let e = VonMises::new(f64::NAN, 5.0).validate("yield").unwrap_err();
+        let e = VonMises::new(f64::NAN, 5.0).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.k0", "NaN"));
         assert!(e.to_string().contains("finite"), "{e}");
-        let e = VonMises::new(1.0, f64::INFINITY).validate("yield").unwrap_err();
+        let e = VonMises::new(1.0, f64::INFINITY).unwrap_err();
         assert_eq!(e.field, "yield.h");
         // h = 0 is legal but warns about uniqueness
-        let pp = VonMises::new(1.0, 0.0);
+        let pp = VonMises::new(1.0, 0.0).unwrap();
         assert!(pp.validate("yield").is_ok());
         let w = pp.warnings();
         assert_eq!(w.len(), 1);
@@ -600,7 +578,7 @@ mod tests {
     fn kit_passes_for_several_parameter_sets() {
         for &(k0, h) in &[(1.0f64, 5.0), (1.0, 1e-4), (0.5, 2000.0), (0.0, 3.0), (1.0, 0.0)] {
             let cfg = KitConfig::new(law(), k0.max(0.1)).with_samples(150).with_seed(7);
-            let vm = VonMises::new(k0, h);
+            let vm = VonMises::new(k0, h).unwrap();
             if let Err(e) = conformance::check_all(&vm, &cfg) {
                 panic!("k0 = {k0}, h = {h}: {e}");
             }
@@ -608,9 +586,9 @@ mod tests {
         // h = 0 with a k₀ for which (2G k₀)/2G ≠ k₀ in floating point: ξ must stay exactly 0
         let k0 = 7.387156424190203;
         let cfg = KitConfig::new(law(), k0).with_samples(150);
-        conformance::check_all(&VonMises::new(k0, 0.0), &cfg).unwrap();
+        conformance::check_all(&VonMises::new(k0, 0.0).unwrap(), &cfg).unwrap();
         // another elasticity, nearly incompressible, and a high-strength scale
         let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
-        conformance::check_all(&VonMises::new(300.0, 1e3), &cfg).unwrap();
+        conformance::check_all(&VonMises::new(300.0, 1e3).unwrap(), &cfg).unwrap();
     }
 }

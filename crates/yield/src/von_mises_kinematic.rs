@@ -44,8 +44,9 @@
 use crate::VonMises;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
+use saddle_core::problem::return_mapping::{DeviatoricTrial, elastic_step, radial_tangent};
 use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
-use saddle_core::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
+use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity, trace};
 use serde::{Deserialize, Serialize};
 
 /// Von Mises yield with linear kinematic and isotropic hardening (theory §9.3):
@@ -65,10 +66,12 @@ pub struct VonMisesKinematic {
 }
 
 impl VonMisesKinematic {
-    /// Kinematic hardening with yield radius `k0`, isotropic modulus `h` and kinematic modulus
-    /// `c` (not validated).
-    pub fn new(k0: f64, h: f64, c: f64) -> Self {
-        Self { k0, h, c }
+    /// Von Mises with isotropic (`h`) and kinematic (`c`) hardening and yield radius `k0`,
+    /// validated (errors name `yield.k0`, `yield.h`, `yield.c`).
+    pub fn new(k0: f64, h: f64, c: f64) -> Result<Self, ParameterError> {
+        let p = Self { k0, h, c };
+        p.validate("yield")?;
+        Ok(p)
     }
 
     /// The back stress χ (a deviatoric Mandel vector) from its coordinates `q[1..6]`.
@@ -162,19 +165,6 @@ impl AdmissibleStresses for VonMisesKinematic {
         true
     }
 
-    /// The local law σ̂ = P_D(Cε, 0) (theory §2): the step law from the zero state, whose
-    /// closed form follows.
-    fn local_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        self.step_law(law, eps, &Sym::zeros(), &[0.0; 6], sigma, q, tangent)
-    }
-
     /// Theory §11.1 in closed form: σ̂ = P_D(C(ε − ε_p), ξ_n, χ_n), the return of the relative
     /// trial `a = s_tr − χ_n` (module docs), and the consistent tangent
     /// `K_b I⊗I + 2G[(1 − 2Gλ/r)(I_dev − n⊗n) + (h + c)/(2G + c + h) n⊗n]` when plastic, with
@@ -190,22 +180,14 @@ impl AdmissibleStresses for VonMisesKinematic {
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
     ) -> bool {
-        let g2 = 2.0 * law.shear_modulus();
-        let kb = law.bulk_modulus();
-        let e = eps - plastic_strain;
-        let s_tr = deviator(&e) * g2;
-        let p = kb * trace(&e);
+        let trial = DeviatoricTrial::new(law, eps, plastic_strain);
+        let DeviatoricTrial { g2, kb, s: s_tr, p, .. } = trial;
         let chi = Self::back_stress(q_n);
         let a = s_tr - chi;
         let r = a.norm();
         let t0 = self.k0 + q_n[0];
         if r <= t0 {
-            *sigma = s_tr + identity() * p;
-            q[..6].copy_from_slice(&q_n[..6]);
-            if let Some(c) = tangent {
-                *c = law.stiffness_matrix();
-            }
-            return false;
+            return elastic_step(law, trial.stress(), q_n, sigma, q, tangent);
         }
         let gc = g2 + self.c;
         let t = if self.h > 0.0 { (gc * t0 + self.h * r) / (gc + self.h) } else { t0 };
@@ -221,10 +203,7 @@ impl AdmissibleStresses for VonMisesKinematic {
         if let Some(c) = tangent {
             // t moves with r only on the cone with h > 0: dλ = dr/(2G + c + h_eff)
             let h_eff = if apex { 0.0 } else { self.h };
-            let nn = n * n.transpose();
-            *c = volumetric_projector() * (3.0 * kb)
-                + (deviatoric_projector() - nn) * (g2 * (1.0 - g2 * lambda / r))
-                + nn * (g2 * (h_eff + self.c) / (gc + h_eff));
+            *c = radial_tangent(kb, &n, g2 * (1.0 - g2 * lambda / r), g2 * (h_eff + self.c) / (gc + h_eff));
         }
         true
     }
@@ -275,6 +254,8 @@ impl AdmissibleStresses for VonMisesKinematic {
 mod tests {
     use super::*;
     use crate::conformance::{self, KitConfig, KitFailure, names};
+    use crate::mutant::Mutant;
+    use saddle_core::problem::tensor::{deviatoric_projector, volumetric_projector};
 
     fn law() -> Elasticity {
         Elasticity::new(100.0, 0.3).unwrap()
@@ -290,13 +271,13 @@ mod tests {
             &[(1.0f64, 5.0, 3.0), (1.0, 0.0, 5.0), (0.0, 2.0, 3.0), (0.5, 1e-4, 2000.0), (1.0, 40.0, 1e-3)]
         {
             let cfg = KitConfig::new(law(), k0.max(0.1)).with_samples(150).with_seed(11);
-            let p = VonMisesKinematic::new(k0, h, c);
+            let p = VonMisesKinematic::new(k0, h, c).unwrap();
             if let Err(e) = conformance::check_all(&p, &cfg) {
                 panic!("k0 = {k0}, h = {h}, c = {c}: {e}");
             }
         }
         let cfg = KitConfig::new(Elasticity::new(210e3, 0.49).unwrap(), 300.0).with_samples(150).with_seed(3);
-        conformance::check_all(&VonMisesKinematic::new(300.0, 1e3, 5e3), &cfg).unwrap();
+        conformance::check_all(&VonMisesKinematic::new(300.0, 1e3, 5e3).unwrap(), &cfg).unwrap();
     }
 
     /// The hand-checkable point of theory §9.3, chosen so that h + c = 20 reproduces the
@@ -320,7 +301,7 @@ mod tests {
         use nalgebra::Matrix3;
         use saddle_core::problem::tensor::{SQRT2, from_matrix, to_matrix};
         let law = Elasticity::new(100.0, 0.25).unwrap();
-        let p = VonMisesKinematic::new(1.0, 8.0, 12.0);
+        let p = VonMisesKinematic::new(1.0, 8.0, 12.0).unwrap();
         let mm = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0);
         let eps = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.025));
         let tol = 1e-13;
@@ -379,7 +360,7 @@ mod tests {
         use saddle_core::problem::stresses::step_law_by_differences;
         use saddle_core::problem::tensor::from_matrix;
         let law = Elasticity::new(100.0, 0.25).unwrap();
-        let p = VonMisesKinematic::new(1.0, 8.0, 12.0);
+        let p = VonMisesKinematic::new(1.0, 8.0, 12.0).unwrap();
         let m = from_matrix(&Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0));
         let i3 = identity();
         let tol = 1e-13;
@@ -400,7 +381,7 @@ mod tests {
         assert!(s == law.stress(&(before - ep)) && q == qn && c == law.stiffness_matrix());
         assert!(p.step_law(&law, &reverse(-0.44 * (1.0 + 1e-9)), &ep, &qn, &mut s, &mut q, None));
         // isotropic hardening to the same size: elastic until |s_tr| = 1.6
-        let iso = VonMises::new(1.0, 20.0);
+        let iso = VonMises::new(1.0, 20.0).unwrap();
         let mut qi = [0.0];
         assert!(!iso.step_law(&law, &reverse(-0.44 * (1.0 + 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
         assert!(!iso.step_law(&law, &reverse(-0.8 * (1.0 - 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
@@ -430,7 +411,7 @@ mod tests {
 
         // h = 0 freezes ξ; from ξ_n = −1.5 (t₀ < 0, not admissible) the apex
         // s' = χ' = (c s_tr + 2Gχ_n)/(2G + c) with the deviatoric tangent 2G c/(2G + c)
-        let pk = VonMisesKinematic::new(1.0, 0.0, 12.0);
+        let pk = VonMisesKinematic::new(1.0, 0.0, 12.0).unwrap();
         assert!(pk.step_law(&law, &eps, &ep, &qn, &mut s, &mut q, Some(&mut c)));
         assert!(q[0] == 0.24 && near((deviator(&s) - VonMisesKinematic::back_stress(&q)).norm(), 1.24));
         let mut q_apex = qn;
@@ -454,8 +435,8 @@ mod tests {
         let law = law();
         let g2 = 2.0 * law.shear_modulus();
         for &(k0, h, c) in &[(1.0, 0.0, 5.0), (1.0, 2.0, 3.0), (0.0, 4.0, 0.5), (0.3, 40.0, 1e-3)] {
-            let kin = VonMisesKinematic::new(k0, h, c);
-            let iso = VonMises::new(k0, h + c);
+            let kin = VonMisesKinematic::new(k0, h, c).unwrap();
+            let iso = VonMises::new(k0, h + c).unwrap();
             let mut plastic = 0;
             for i in 0..40 {
                 let t = i as f64;
@@ -500,7 +481,7 @@ mod tests {
     #[test]
     fn kinematic_projection_of_general_points() {
         let law = Elasticity::new(100.0, 0.25).unwrap();
-        let p = VonMisesKinematic::new(1.0, 8.0, 12.0);
+        let p = VonMisesKinematic::new(1.0, 8.0, 12.0).unwrap();
         let basis = VonMises::deviatoric_basis();
         let (d, m) = (basis[0], basis[3]);
         let vol = identity() * 0.7;
@@ -542,7 +523,7 @@ mod tests {
         assert!(ip <= 0.0, "{ip}");
 
         // h = 0: ξ frozen, λ = (4 − 1.25)/92; apex with ξ' = −k0 when k0 + ξ ≤ 0
-        let pk = VonMisesKinematic::new(1.0, 0.0, 12.0);
+        let pk = VonMisesKinematic::new(1.0, 0.0, 12.0).unwrap();
         let (mut s, mut q) = (vol + d * 4.0 + chi, q_of(0.25, &chi));
         assert!(pk.project(&law, &mut s, &mut q));
         let lambda = 2.75 / 92.0;
@@ -558,7 +539,7 @@ mod tests {
 
     #[test]
     fn kinematic_cone_block_measures_the_relative_stress() {
-        let p = VonMisesKinematic::new(1.5, 5.0, 2.0);
+        let p = VonMisesKinematic::new(1.5, 5.0, 2.0).unwrap();
         assert_eq!((p.hardening_dim(), p.hardening_fields()), (6, vec![("xi", 1), ("back_stress", 5)]));
         let cone = p.cone().unwrap();
         assert_eq!(cone.blocks.len(), 1);
@@ -582,18 +563,18 @@ mod tests {
 
     #[test]
     fn kinematic_validation_warnings_and_toml() {
-        let ok = VonMisesKinematic::new(1.0, 0.0, 5.0);
+        let ok = VonMisesKinematic::new(1.0, 0.0, 5.0).unwrap();
         assert!(ok.validate("yield").is_ok() && ok.warnings().is_empty(), "h = 0 is unique with c > 0");
-        let e = VonMisesKinematic::new(-1.0, 5.0, 1.0).validate("yield").unwrap_err();
+        let e = VonMisesKinematic::new(-1.0, 5.0, 1.0).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.k0", "-1"));
-        let e = VonMisesKinematic::new(1.0, -0.5, 1.0).validate("yield").unwrap_err();
+        let e = VonMisesKinematic::new(1.0, -0.5, 1.0).unwrap_err();
         assert_eq!(e.field, "yield.h");
-        let e = VonMisesKinematic::new(1.0, 5.0, 0.0).validate("yield").unwrap_err();
+        let e = VonMisesKinematic::new(1.0, 5.0, 0.0).unwrap_err();
         assert_eq!((e.field.as_str(), e.value.as_str()), ("yield.c", "0"));
         assert!(e.to_string().contains("> 0"), "{e}");
-        let e = VonMisesKinematic::new(1.0, 5.0, f64::NAN).validate("yield").unwrap_err();
+        let e = VonMisesKinematic::new(1.0, 5.0, f64::NAN).unwrap_err();
         assert!(e.field == "yield.c" && e.to_string().contains("finite"), "{e}");
-        let w = VonMisesKinematic::new(0.0, 1.0, 1.0).warnings();
+        let w = VonMisesKinematic::new(0.0, 1.0, 1.0).unwrap().warnings();
         assert!(w.len() == 1 && w[0].contains("k0 = 0"), "{w:?}");
 
         let p: Box<dyn AdmissibleStresses> =
@@ -629,99 +610,65 @@ mod tests {
         ConeWithoutBackStress,
     }
 
-    #[derive(Clone, Debug, Serialize, Deserialize)]
-    struct Broken {
-        p: VonMisesKinematic,
-        how: Breakage,
-    }
-
-    #[typetag::serde(name = "von_mises_kinematic_test_broken")]
-    impl AdmissibleStresses for Broken {
-        fn validate(&self, path: &str) -> Result<(), ParameterError> {
-            self.p.validate(path)
-        }
-        fn hardening_dim(&self) -> usize {
-            6
-        }
-        fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-            match self.how {
-                Breakage::WrongMetricWeight => {
-                    let kin: f64 = q[1..6].iter().zip(&r[1..6]).map(|(a, b)| a * b).sum();
-                    q[0] * r[0] / self.p.h + kin * self.p.c
-                }
-                _ => self.p.hardening_inner(q, r),
-            }
-        }
-        fn contains(&self, sigma: &Sym, q: &[f64], tol: f64) -> bool {
-            self.p.contains(sigma, q, tol)
-        }
-        fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool {
-            let chi0 = VonMisesKinematic::back_stress(q);
-            let out = self.p.project(law, sigma, q);
-            if out && self.how == Breakage::DoubleBackStress {
-                // χ' = χ + 2cλn: add the increment once more
-                let dchi = VonMisesKinematic::back_stress(q) - chi0;
-                let x = VonMisesKinematic::coordinates(&(chi0 + dchi * 2.0));
-                q[1..6].copy_from_slice(&x);
-            }
-            out
-        }
-        fn local_law(
-            &self,
-            law: &Elasticity,
-            eps: &Sym,
-            sigma: &mut Sym,
-            q: &mut [f64],
-            tangent: Option<&mut SymOp>,
-        ) -> bool {
-            match self.how {
-                Breakage::DoubleBackStress => {
-                    let plastic = self.p.local_law(law, eps, sigma, q, tangent);
+    /// `p` broken as `how` says.
+    fn broken(p: VonMisesKinematic, how: Breakage) -> Mutant {
+        let m = Mutant::of(p);
+        match how {
+            Breakage::DoubleBackStress => m
+                .with_project(move |_, law, sigma, q| {
+                    let chi0 = VonMisesKinematic::back_stress(q);
+                    let out = p.project(law, sigma, q);
+                    if out {
+                        // χ' = χ + 2cλn: add the increment once more
+                        let dchi = VonMisesKinematic::back_stress(q) - chi0;
+                        let x = VonMisesKinematic::coordinates(&(chi0 + dchi * 2.0));
+                        q[1..6].copy_from_slice(&x);
+                    }
+                    out
+                })
+                .with_local_law(move |m, law, eps, sigma, q, tangent| {
+                    let plastic = p.local_law(law, eps, sigma, q, tangent);
                     *sigma = law.stress(eps);
                     q.fill(0.0);
-                    self.project(law, sigma, q);
+                    m.project(law, sigma, q);
                     plastic
-                }
-                Breakage::LocalLawWithoutC => {
+                }),
+            Breakage::WrongMetricWeight => m.with_hardening_inner(move |_, q, r| {
+                let kin: f64 = q[1..6].iter().zip(&r[1..6]).map(|(a, b)| a * b).sum();
+                q[0] * r[0] / p.h + kin * p.c
+            }),
+            Breakage::LocalLawWithoutC => {
+                let iso = VonMises { k0: p.k0, h: p.h };
+                m.with_local_law(move |_, law, eps, sigma, q, tangent| {
                     let mut xi = [0.0];
-                    let plastic = VonMises::new(self.p.k0, self.p.h).local_law(law, eps, sigma, &mut xi, tangent);
+                    let plastic = iso.local_law(law, eps, sigma, &mut xi, tangent);
                     q.fill(0.0);
                     q[0] = xi[0];
                     plastic
-                }
-                Breakage::WrongMetricWeight | Breakage::ConeWithoutBackStress => {
-                    self.p.local_law(law, eps, sigma, q, tangent)
-                }
+                })
+                .with_energy(move |_, law, eps| iso.energy(law, eps))
             }
-        }
-        fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
-            match self.how {
-                Breakage::LocalLawWithoutC => VonMises::new(self.p.k0, self.p.h).energy(law, eps),
-                _ => self.p.energy(law, eps),
-            }
-        }
-        fn cone(&self) -> Option<ConeDescription> {
-            let mut c = self.p.cone()?;
-            if self.how == Breakage::ConeWithoutBackStress {
+            Breakage::ConeWithoutBackStress => m.with_cone(move |_| {
+                let mut c = p.cone()?;
                 for row in c.blocks[0].map.chunks_mut(12) {
                     row[7..].fill(0.0);
                 }
-            }
-            Some(c)
+                Some(c)
+            }),
         }
     }
 
     #[test]
     fn kinematic_kit_catches_broken_copies() {
         let cfg = KitConfig::new(law(), 1.0).with_samples(120);
-        let p = VonMisesKinematic::new(1.0, 5.0, 3.0);
+        let p = VonMisesKinematic::new(1.0, 5.0, 3.0).unwrap();
         for (how, first) in [
             (Breakage::DoubleBackStress, names::PROJECTION_IN_SET),
             (Breakage::WrongMetricWeight, names::VARIATIONAL_INEQUALITY),
             (Breakage::LocalLawWithoutC, names::LOCAL_LAW_IS_PROJECTION),
             (Breakage::ConeWithoutBackStress, names::CONE_MEMBERSHIP),
         ] {
-            let e: KitFailure = conformance::check_all(&Broken { p, how }, &cfg).unwrap_err();
+            let e: KitFailure = conformance::check_all(&broken(p, how), &cfg).unwrap_err();
             assert_eq!(e.check, first, "{how:?}: {e}");
         }
         conformance::check_all(&p, &cfg).unwrap();

@@ -4,11 +4,11 @@
 use crate::error::SceneError;
 use crate::evolution::reduced::Reduced;
 use crate::evolution::step::LoadStep;
-use crate::fem::Discretisation;
-use crate::problem::lagrangian::{Lagrangian, StressField};
+use crate::fem::DiscreteProblem;
+use crate::problem::fields::{PlasticState, StressField};
+use crate::problem::lagrangian::Lagrangian;
 use crate::problem::obstacles::OBSTACLE_PATH;
 use crate::problem::solver::{Monitor, Solution, SolveError, Solver, Start};
-use crate::problem::state::PlasticState;
 use crate::problem::tensor::Sym;
 use thiserror::Error;
 
@@ -58,11 +58,9 @@ pub struct StepSolution<'a> {
     /// L of the step.
     pub problem: LoadStep<'a>,
     /// The solution: every row's multiplier (0 on the rows of an unloaded obstacle) and every
-    /// extra (an undetermined one holds the position where its obstacle just touches).
+    /// extra (an undetermined one, listed in `solution.undetermined`, holds the position where
+    /// its obstacle just touches).
     pub solution: Solution,
-    /// The extras that are undetermined in this step (indices into the extras): those of
-    /// obstacles that carry no load (theory §11.3).
-    pub undetermined: Vec<usize>,
     /// What the user should know about the step (undetermined extras).
     pub warnings: Vec<String>,
 }
@@ -78,7 +76,7 @@ impl StepSolution<'_> {
 /// from, and the last solution (the next step's warm start).
 #[derive(Debug)]
 pub struct Evolution<'a> {
-    base: &'a dyn Discretisation,
+    base: &'a DiscreteProblem,
     state: PlasticState,
     start: Option<Start>,
     steps: usize,
@@ -86,8 +84,9 @@ pub struct Evolution<'a> {
 
 impl<'a> Evolution<'a> {
     /// A path of `base` from the zero state (the first step is the stationary problem).
-    pub fn new(base: &'a dyn Discretisation) -> Self {
-        Self { base, state: PlasticState::zero(base.n_points(), base.hardening_dim()), start: None, steps: 0 }
+    pub fn new(base: &'a DiscreteProblem) -> Self {
+        let l = base.lagrangian();
+        Self { base, state: PlasticState::zero(l.n_points(), l.data.hardening_dim()), start: None, steps: 0 }
     }
 
     /// The state the next step starts from.
@@ -116,45 +115,46 @@ impl<'a> Evolution<'a> {
             factor,
             source,
         })?;
+        let l = problem.lagrangian();
         let unloaded = unloaded_obstacles(&problem);
-        let start = self.start.as_ref().filter(|s| s.check(&problem, solver.name()).is_ok());
-        let mut solve = |l: &dyn Lagrangian, start: Option<&Start>| {
+        let start = self.start.as_ref().filter(|s| s.check(&l, solver.name()).is_ok());
+        let mut solve = |l: &Lagrangian<'_>, start: Option<&Start>| {
             match start {
                 Some(s) => solver.solve_warm(l, s, monitor),
                 None => solver.solve(l, monitor),
             }
             .map_err(|source| PathError::Solve { step: index, factor, source })
         };
-        let (solution, undetermined, warnings) = if unloaded.is_empty() {
-            (solve(&problem, start)?, Vec::new(), Vec::new())
+        let (solution, warnings) = if unloaded.is_empty() {
+            (solve(&l, start)?, Vec::new())
         } else {
             let (rows_kept, extras_kept) = kept(&problem, &unloaded);
-            let reduced = Reduced::new(&problem, rows_kept, extras_kept);
+            let reduced = Reduced::new(&l, rows_kept, extras_kept);
             let restricted = start.map(|s| Start {
                 u: s.u.clone(),
                 extras: reduced.restrict_extras(&s.extras),
                 lambda: reduced.restrict_rows(&s.lambda),
             });
-            let sol = solve(&reduced, restricted.as_ref())?;
+            let sol = solve(&reduced.lagrangian(&l), restricted.as_ref())?;
             let previous = self.start.as_ref().map(|s| s.extras.clone());
             expand(&problem, &reduced, &unloaded, sol, previous, factor)
         };
         if solution.report.converged {
-            self.state = state_after(&problem, &solution.u);
+            self.state = state_after(&l, &solution.u);
             self.start = Some(Start::from_solution(&solution));
         }
-        Ok(StepSolution { index, problem, solution, undetermined, warnings })
+        Ok(StepSolution { index, problem, solution, warnings })
     }
 }
 
 /// The state a step leaves at displacement `u` (theory §11.1): ε_p = ε(u) − Aσ with σ̂ the
 /// step's local law at ε(u) (so that the next step's trial C(ε − ε_p) is σ + C(ε − ε(u))).
-fn state_after(problem: &LoadStep<'_>, u: &[f64]) -> PlasticState {
-    let mut eps = vec![Sym::zeros(); problem.n_points()];
-    problem.strain(u, &mut eps);
-    let mut stress = StressField::new(problem.n_points(), problem.hardening_dim());
-    problem.local_law(&eps, &mut stress, None);
-    PlasticState::from_solution(problem.elasticity(), &eps, &stress)
+fn state_after(l: &Lagrangian<'_>, u: &[f64]) -> PlasticState {
+    let mut eps = vec![Sym::zeros(); l.n_points()];
+    l.strain(u, &mut eps);
+    let mut stress = StressField::new(l.n_points(), l.data.hardening_dim());
+    l.data.local_law(&eps, &mut stress, None);
+    PlasticState::from_solution(l.data.elasticity, &eps, &stress)
 }
 
 /// An obstacle without load in a step: its index, and the extra whose column of H has one
@@ -169,9 +169,9 @@ struct Unloaded {
 /// The obstacles with extras whose loads are all zero and with a column of H of one strict
 /// sign: their multipliers vanish (Hᵀλ = 0, λ ≥ 0) and their extras are undetermined.
 fn unloaded_obstacles(problem: &LoadStep<'_>) -> Vec<Unloaded> {
-    let rows = problem.constraints();
-    let load = problem.load();
-    let parts = problem.discrete_obstacles().parts();
+    let rows = problem.obstacles().rows();
+    let load = problem.obstacles().load();
+    let parts = problem.obstacles().parts();
     parts
         .iter()
         .enumerate()
@@ -189,37 +189,38 @@ fn unloaded_obstacles(problem: &LoadStep<'_>) -> Vec<Unloaded> {
 
 /// The rows and extras that stay in the step: all but those of the unloaded obstacles.
 fn kept(problem: &LoadStep<'_>, unloaded: &[Unloaded]) -> (Vec<usize>, Vec<usize>) {
-    let parts = problem.discrete_obstacles().parts();
+    let parts = problem.obstacles().parts();
     let out_rows = |i: usize| unloaded.iter().any(|u| parts[u.obstacle].row_range.contains(&i));
     let out_extras = |k: usize| unloaded.iter().any(|u| parts[u.obstacle].extra_range.contains(&k));
-    let rows = (0..problem.constraints().n_rows()).filter(|&i| !out_rows(i)).collect();
-    let extras = (0..problem.n_extras()).filter(|&k| !out_extras(k)).collect();
+    let rows = (0..problem.obstacles().rows().n_rows()).filter(|&i| !out_rows(i)).collect();
+    let extras = (0..problem.obstacles().load().len()).filter(|&k| !out_extras(k)).collect();
     (rows, extras)
 }
 
 /// The reduced solution in the step's numbering: zero multipliers on the rows left out, and
 /// each unloaded obstacle placed where it just touches the body (its other extras as they
-/// were): an admissible position with λ = 0, so the full problem's KKT conditions hold.
+/// were): an admissible position with λ = 0, so the full problem's KKT conditions hold. Its
+/// extras are marked undetermined in the solution.
 fn expand(
     problem: &LoadStep<'_>,
-    reduced: &Reduced<'_, LoadStep<'_>>,
+    reduced: &Reduced,
     unloaded: &[Unloaded],
     sol: Solution,
     previous: Option<Vec<f64>>,
     factor: f64,
-) -> (Solution, Vec<usize>, Vec<String>) {
-    let rows = problem.constraints();
+) -> (Solution, Vec<String>) {
+    let rows = problem.obstacles().rows();
+    let n_extras = problem.obstacles().load().len();
     let mut lambda = vec![0.0; rows.n_rows()];
     for (j, &i) in reduced.rows_kept().iter().enumerate() {
         lambda[i] = sol.lambda[j];
     }
-    let mut extras =
-        previous.filter(|p| p.len() == problem.n_extras()).unwrap_or_else(|| vec![0.0; problem.n_extras()]);
+    let mut extras = previous.filter(|p| p.len() == n_extras).unwrap_or_else(|| vec![0.0; n_extras]);
     for (j, &k) in reduced.extras_kept().iter().enumerate() {
         extras[k] = sol.extras[j];
     }
-    let parts = problem.discrete_obstacles().parts();
-    let names = problem.extra_names();
+    let parts = problem.obstacles().parts();
+    let names = problem.obstacles().obstacles().extra_names();
     let mut undetermined = Vec::new();
     let mut warnings = Vec::new();
     let mut gap = vec![0.0; rows.n_rows()];
@@ -236,7 +237,7 @@ fn expand(
         };
         extras[un.extra] += t;
         undetermined.extend(p.extra_range.clone());
-        let path = problem.obstacles().path(OBSTACLE_PATH, un.obstacle);
+        let path = problem.obstacles().obstacles().path(OBSTACLE_PATH, un.obstacle);
         let which: Vec<&str> = p.extra_range.clone().map(|k| names[k].as_str()).collect();
         warnings.push(format!(
             "{path}: carries no load at load factor {factor}: {} undetermined (any position out of contact is \
@@ -248,7 +249,8 @@ fn expand(
             }
         ));
     }
-    (Solution { u: sol.u, extras, stress: sol.stress, lambda, report: sol.report }, undetermined, warnings)
+    undetermined.sort_unstable();
+    (Solution { u: sol.u, extras, stress: sol.stress, lambda, report: sol.report, undetermined }, warnings)
 }
 
 #[cfg(test)]

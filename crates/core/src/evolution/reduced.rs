@@ -4,27 +4,22 @@
 //! are undetermined: any position out of contact is admissible.
 
 use crate::problem::displacements::ConstraintRows;
-use crate::problem::elasticity::Elasticity;
-use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
-use crate::problem::pattern::SymmetricPattern;
-use crate::problem::state::PlasticState;
-use crate::problem::stresses::AdmissibleStresses;
-use crate::problem::tensor::Sym;
+use crate::problem::lagrangian::{Data, Lagrangian};
 
-/// `inner` with the rows `rows_kept` and the extras `extras_kept` only (both ascending).
+/// The rows `rows_kept` and the extras `extras_kept` (both ascending) of a problem's K_h, and
+/// their load: the data a reduced L replaces ([`Reduced::lagrangian`]).
 #[derive(Debug)]
-pub struct Reduced<'a, L: Lagrangian + ?Sized> {
-    inner: &'a L,
+pub struct Reduced {
     rows: ConstraintRows,
     load: Vec<f64>,
     rows_kept: Vec<usize>,
     extras_kept: Vec<usize>,
 }
 
-impl<'a, L: Lagrangian + ?Sized> Reduced<'a, L> {
-    /// `inner` without the rows and extras not kept.
-    pub fn new(inner: &'a L, rows_kept: Vec<usize>, extras_kept: Vec<usize>) -> Self {
-        let all = inner.constraints();
+impl Reduced {
+    /// The kept rows and extras of `l`'s K_h.
+    pub fn new(l: &Lagrangian<'_>, rows_kept: Vec<usize>, extras_kept: Vec<usize>) -> Self {
+        let all = l.data.rows;
         let mut rows = ConstraintRows::new(extras_kept.len());
         for &i in &rows_kept {
             let (cols, vals) = all.row(i);
@@ -33,78 +28,32 @@ impl<'a, L: Lagrangian + ?Sized> Reduced<'a, L> {
             rows.push(&entries, &h, all.offset[i], all.node[i]);
         }
         rows.warnings = all.warnings.clone();
-        let load = extras_kept.iter().map(|&k| inner.load()[k]).collect();
-        Self { inner, rows, load, rows_kept, extras_kept }
+        let load = extras_kept.iter().map(|&k| l.data.load[k]).collect();
+        Self { rows, load, rows_kept, extras_kept }
     }
 
-    /// The kept rows of `inner`.
+    /// `l` with the kept rows and extras only: the same operators and other data.
+    pub fn lagrangian<'a>(&'a self, l: &Lagrangian<'a>) -> Lagrangian<'a> {
+        l.with_data(Data { rows: &self.rows, load: &self.load, ..l.data })
+    }
+
+    /// The kept rows.
     pub fn rows_kept(&self) -> &[usize] {
         &self.rows_kept
     }
 
-    /// The kept extras of `inner`.
+    /// The kept extras.
     pub fn extras_kept(&self) -> &[usize] {
         &self.extras_kept
     }
 
-    /// A vector over `inner`'s rows restricted to the kept ones.
+    /// A vector over all rows restricted to the kept ones.
     pub fn restrict_rows(&self, x: &[f64]) -> Vec<f64> {
         self.rows_kept.iter().map(|&i| x[i]).collect()
     }
 
-    /// A vector over `inner`'s extras restricted to the kept ones.
+    /// A vector over all extras restricted to the kept ones.
     pub fn restrict_extras(&self, x: &[f64]) -> Vec<f64> {
         self.extras_kept.iter().map(|&k| x[k]).collect()
-    }
-}
-
-impl<L: Lagrangian + ?Sized> Lagrangian for Reduced<'_, L> {
-    fn n_dofs(&self) -> usize {
-        self.inner.n_dofs()
-    }
-    fn n_points(&self) -> usize {
-        self.inner.n_points()
-    }
-    fn elasticity(&self) -> &Elasticity {
-        self.inner.elasticity()
-    }
-    fn stresses(&self) -> Option<&dyn AdmissibleStresses> {
-        self.inner.stresses()
-    }
-    fn constraints(&self) -> &ConstraintRows {
-        &self.rows
-    }
-    fn load(&self) -> &[f64] {
-        &self.load
-    }
-    fn weights(&self) -> &[f64] {
-        self.inner.weights()
-    }
-    fn strain(&self, u: &[f64], eps: &mut [Sym]) {
-        self.inner.strain(u, eps)
-    }
-    fn divergence(&self, sigma: &[Sym], f: &mut [f64]) {
-        self.inner.divergence(sigma, f)
-    }
-    fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)> {
-        self.inner.strain_entries()
-    }
-    fn pattern(&self) -> &SymmetricPattern {
-        self.inner.pattern()
-    }
-    fn assemble(&self, material: Material<'_>, values: &mut [f64]) {
-        self.inner.assemble(material, values)
-    }
-    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
-        self.inner.rigid_body_modes()
-    }
-    fn nodal_load(&self) -> &[f64] {
-        self.inner.nodal_load()
-    }
-    fn state(&self) -> Option<&PlasticState> {
-        self.inner.state()
-    }
-    fn state_force_norm(&self) -> f64 {
-        self.inner.state_force_norm()
     }
 }

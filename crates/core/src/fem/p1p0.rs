@@ -1,4 +1,4 @@
-//! The P1–P0 discretisation of L (theory §3): continuous piecewise-linear displacements on
+//! The P1–P0 element (theory §3): continuous piecewise-linear displacements on
 //! tetrahedra, stresses and hardening constant per element. The strain of a P1 field is
 //! constant per tetrahedron, so one stress point per element is exact.
 //!
@@ -7,18 +7,13 @@
 //! elements around the node), and assembly over matrix columns (each column owns its slice of
 //! the values; the sparsity pattern is built once).
 
-use super::Discretisation;
 use super::topology::{NodalParts, assemble_columns, element_topology};
+use super::{Discretisation, VtkCell};
 use crate::error::SceneError;
-use crate::fem::loads::Load;
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
-use crate::problem::displacements::ConstraintRows;
-use crate::problem::elasticity::Elasticity;
-use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
-use crate::problem::obstacles::{DiscreteObstacles, Obstacles};
+use crate::problem::operators::{ElementOperators, Material, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
-use crate::problem::stresses::AdmissibleStresses;
 use crate::problem::tensor::{SQRT2, Sym};
 use rayon::prelude::*;
 
@@ -29,55 +24,28 @@ pub struct P1 {}
 
 #[typetag::serde(name = "p1")]
 impl super::FiniteElement for P1 {
-    fn build(
-        &self,
-        mesh: TetMesh,
-        dirichlet: &[Dirichlet],
-        law: Elasticity,
-        stresses: Option<Box<dyn AdmissibleStresses>>,
-        obstacles: Obstacles,
-        loads: &[Load],
-    ) -> Result<Box<dyn Discretisation>, SceneError> {
-        Ok(Box::new(P1P0Lagrangian::new(mesh, dirichlet, law, stresses, obstacles)?.with_loads(loads)?))
+    fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError> {
+        Ok(Box::new(P1P0Element::new(mesh, dirichlet)?))
     }
 }
 
-/// L for P1 displacements and P0 generalised stresses on a tetrahedral mesh.
+/// The P1–P0 element on a tetrahedral mesh: P1 displacements, P0 generalised stresses.
 #[derive(Debug)]
-pub struct P1P0Lagrangian {
-    /// Mesh, dofs, material, P, K, loads, gradients, adjacency, pattern.
+pub struct P1P0Element {
+    /// Mesh, dofs, gradients, adjacency, pattern.
     parts: NodalParts,
     /// |T|.
     weights: Vec<f64>,
 }
 
-impl P1P0Lagrangian {
-    /// Assembles L from a mesh, Dirichlet conditions, elasticity, P (`None`: elastic) and K:
-    /// [`Obstacles`], or anything that converts into it — `None` (no contact), one boxed
-    /// obstacle, `Some(obstacle)`. The parameters are taken as valid: a scene validates every plugin
-    /// once, when it is read; a problem composed in Rust calls each plugin's `validate` (or
-    /// builds it with a constructor that checks). K's rows are discretised here, every
-    /// obstacle's concatenated (theory §8), and errors name the scene's paths (`obstacle.zone`,
-    /// `obstacle[1].zone`).
-    pub fn new(
-        mesh: TetMesh,
-        dirichlet: &[Dirichlet],
-        law: Elasticity,
-        stresses: Option<Box<dyn AdmissibleStresses>>,
-        obstacles: impl Into<Obstacles>,
-    ) -> Result<Self, SceneError> {
+impl P1P0Element {
+    /// The element on the vertices of `mesh` (a second-order mesh's edge nodes are dropped)
+    /// with the Dirichlet conditions `dirichlet`.
+    pub fn new(mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Self, SceneError> {
         // the vertices of a second-order mesh: P1 has no edge nodes
         let mesh = if mesh.is_second_order() { mesh.first_order() } else { mesh };
-        let (parts, weights) = NodalParts::new(mesh, dirichlet, law, stresses, obstacles.into(), |m, d| {
-            element_topology(&m.tets, m.n_nodes(), d)
-        })?;
+        let (parts, weights) = NodalParts::new(mesh, dirichlet, |m, d| element_topology(&m.tets, m.n_nodes(), d))?;
         Ok(Self { parts, weights })
-    }
-
-    /// The same problem with tractions and body forces (theory §3 with loads on u).
-    pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
-        self.parts.set_loads(loads)?;
-        Ok(self)
     }
 
     /// Column j of Σ_T |T| B_Tᵀ C_T B_T (rows ≥ j), gathered from the elements around its node.
@@ -129,16 +97,34 @@ pub(super) fn strain_of_unit_dot(g: &[f64; 3], c: usize, v: &Sym) -> f64 {
     }
 }
 
-impl Discretisation for P1P0Lagrangian {
-    nodal_parts_accessors!(discretisation);
-
+impl Discretisation for P1P0Element {
+    fn mesh(&self) -> &TetMesh {
+        &self.parts.mesh
+    }
+    fn dofs(&self) -> &DofMap {
+        &self.parts.dofs
+    }
     fn name(&self) -> &'static str {
         "p1"
     }
+    /// VTK_TETRA.
+    fn vtk_cell(&self) -> VtkCell {
+        VtkCell { type_id: 10, nodes: 4 }
+    }
 }
 
-impl Lagrangian for P1P0Lagrangian {
-    nodal_parts_accessors!(lagrangian);
+impl ElementOperators for P1P0Element {
+    fn n_dofs(&self) -> usize {
+        self.parts.dofs.n_free
+    }
+
+    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+        Some(self.parts.rigid_body_modes())
+    }
+
+    fn pattern(&self) -> &SymmetricPattern {
+        &self.parts.pattern
+    }
 
     fn n_points(&self) -> usize {
         self.parts.mesh.n_elements()
@@ -215,20 +201,20 @@ mod tests {
     use nalgebra::Matrix3;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
-    fn problem() -> P1P0Lagrangian {
+    fn problem() -> P1P0Element {
         let mesh =
             BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [3, 4, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
         let bc = [
             Dirichlet::clamped(Region::Group("zmax".into())),
             Dirichlet::roller(Region::Group("xmin".into()), crate::mesh::dofs::Component::X),
         ];
-        P1P0Lagrangian::new(mesh, &bc, Elasticity::new(10.0, 0.3).unwrap(), None, None).unwrap()
+        P1P0Element::new(mesh, &bc).unwrap()
     }
 
     #[test]
     fn strain_of_a_linear_field_is_exact() {
         let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
-        let l = P1P0Lagrangian::new(mesh, &[], Elasticity::new(1.0, 0.2).unwrap(), None, None).unwrap();
+        let l = P1P0Element::new(mesh, &[]).unwrap();
         let grad = Matrix3::new(0.1, 0.2, -0.3, 0.05, -0.4, 0.7, 0.3, 0.0, 0.25);
         let mut u = vec![0.0; l.n_dofs()];
         for (n, x) in l.parts.mesh.nodes.iter().enumerate() {
@@ -277,7 +263,7 @@ mod tests {
     fn assembled_stiffness_matches_the_operator() {
         // K u = Bᵀ (C B u) for a random u: assembly against the matrix-free operator
         let l = problem();
-        let c = l.parts.law.stiffness_matrix();
+        let c = crate::problem::elasticity::Elasticity::new(10.0, 0.3).unwrap().stiffness_matrix();
         let values = l.stiffness(Material::Uniform(&c));
         let mut rng = StdRng::seed_from_u64(3);
         let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
@@ -293,6 +279,7 @@ mod tests {
         assert!(err < 1e-12 * scale, "{err} vs {scale}");
         // and the energy ½uᵀKu equals Σ|T| ½ ε:Cε
         let e1: f64 = 0.5 * ku.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
-        assert!((e1 - l.energy_of_strain(&eps)).abs() < 1e-12 * e1);
+        let e2: f64 = eps.iter().zip(&l.weights).map(|(e, w)| 0.5 * w * e.dot(&(c * e))).sum();
+        assert!((e1 - e2).abs() < 1e-12 * e1);
     }
 }

@@ -1,4 +1,4 @@
-//! The P2 discretisation of L (theory §10): continuous piecewise-quadratic displacements on
+//! The P2 element (theory §10): continuous piecewise-quadratic displacements on
 //! 10-node tetrahedra, generalised stresses at the four Gauss points of every element, and the
 //! mean-dilatation strain operator B̄.
 //!
@@ -14,19 +14,14 @@
 //! Hot loops gather, as in [`super::p1p0`]: strains over elements, Bᵀσ over dofs, assembly
 //! over matrix columns.
 
-use super::Discretisation;
 use super::p1p0::{strain_of_unit, strain_of_unit_dot};
 use super::topology::{NodalParts, assemble_columns, element_topology};
+use super::{Discretisation, VtkCell};
 use crate::error::SceneError;
-use crate::fem::loads::Load;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::mesh::{TET_EDGES, TetMesh};
-use crate::problem::displacements::ConstraintRows;
-use crate::problem::elasticity::Elasticity;
-use crate::problem::lagrangian::{Lagrangian, Material, RigidBodyModes};
-use crate::problem::obstacles::{DiscreteObstacles, Obstacles};
+use crate::problem::operators::{ElementOperators, Material, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
-use crate::problem::stresses::AdmissibleStresses;
 use crate::problem::tensor::{SQRT2, Sym};
 use rayon::prelude::*;
 
@@ -61,27 +56,15 @@ impl Default for P2 {
 
 #[typetag::serde(name = "p2")]
 impl super::FiniteElement for P2 {
-    fn build(
-        &self,
-        mesh: TetMesh,
-        dirichlet: &[Dirichlet],
-        law: Elasticity,
-        stresses: Option<Box<dyn AdmissibleStresses>>,
-        obstacles: Obstacles,
-        loads: &[Load],
-    ) -> Result<Box<dyn Discretisation>, SceneError> {
-        Ok(Box::new(
-            P2Lagrangian::new(mesh, dirichlet, law, stresses, obstacles)?
-                .with_mean_dilatation(self.mean_dilatation)
-                .with_loads(loads)?,
-        ))
+    fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError> {
+        Ok(Box::new(P2Element::new(mesh, dirichlet)?.with_mean_dilatation(self.mean_dilatation)))
     }
 }
 
-/// L for P2 displacements with the B̄ strain and stresses at four points per element.
+/// The P2 element: P2 displacements with the B̄ strain and stresses at four points per element.
 #[derive(Debug)]
-pub struct P2Lagrangian {
-    /// Mesh (second order), dofs, material, P, K, loads, gradients, adjacency, pattern.
+pub struct P2Element {
+    /// Mesh (second order), dofs, gradients, adjacency, pattern.
     parts: NodalParts,
     /// |T|/4 at each of the four points of every element.
     weights: Vec<f64>,
@@ -127,17 +110,11 @@ fn column(g: &[[f64; 3]; 4], a: usize, c: usize, q: usize, mean_dilatation: bool
     (ga, delta)
 }
 
-impl P2Lagrangian {
-    /// Assembles L as [`super::p1p0::P1P0Lagrangian::new`] does, on the second-order mesh of
-    /// `mesh` (a first-order mesh gets a node at the midpoint of every edge,
-    /// [`TetMesh::second_order`]), with the mean-dilatation B̄ strain.
-    pub fn new(
-        mesh: TetMesh,
-        dirichlet: &[Dirichlet],
-        law: Elasticity,
-        stresses: Option<Box<dyn AdmissibleStresses>>,
-        obstacles: impl Into<Obstacles>,
-    ) -> Result<Self, SceneError> {
+impl P2Element {
+    /// The element on the second-order mesh of `mesh` (a first-order mesh gets a node at the
+    /// midpoint of every edge, [`TetMesh::second_order`]) with the Dirichlet conditions
+    /// `dirichlet`, and the mean-dilatation B̄ strain.
+    pub fn new(mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Self, SceneError> {
         let mesh = if mesh.is_second_order() { mesh } else { mesh.second_order() };
         let so = mesh.second_order.as_ref().expect("second order");
         let nodes: Vec<[usize; NODES]> = mesh
@@ -146,9 +123,7 @@ impl P2Lagrangian {
             .zip(&so.tet_edges)
             .map(|(t, ed)| std::array::from_fn(|a| if a < 4 { t[a] } else { ed[a - 4] }))
             .collect();
-        let (parts, volumes) = NodalParts::new(mesh, dirichlet, law, stresses, obstacles.into(), |m, d| {
-            element_topology(&nodes, m.n_nodes(), d)
-        })?;
+        let (parts, volumes) = NodalParts::new(mesh, dirichlet, |m, d| element_topology(&nodes, m.n_nodes(), d))?;
         let weights = volumes.iter().flat_map(|v| [v / POINTS as f64; POINTS]).collect();
         Ok(Self { parts, weights, nodes, mean_dilatation: true })
     }
@@ -158,12 +133,6 @@ impl P2Lagrangian {
     pub fn with_mean_dilatation(mut self, on: bool) -> Self {
         self.mean_dilatation = on;
         self
-    }
-
-    /// The same problem with tractions and body forces (consistent P2 nodal forces).
-    pub fn with_loads(mut self, loads: &[Load]) -> Result<Self, SceneError> {
-        self.parts.set_loads(loads)?;
-        Ok(self)
     }
 
     /// Column j of Σ_T Σ_q w_q B̄_qᵀ C_q B̄_q (rows ≥ j), gathered from the elements around its
@@ -213,11 +182,22 @@ impl P2Lagrangian {
     }
 }
 
-impl Discretisation for P2Lagrangian {
-    nodal_parts_accessors!(discretisation);
+impl Discretisation for P2Element {
+    fn mesh(&self) -> &TetMesh {
+        &self.parts.mesh
+    }
+
+    fn dofs(&self) -> &DofMap {
+        &self.parts.dofs
+    }
 
     fn name(&self) -> &'static str {
         "p2"
+    }
+
+    /// VTK_QUADRATIC_TETRA: vertices, then the edge nodes in VTK's order.
+    fn vtk_cell(&self) -> VtkCell {
+        VtkCell { type_id: 24, nodes: NODES }
     }
 
     fn points_per_element(&self) -> usize {
@@ -230,8 +210,18 @@ impl Discretisation for P2Lagrangian {
     }
 }
 
-impl Lagrangian for P2Lagrangian {
-    nodal_parts_accessors!(lagrangian);
+impl ElementOperators for P2Element {
+    fn n_dofs(&self) -> usize {
+        self.parts.dofs.n_free
+    }
+
+    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+        Some(self.parts.rigid_body_modes())
+    }
+
+    fn pattern(&self) -> &SymmetricPattern {
+        &self.parts.pattern
+    }
 
     fn n_points(&self) -> usize {
         POINTS * self.parts.mesh.n_elements()
@@ -335,20 +325,18 @@ mod tests {
     use nalgebra::Matrix3;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
-    fn problem(mean_dilatation: bool) -> P2Lagrangian {
+    fn problem(mean_dilatation: bool) -> P2Element {
         let mesh =
             BoxMesh::new([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [2, 3, 2]).graded([0.2, 0.0, 0.0], 2.0).mesh().unwrap();
         let bc = [
             Dirichlet::clamped(Region::Group("zmax".into())),
             Dirichlet::roller(Region::Group("xmin".into()), crate::mesh::dofs::Component::X),
         ];
-        P2Lagrangian::new(mesh, &bc, Elasticity::new(10.0, 0.3).unwrap(), None, None)
-            .unwrap()
-            .with_mean_dilatation(mean_dilatation)
+        P2Element::new(mesh, &bc).unwrap().with_mean_dilatation(mean_dilatation)
     }
 
     /// u(x) with components quadratic in x: u_i = G_ij x_j + ½ H_ijk x_j x_k.
-    fn quadratic_field(l: &P2Lagrangian, grad: &Matrix3<f64>, hess: &[[[f64; 3]; 3]; 3]) -> Vec<f64> {
+    fn quadratic_field(l: &P2Element, grad: &Matrix3<f64>, hess: &[[[f64; 3]; 3]; 3]) -> Vec<f64> {
         let mut u = vec![0.0; l.n_dofs()];
         for (n, x) in l.parts.mesh.nodes.iter().enumerate() {
             for i in 0..3 {
@@ -366,7 +354,7 @@ mod tests {
     }
 
     /// The Gauss points of element e.
-    fn points(l: &P2Lagrangian, e: usize) -> [[f64; 3]; POINTS] {
+    fn points(l: &P2Element, e: usize) -> [[f64; 3]; POINTS] {
         let x = l.parts.mesh.tets[e].map(|n| l.parts.mesh.nodes[n]);
         std::array::from_fn(|q| std::array::from_fn(|k| (0..4).map(|i| if i == q { A } else { B } * x[i][k]).sum()))
     }
@@ -383,9 +371,7 @@ mod tests {
             std::array::from_fn(|j| std::array::from_fn(|k| h[j][k] + h[k][j]))
         });
         for md in [false, true] {
-            let l = P2Lagrangian::new(mesh.clone(), &[], Elasticity::new(1.0, 0.2).unwrap(), None, None)
-                .unwrap()
-                .with_mean_dilatation(md);
+            let l = P2Element::new(mesh.clone(), &[]).unwrap().with_mean_dilatation(md);
             let u = quadratic_field(&l, &grad, &hess);
             let mut eps = vec![Sym::zeros(); l.n_points()];
             l.strain(&u, &mut eps);
@@ -440,7 +426,7 @@ mod tests {
     fn assembled_stiffness_matches_the_operator_and_the_energy() {
         for md in [false, true] {
             let l = problem(md);
-            let c = l.parts.law.stiffness_matrix();
+            let c = crate::problem::elasticity::Elasticity::new(10.0, 0.3).unwrap().stiffness_matrix();
             let values = l.stiffness(Material::Uniform(&c));
             let mut rng = StdRng::seed_from_u64(3);
             let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
@@ -455,14 +441,15 @@ mod tests {
             let scale = f.iter().map(|a| a.abs()).fold(0.0, f64::max);
             assert!(err < 1e-12 * scale, "{err} vs {scale}");
             let e1: f64 = 0.5 * ku.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
-            assert!((e1 - l.energy_of_strain(&eps)).abs() < 1e-12 * e1);
+            let e2: f64 = eps.iter().zip(&l.weights).map(|(e, w)| 0.5 * w * e.dot(&(c * e))).sum();
+            assert!((e1 - e2).abs() < 1e-12 * e1);
         }
     }
 
     #[test]
     fn rigid_motions_have_no_strain() {
         let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
-        let l = P2Lagrangian::new(mesh, &[], Elasticity::new(1.0, 0.2).unwrap(), None, None).unwrap();
+        let l = P2Element::new(mesh, &[]).unwrap();
         let modes = l.rigid_body_modes().unwrap();
         let mut eps = vec![Sym::zeros(); l.n_points()];
         for m in 0..6 {

@@ -1,17 +1,12 @@
-//! What every nodal element shares: [`NodalParts`] (mesh, dofs, material, P, K, loads, the
-//! node → element adjacency and the sparsity pattern of the stiffness, for elements of N nodes
-//! each: 4 for P1, 10 for P2), the accessors of L and of the discretisation that read them
-//! ([`nodal_parts_accessors`]), and column assembly.
+//! What every nodal element shares: [`NodalParts`] (mesh, dofs, the gradients of the
+//! barycentric coordinates, the node → element adjacency and the sparsity pattern of the
+//! stiffness, for elements of N nodes each: 4 for P1, 10 for P2), and column assembly.
 
 use crate::error::SceneError;
-use crate::fem::loads::{Load, nodal_loads};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
-use crate::problem::elasticity::Elasticity;
-use crate::problem::lagrangian::RigidBodyModes;
-use crate::problem::obstacles::{DiscreteObstacles, OBSTACLE_PATH, Obstacles};
+use crate::problem::operators::RigidBodyModes;
 use crate::problem::pattern::SymmetricPattern;
-use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -116,23 +111,15 @@ pub fn element_topology<const N: usize>(elements: &[[usize; N]], n_nodes: usize,
 }
 
 /// What every nodal element is built on (theory §3, §10): the mesh (of the order the element
-/// needs), the numbering of its nodal dofs, the material, P, K discretised, the nodal loads, the
-/// gradients of the barycentric coordinates, the node → element adjacency, each free dof's node
-/// and component, and the stiffness pattern. An element adds its own strain operator to it.
+/// needs), the numbering of its nodal dofs, the gradients of the barycentric coordinates, the
+/// node → element adjacency, each free dof's node and component, and the stiffness pattern. An
+/// element adds its own strain operator to it.
 #[derive(Debug)]
 pub struct NodalParts {
     /// The mesh.
     pub mesh: TetMesh,
     /// The nodal dofs.
     pub dofs: DofMap,
-    /// Elasticity.
-    pub law: Elasticity,
-    /// P (`None`: elastic).
-    pub stresses: Option<Box<dyn AdmissibleStresses>>,
-    /// K = K₁ ∩ K₂ ∩ …: the concatenated rows and load, each obstacle's own part.
-    pub obstacles: DiscreteObstacles,
-    /// Consistent nodal forces of tractions and body forces (empty: none).
-    pub nodal_load: Vec<f64>,
     /// Gradients of the barycentric coordinates of each element.
     pub grads: Vec<[[f64; 3]; 4]>,
     /// Node → (element, local node) adjacency, CSR.
@@ -148,49 +135,20 @@ pub struct NodalParts {
 }
 
 impl NodalParts {
-    /// The parts on `mesh`, with the element volumes; `topology` gives the adjacency and the
-    /// pattern of the element's nodes ([`element_topology`] of the vertices for P1, of the ten
-    /// nodes for P2). Checks P's hardening dimension; K's rows are discretised here (errors
-    /// name `obstacle…`).
+    /// The parts on `mesh` with the Dirichlet conditions `dirichlet`, and the element volumes;
+    /// `topology` gives the adjacency and the pattern of the element's nodes
+    /// ([`element_topology`] of the vertices for P1, of the ten nodes for P2).
     pub fn new(
         mesh: TetMesh,
         dirichlet: &[Dirichlet],
-        law: Elasticity,
-        stresses: Option<Box<dyn AdmissibleStresses>>,
-        obstacles: Obstacles,
         topology: impl FnOnce(&TetMesh, &DofMap) -> Topology,
     ) -> Result<(Self, Vec<f64>), SceneError> {
-        if let Some(p) = &stresses {
-            assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
-        }
         let dofs = DofMap::new(&mesh, dirichlet)?;
         let (grads, volumes): (Vec<_>, Vec<_>) =
             (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
         let (adj_ptr, adj, pattern) = topology(&mesh, &dofs);
         let (dof_node, dof_comp) = dofs.owners();
-        let obstacles = obstacles.discretise(&mesh, &dofs, OBSTACLE_PATH)?;
-        let parts = Self {
-            mesh,
-            dofs,
-            law,
-            stresses,
-            obstacles,
-            nodal_load: Vec::new(),
-            grads,
-            adj_ptr,
-            adj,
-            dof_node,
-            dof_comp,
-            pattern,
-        };
-        Ok((parts, volumes))
-    }
-
-    /// Sets the consistent nodal forces of tractions and body forces (theory §3 with loads on u).
-    pub fn set_loads(&mut self, loads: &[Load]) -> Result<(), SceneError> {
-        let f = nodal_loads(&self.mesh, &self.dofs, loads)?;
-        self.nodal_load = if loads.is_empty() { Vec::new() } else { f };
-        Ok(())
+        Ok((Self { mesh, dofs, grads, adj_ptr, adj, dof_node, dof_comp, pattern }, volumes))
     }
 
     /// The displacement of node `n` from the free dofs `u` (fixed components 0).

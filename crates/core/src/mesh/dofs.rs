@@ -72,7 +72,6 @@ impl DofMap {
         let mut fixed = vec![[false; 3]; mesh.n_nodes()];
         for (i, c) in conditions.iter().enumerate() {
             let field = format!("dirichlet[{i}].on");
-            c.on.validate(&field)?;
             let missing = c.on.missing_groups(mesh);
             if !missing.is_empty() {
                 return Err(SceneError::Region {

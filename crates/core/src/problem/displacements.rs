@@ -9,6 +9,7 @@
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
+use std::borrow::Cow;
 use std::fmt::Debug;
 
 /// K_h as affine rows g(u, V) = G u + H V + c ≥ 0, G sparse (CSR), H dense.
@@ -160,6 +161,31 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
     fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
         let _ = factor;
         None
+    }
+
+    /// K_h of this obstacle with its load multiplied by `factor` (theory §11.2), from `rows`, its
+    /// rows at its own load: what a load step or a sweep point solves. The default discretises
+    /// the scaled obstacle ([`AdmissibleDisplacements::scaled_load`]) again, which is always
+    /// right. An obstacle whose rows do not depend on its load (force control: only f scales)
+    /// returns `rows` borrowed; one whose offsets carry a prescribed displacement recomputes only
+    /// those. The K conformance kit checks the result against the default.
+    fn rows_at_factor<'r>(
+        &self,
+        factor: f64,
+        rows: &'r ConstraintRows,
+        mesh: &TetMesh,
+        dofs: &DofMap,
+        path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        let _ = rows;
+        let scaled = self.scaled_load(factor).ok_or_else(|| {
+            ParameterError::new(
+                path,
+                format!("type = {:?}", self.name()),
+                "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_load is None)",
+            )
+        })?;
+        scaled.discretise(mesh, dofs, path).map(Cow::Owned)
     }
 }
 

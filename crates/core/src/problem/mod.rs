@@ -5,19 +5,27 @@
 //!   obstacle, theory §1, §3, §8);
 //! * [`obstacles`] — several obstacles, K = K₁ ∩ K₂ ∩ … (theory §8): rows and extras
 //!   concatenated, each obstacle reporting on its own part;
-//! * [`lagrangian`] — **L**, the discrete saddle problem every solver consumes (theory §3), with
-//!   the energies and KKT residuals of any iterate;
-//! * [`state`] — the plastic state a load step starts from (theory §11);
+//! * [`operators`] — the element's operators: stress points, ε = B u, Bᵀσ, assembly (theory §3);
+//! * [`lagrangian`] — **L**, the discrete saddle problem every solver consumes (theory §3): the
+//!   element's operators with the problem's data;
+//! * [`energies`], [`kkt`] — the energies and KKT residuals of any iterate, free functions of L;
+//! * [`fields`] — fields at the stress points: stresses σ̂ and the plastic state a load step
+//!   starts from (theory §11);
+//! * [`return_mapping`] — the steps yield surfaces' return mappings share;
 //! * [`solver`] — the solver interface: [`solver::Solver`], [`solver::Solution`], the report;
 //! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
 //! * [`pattern`] — the sparsity pattern of assembled matrices, as plain data.
 
 pub mod displacements;
 pub mod elasticity;
+pub mod energies;
+pub mod fields;
+pub mod kkt;
 pub mod lagrangian;
 pub mod obstacles;
+pub mod operators;
 pub mod pattern;
+pub mod return_mapping;
 pub mod solver;
-pub mod state;
 pub mod stresses;
 pub mod tensor;

@@ -224,43 +224,10 @@ impl Obstacles {
     /// obstacle's H columns at its own offset among the concatenated extras; the loads
     /// concatenated; the warnings concatenated, each naming its obstacle's path.
     pub fn discretise(self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<DiscreteObstacles, SceneError> {
-        let mut parts = Vec::with_capacity(self.list.len());
-        let (mut n_rows, mut n_extras) = (0, 0);
-        for (i, o) in self.list.iter().enumerate() {
-            let p = self.path(path, i);
-            let mut rows = o.k.discretise(mesh, dofs, &p)?;
-            let n = o.k.extra_names().len();
-            assert!(
-                rows.n_extras == n && o.k.load().len() == n,
-                "obstacle plugin {:?}: {} extra names, {} load coefficients, {} columns of H",
-                o.k.name(),
-                n,
-                o.k.load().len(),
-                rows.n_extras
-            );
-            rows.warnings = rows.warnings.into_iter().map(|w| naming_path(&p, w)).collect();
-            parts.push(ObstacleRows {
-                row_range: n_rows..n_rows + rows.n_rows(),
-                extra_range: n_extras..n_extras + n,
-                rows,
-            });
-            n_rows += parts.last().map_or(0, |p| p.rows.n_rows());
-            n_extras += n;
-        }
-        let mut all = ConstraintRows::new(n_extras);
-        let mut h = vec![0.0; n_extras];
-        for part in &parts {
-            for i in 0..part.rows.n_rows() {
-                let (cols, vals) = part.rows.row(i);
-                let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
-                h.iter_mut().for_each(|x| *x = 0.0);
-                h[part.extra_range.clone()].copy_from_slice(part.rows.extra_row(i));
-                all.push(&entries, &h, part.rows.offset[i], part.rows.node[i]);
-            }
-            all.warnings.extend(part.rows.warnings.iter().cloned());
-        }
-        let load = self.load();
-        Ok(DiscreteObstacles { obstacles: self, rows: all, load, parts })
+        let rows = (self.list.iter().enumerate())
+            .map(|(i, o)| o.k.discretise(mesh, dofs, &self.path(path, i)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(DiscreteObstacles::concatenate(self, rows, path))
     }
 }
 
@@ -318,6 +285,65 @@ pub struct DiscreteObstacles {
 }
 
 impl DiscreteObstacles {
+    /// The obstacles `obstacles` with their rows `rows` (one entry each, in order): the
+    /// concatenation every solver consumes, each obstacle's H columns at its own offset among
+    /// the concatenated extras, the loads concatenated, the warnings each naming its
+    /// obstacle's path under `path`.
+    fn concatenate(obstacles: Obstacles, rows: Vec<ConstraintRows>, path: &str) -> Self {
+        let mut parts = Vec::with_capacity(rows.len());
+        let (mut n_rows, mut n_extras) = (0, 0);
+        for (i, (o, mut rows)) in obstacles.list.iter().zip(rows).enumerate() {
+            let p = obstacles.path(path, i);
+            let n = o.k.extra_names().len();
+            assert!(
+                rows.n_extras == n && o.k.load().len() == n,
+                "obstacle plugin {:?}: {} extra names, {} load coefficients, {} columns of H",
+                o.k.name(),
+                n,
+                o.k.load().len(),
+                rows.n_extras
+            );
+            rows.warnings = rows.warnings.into_iter().map(|w| naming_path(&p, w)).collect();
+            let row_range = n_rows..n_rows + rows.n_rows();
+            n_rows = row_range.end;
+            parts.push(ObstacleRows { row_range, extra_range: n_extras..n_extras + n, rows });
+            n_extras += n;
+        }
+        let mut all = ConstraintRows::new(n_extras);
+        let mut h = vec![0.0; n_extras];
+        for part in &parts {
+            for i in 0..part.rows.n_rows() {
+                let (cols, vals) = part.rows.row(i);
+                let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
+                h.iter_mut().for_each(|x| *x = 0.0);
+                h[part.extra_range.clone()].copy_from_slice(part.rows.extra_row(i));
+                all.push(&entries, &h, part.rows.offset[i], part.rows.node[i]);
+            }
+            all.warnings.extend(part.rows.warnings.iter().cloned());
+        }
+        let load = obstacles.load();
+        Self { obstacles, rows: all, load, parts }
+    }
+
+    /// K_h with every obstacle's load multiplied by `factor` (theory §11.2): the obstacles
+    /// scaled ([`AdmissibleDisplacements::scaled_load`]) and their rows from these
+    /// ([`AdmissibleDisplacements::rows_at_factor`]: the same rows with the load alone changed,
+    /// where the plugin can). Factor 1 is these obstacles. Errors name the obstacle whose plugin
+    /// cannot scale its load, or whose rows at the scaled load cannot be made.
+    pub fn at_factor(&self, factor: f64, mesh: &TetMesh, dofs: &DofMap) -> Result<Self, SceneError> {
+        if factor == 1.0 {
+            return Ok(self.clone());
+        }
+        let scaled = self.obstacles.scaled_load(factor)?;
+        let rows = (self.obstacles.list.iter().zip(&self.parts).enumerate())
+            .map(|(i, (o, part))| {
+                let path = self.obstacles.path(OBSTACLE_PATH, i);
+                o.k.rows_at_factor(factor, &part.rows, mesh, dofs, &path).map(|r| r.into_owned())
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self::concatenate(scaled, rows, OBSTACLE_PATH))
+    }
+
     /// The obstacles.
     pub fn obstacles(&self) -> &Obstacles {
         &self.obstacles

@@ -3,7 +3,9 @@
 //! stopped — or a typed [`SolveError`]. NaN or Inf never leaves a solver unreported.
 
 use crate::error::ParameterError;
-use crate::problem::lagrangian::{Iterate, KktResiduals, Lagrangian, StressField};
+use crate::problem::fields::StressField;
+use crate::problem::kkt::KktResiduals;
+use crate::problem::lagrangian::{Iterate, Lagrangian};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Debug;
@@ -70,6 +72,10 @@ pub struct Solution {
     pub lambda: Vec<f64>,
     /// How it was obtained.
     pub report: SolveReport,
+    /// The extras the problem leaves undetermined (indices into `extras`, ascending): those of
+    /// an obstacle that carries no load (theory §11.3). Their entries in `extras` hold an
+    /// admissible position (where the obstacle just touches); reports show them as null.
+    pub undetermined: Vec<usize>,
 }
 
 impl Solution {
@@ -134,7 +140,7 @@ pub trait Solver: Debug + Send + Sync + dyn_clone::DynClone {
     /// The relative KKT tolerance it stops at.
     fn tolerance(&self) -> f64;
     /// Solves the discrete problem.
-    fn solve(&self, problem: &dyn Lagrangian, monitor: &mut dyn Monitor) -> Result<Solution, SolveError>;
+    fn solve(&self, problem: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError>;
 
     /// Solves the discrete problem from `start`, the previous load step's solution (theory §11.2:
     /// a warm start). A solver that can use a start reports the counter `warm_start` = 1; the
@@ -142,7 +148,7 @@ pub trait Solver: Debug + Send + Sync + dyn_clone::DynClone {
     /// for one).
     fn solve_warm(
         &self,
-        problem: &dyn Lagrangian,
+        problem: &Lagrangian<'_>,
         start: &Start,
         monitor: &mut dyn Monitor,
     ) -> Result<Solution, SolveError> {
@@ -169,8 +175,8 @@ impl Start {
     }
 
     /// Checks the sizes against `problem`; an error names the solver `solver`.
-    pub fn check(&self, problem: &dyn Lagrangian, solver: &str) -> Result<(), SolveError> {
-        let want = (problem.n_dofs(), problem.n_extras(), problem.constraints().n_rows());
+    pub fn check(&self, problem: &Lagrangian<'_>, solver: &str) -> Result<(), SolveError> {
+        let want = (problem.n_dofs(), problem.n_extras(), problem.n_rows());
         let got = (self.u.len(), self.extras.len(), self.lambda.len());
         if want != got {
             return Err(SolveError::Unsupported {

@@ -7,7 +7,9 @@
 //!
 //! Everything a solver needs from P follows from the projection onto D in that metric: the
 //! local law σ̂ = P_D(Cε, 0), its derivative (the consistent tangent) and the reduced energy
-//! ψ(ε) = sup_{τ̂∈D} (ε:τ − ½[τ̂, τ̂]) with ∂ψ/∂ε = σ. Implementations must pass the
+//! ψ(ε) = sup_{τ̂∈D} (ε:τ − ½[τ̂, τ̂]) with ∂ψ/∂ε = σ. A plugin provides the projection and the
+//! law of a load step ([`AdmissibleStresses::step_law`], theory §11.1); the local law of the
+//! stationary problem is the step law from the zero state. Implementations must pass the
 //! conformance kit of `saddle-yield`.
 
 use crate::error::ParameterError;
@@ -78,27 +80,12 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
     /// nearest in `[·,·]`. Returns true when the point was outside D.
     fn project(&self, law: &Elasticity, sigma: &mut Sym, q: &mut [f64]) -> bool;
 
-    /// The local law (theory §2): σ̂ = P_D(Cε, 0), and its consistent tangent dσ/dε when asked.
-    /// Returns true when the point is plastic (the trial was outside D).
-    fn local_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool;
-
-    /// The local law of a load step (theory §11.1): σ̂ = P_D(C(ε − ε_p), q_n), the projection of
-    /// the trial built from the previous step's plastic strain ε_p and hardening variables q_n,
-    /// and its consistent tangent dσ/dε when asked. Returns true when the trial was outside D.
-    /// With ε_p = 0 and q_n = 0 it is [`AdmissibleStresses::local_law`].
-    ///
-    /// The default is exact for every P: [`AdmissibleStresses::local_law`] at ε − ε_p when
-    /// q_n = 0 (the trial C(ε − ε_p) is then that of the strain ε − ε_p), otherwise
-    /// [`AdmissibleStresses::project`] with the tangent by central differences of the
-    /// projection ([`step_law_by_differences`]: twelve projections per point, about 1e-8
-    /// relative). Plugins with hardening variables override it with the closed form.
+    /// The law of a load step (theory §11.1) — the one law a plugin must provide:
+    /// σ̂ = P_D(C(ε − ε_p), q_n), the projection of the trial built from the previous step's
+    /// plastic strain ε_p and hardening variables q_n, and its consistent tangent dσ/dε when
+    /// asked. Returns true when the trial was outside D. A plugin without a closed form may
+    /// call [`step_law_by_differences`]; the return-mapping helpers of
+    /// [`crate::problem::return_mapping`] hold the steps plugins share.
     #[allow(clippy::too_many_arguments)]
     fn step_law(
         &self,
@@ -109,11 +96,20 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
         sigma: &mut Sym,
         q: &mut [f64],
         tangent: Option<&mut SymOp>,
+    ) -> bool;
+
+    /// The local law (theory §2): σ̂ = P_D(Cε, 0), and its consistent tangent dσ/dε when asked
+    /// — the step law from the zero state. Returns true when the point is plastic.
+    fn local_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        sigma: &mut Sym,
+        q: &mut [f64],
+        tangent: Option<&mut SymOp>,
     ) -> bool {
-        if q_n.iter().all(|x| *x == 0.0) {
-            return self.local_law(law, &(eps - plastic_strain), sigma, q, tangent);
-        }
-        step_law_by_differences(self, law, eps, plastic_strain, q_n, sigma, q, tangent)
+        let zero = [0.0; MAX_HARDENING_DIM];
+        self.step_law(law, eps, &Sym::zeros(), &zero[..self.hardening_dim()], sigma, q, tangent)
     }
 
     /// The reduced energy density of a load step (theory §11.1),
@@ -163,13 +159,13 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
 
 dyn_clone::clone_trait_object!(AdmissibleStresses);
 
-/// The step law by projection, with the tangent by central differences (theory §11.1): the
-/// default of [`AdmissibleStresses::step_law`] for a plugin without a closed form. The trial
+/// The step law by projection, with the tangent by central differences (theory §11.1): for a
+/// plugin without a closed form of [`AdmissibleStresses::step_law`]. The trial
 /// T = (C(ε − ε_p), q_n) is projected; the tangent's column j is
 /// `(P_σ(T + δ C e_j) − P_σ(T − δ C e_j)) / 2δ` with δ = 1e-6 · max(|ε − ε_p|, k/2G), k the
 /// size of the projected stress. It is exact where the projection is smooth up to O(δ²) and
 /// round-off ε_mach/δ, about 1e-8 relative: Newton then converges fast but not quadratically
-/// below that. Plugins should override the step law with their closed form.
+/// below that. Plugins should give the step law's closed form where they know it.
 #[allow(clippy::too_many_arguments)]
 pub fn step_law_by_differences(
     p: &(impl AdmissibleStresses + ?Sized),

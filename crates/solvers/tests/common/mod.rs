@@ -4,10 +4,11 @@
 #![allow(dead_code)]
 
 use saddle_contact::{Flat, Paraboloid, RigidPunch};
+use saddle_core::P1P0Element;
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleDisplacements, AdmissibleStresses, BoxMesh, Component, ConeDescription, Dirichlet, Elasticity,
-    P1P0Lagrangian, Region, Sym, SymOp,
+    AdmissibleDisplacements, AdmissibleStresses, BoxMesh, Component, ConeDescription, Dirichlet, DiscreteProblem,
+    Elasticity, Region, Sym, SymOp,
 };
 use saddle_yield::VonMises;
 use serde::{Deserialize, Serialize};
@@ -25,18 +26,18 @@ pub struct Units {
 pub const SCALED: Units = Units { stress: 1.0, length: 1.0 };
 
 /// The default scene of theory §6 (force F = 0.3) with `cells`; `k0_h = None` is elastic.
-pub fn johnson(cells: [usize; 3], k0_h: Option<(f64, f64)>, units: Units) -> P1P0Lagrangian {
+pub fn johnson(cells: [usize; 3], k0_h: Option<(f64, f64)>, units: Units) -> DiscreteProblem {
     johnson_with(cells, k0_h, units, punch)
 }
 
 /// The default scene of theory §6 in scaled units with the yield surface `p`.
-pub fn johnson_yield(cells: [usize; 3], p: Box<dyn AdmissibleStresses>) -> P1P0Lagrangian {
+pub fn johnson_yield(cells: [usize; 3], p: Box<dyn AdmissibleStresses>) -> DiscreteProblem {
     johnson_scene(cells, Some(p), SCALED, punch)
 }
 
 /// The paraboloid punch of theory §6 on `zone` with force `force` and radius `radius`.
 fn punch(zone: Region, force: f64, radius: f64) -> Box<dyn AdmissibleDisplacements> {
-    Box::new(RigidPunch::new(force, zone, Box::new(Paraboloid::new(radius))))
+    Box::new(RigidPunch::new(force, zone, Box::new(Paraboloid::new(radius))).unwrap())
 }
 
 /// The default scene of theory §6 with the obstacle made by `obstacle(zone Γ₀, force F, punch
@@ -46,9 +47,9 @@ pub fn johnson_with(
     k0_h: Option<(f64, f64)>,
     units: Units,
     obstacle: impl FnOnce(Region, f64, f64) -> Box<dyn AdmissibleDisplacements>,
-) -> P1P0Lagrangian {
+) -> DiscreteProblem {
     let p: Option<Box<dyn AdmissibleStresses>> =
-        k0_h.map(|(k0, h)| Box::new(VonMises::new(k0 * units.stress, h * units.stress)) as _);
+        k0_h.map(|(k0, h)| Box::new(VonMises::new(k0 * units.stress, h * units.stress).unwrap()) as _);
     johnson_scene(cells, p, units, obstacle)
 }
 
@@ -58,7 +59,7 @@ fn johnson_scene(
     p: Option<Box<dyn AdmissibleStresses>>,
     units: Units,
     obstacle: impl FnOnce(Region, f64, f64) -> Box<dyn AdmissibleDisplacements>,
-) -> P1P0Lagrangian {
+) -> DiscreteProblem {
     let s = units.length;
     let mesh = BoxMesh::new([-s, -s, 0.0], [s, s, s], cells).graded([0.0; 3], 3.0).mesh().unwrap();
     let gamma1 = Region::All(vec![
@@ -66,31 +67,37 @@ fn johnson_scene(
         Region::Box { min: [-0.75 * s, -0.75 * s, -s], max: [0.75 * s, 0.75 * s, s] },
     ]);
     let zone = Region::All(vec![Region::Group("zmin".into()), Region::Disc { center: [0.0, 0.0], radius: 0.5 * s }]);
-    P1P0Lagrangian::new(
-        mesh,
-        &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))],
+    DiscreteProblem::new(
+        Box::new(P1P0Element::new(mesh, &[Dirichlet::clamped(Region::Not(Box::new(gamma1)))]).unwrap()),
         Elasticity::new(100.0 * units.stress, 0.3).unwrap(),
         p,
         Some(obstacle(zone, 0.3 * units.stress * s * s, 5.0 * s)),
+        &[],
     )
     .unwrap()
 }
 
 /// Homogeneous compression of theory §7.1: the unit cube on rollers (u₁ = 0 on x₁ = 0, u₂ = 0 on
 /// x₂ = 0, u₃ = 0 on x₃ = 1), a flat punch on the whole bottom face with force `f`; k₀ = 1, h = 5.
-pub fn homogeneous(f: f64) -> P1P0Lagrangian {
+pub fn homogeneous(f: f64) -> DiscreteProblem {
     let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]).mesh().unwrap();
     let g = |name: &str| Region::Group(name.into());
-    P1P0Lagrangian::new(
-        mesh,
-        &[
-            Dirichlet::roller(g("xmin"), Component::X),
-            Dirichlet::roller(g("ymin"), Component::Y),
-            Dirichlet::roller(g("zmax"), Component::Z),
-        ],
+    DiscreteProblem::new(
+        Box::new(
+            P1P0Element::new(
+                mesh,
+                &[
+                    Dirichlet::roller(g("xmin"), Component::X),
+                    Dirichlet::roller(g("ymin"), Component::Y),
+                    Dirichlet::roller(g("zmax"), Component::Z),
+                ],
+            )
+            .unwrap(),
+        ),
         Elasticity::new(100.0, 0.3).unwrap(),
-        Some(Box::new(VonMises::new(1.0, 5.0))),
-        saddle_core::Obstacles::one(Box::new(RigidPunch::new(f, g("zmin"), Box::new(Flat::default())))),
+        Some(Box::new(VonMises::new(1.0, 5.0).unwrap())),
+        saddle_core::Obstacles::one(Box::new(RigidPunch::new(f, g("zmin"), Box::new(Flat::default())).unwrap())),
+        &[],
     )
     .unwrap()
 }
@@ -138,9 +145,18 @@ impl AdmissibleStresses for Counting {
         self.count();
         self.inner.project(law, sigma, q)
     }
-    fn local_law(&self, law: &Elasticity, eps: &Sym, sigma: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>) -> bool {
+    fn step_law(
+        &self,
+        law: &Elasticity,
+        eps: &Sym,
+        ep: &Sym,
+        q_n: &[f64],
+        sigma: &mut Sym,
+        q: &mut [f64],
+        t: Option<&mut SymOp>,
+    ) -> bool {
         self.count();
-        self.inner.local_law(law, eps, sigma, q, t)
+        self.inner.step_law(law, eps, ep, q_n, sigma, q, t)
     }
     /// The wrapped P's energy (for von Mises a closed form, no return mapping).
     fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {

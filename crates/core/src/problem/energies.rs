@@ -1,0 +1,76 @@
+//! The energies of L (theory §3 forms 1 and 3, §11.1) for any iterate, as free functions of L:
+//! the primal energy J, the stress energy ½[σ̂, σ̂] and the dual energy. J − dual is the
+//! duality gap of a dual-feasible pair.
+
+use crate::problem::fields::StressField;
+use crate::problem::lagrangian::{Lagrangian, Workspace};
+use crate::problem::stresses::{MAX_HARDENING_DIM, energy_inner};
+use crate::problem::tensor::Sym;
+use rayon::prelude::*;
+
+/// Σ_T w_T ψ(ε_T): the stored energy of a strain field (theory §2); from a step's state
+/// Σ_T w_T ψ_n(ε_T) (theory §11.1).
+pub fn energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
+    let law = *l.data.elasticity;
+    let w = l.weights();
+    match (l.data.plasticity(), l.data.state) {
+        (None, None) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| 0.5 * w * e.dot(&law.stress(e))).sum(),
+        (Some(p), None) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| w * p.energy(&law, e)).sum(),
+        (None, Some(st)) => (eps, &st.plastic_strain[..], w)
+            .into_par_iter()
+            .map(|(e, ep, w)| {
+                let x = e - ep;
+                0.5 * w * x.dot(&law.stress(&x))
+            })
+            .sum(),
+        (Some(p), Some(st)) => (0..eps.len())
+            .into_par_iter()
+            .map(|i| w[i] * p.step_energy(&law, &eps[i], &st.plastic_strain[i], st.q(i)))
+            .sum(),
+    }
+}
+
+/// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V (theory §3 form 1).
+pub fn energy(l: &Lagrangian<'_>, u: &[f64], extras: &[f64], ws: &mut Workspace) -> f64 {
+    l.strain(u, &mut ws.eps);
+    energy_of_strain(l, &ws.eps)
+        - l.data.nodal_load.iter().zip(u).map(|(f, x)| f * x).sum::<f64>()
+        - l.data.load.iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
+}
+
+/// q − q_n at one point (q itself for the stationary problem), on the stack.
+#[inline]
+pub(crate) fn hardening_increment(q: &[f64], q_n: Option<&[f64]>) -> [f64; MAX_HARDENING_DIM] {
+    std::array::from_fn(|k| if k < q.len() { q[k] - q_n.map_or(0.0, |qn| qn[k]) } else { 0.0 })
+}
+
+/// ½[σ̂, σ̂] = ½ Σ_T |T| (Aσ_T:σ_T + q_T·H⁻¹q_T); from a step's state the hardening part is
+/// centred at q_n: ½ Σ_T |T| (Aσ_T:σ_T + (q_T − q_n)·H⁻¹(q_T − q_n)) (theory §11.1).
+pub fn stress_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
+    let law = *l.data.elasticity;
+    let p = l.data.plasticity();
+    let w = l.weights();
+    let state = l.data.state;
+    (0..stress.len())
+        .into_par_iter()
+        .map(|i| {
+            let (s, q) = (&stress.sigma[i], stress.q(i));
+            let dq = hardening_increment(q, state.map(|st| st.q(i)));
+            let dq = &dq[..q.len()];
+            0.5 * w[i] * energy_inner(p, &law, s, dq, s, dq)
+        })
+        .sum()
+}
+
+/// The dual energy −(½[σ̂, σ̂] + λ·c) (theory §3 form 3); from a step's state
+/// −(½[σ̂, σ̂]_n + (ε_p, σ) + λ·c) with the centred ½[σ̂, σ̂]_n of [`stress_energy`]
+/// (theory §11.1). For a dual-feasible pair it is a lower bound of J, with equality at the
+/// solution: J − dual is the duality gap.
+pub fn dual_energy(l: &Lagrangian<'_>, stress: &StressField, lambda: &[f64]) -> f64 {
+    let c = &l.data.rows.offset;
+    let prestrain: f64 = l.data.state.map_or(0.0, |st| {
+        let w = l.weights();
+        (0..stress.len()).into_par_iter().map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum()
+    });
+    -(stress_energy(l, stress) + prestrain + lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>())
+}

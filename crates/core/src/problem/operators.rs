@@ -1,0 +1,111 @@
+//! The element's operators (theory §3): what a finite element — or a distributed implementation
+//! of one — provides to L. Stress points with weights w_T, the strain operator ε = B u, its
+//! transpose (the internal forces Bᵀσ), and the assembly of `Σ_T w_T B_Tᵀ C_T B_T` on a fixed
+//! pattern. Nothing here knows the material, the obstacles or the loads: those are the problem's
+//! data ([`crate::problem::lagrangian::Data`]).
+
+use crate::problem::pattern::SymmetricPattern;
+use crate::problem::tensor::{Sym, SymOp};
+use std::fmt::Debug;
+
+/// Number of rigid-body motions in 3D: three translations, three rotations.
+pub const RIGID_BODY_MODES: usize = 6;
+
+/// The rigid-body motions restricted to the free dofs, with the node each dof belongs to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RigidBodyModes {
+    /// The node of every free dof: the dofs of one node form a block.
+    pub node: Vec<u32>,
+    /// Row-major `n × 6`: translations e_x, e_y, e_z and rotations ω × (x − x̄) about the axes
+    /// through the centroid x̄ of the nodes.
+    pub modes: Vec<f64>,
+}
+
+impl RigidBodyModes {
+    /// The modes of the free dofs with nodes `node` and components `comp`, the nodes at `coords`.
+    pub fn new(node: Vec<u32>, comp: &[u8], coords: &[[f64; 3]]) -> Self {
+        let n = node.len();
+        let mut centroid = [0.0; 3];
+        for &nd in &node {
+            for (c, x) in centroid.iter_mut().zip(coords[nd as usize]) {
+                *c += x / n.max(1) as f64;
+            }
+        }
+        let mut modes = vec![0.0; n * RIGID_BODY_MODES];
+        for (d, row) in modes.chunks_exact_mut(RIGID_BODY_MODES).enumerate() {
+            let x = coords[node[d] as usize];
+            let [x, y, z] = [x[0] - centroid[0], x[1] - centroid[1], x[2] - centroid[2]];
+            let c = comp[d] as usize;
+            row[c] = 1.0;
+            // ω × x for ω = e_x, e_y, e_z: (0, −z, y), (z, 0, −x), (−y, x, 0)
+            row[3] = [0.0, -z, y][c];
+            row[4] = [z, 0.0, -x][c];
+            row[5] = [-y, x, 0.0][c];
+        }
+        Self { node, modes }
+    }
+
+    /// Number of free dofs.
+    pub fn n(&self) -> usize {
+        self.node.len()
+    }
+}
+
+/// The material of an assembly: one tensor for all points, or one per point.
+#[derive(Clone, Copy, Debug)]
+pub enum Material<'a> {
+    /// The same 6×6 Mandel matrix at every point.
+    Uniform(&'a SymOp),
+    /// One matrix per stress point (consistent tangents).
+    PerPoint(&'a [SymOp]),
+}
+
+impl Material<'_> {
+    /// The matrix at point `i`.
+    #[inline]
+    pub fn at(&self, i: usize) -> &SymOp {
+        match self {
+            Material::Uniform(c) => c,
+            Material::PerPoint(cs) => &cs[i],
+        }
+    }
+}
+
+/// The element's operators (theory §3): stress points and weights, ε = B u, Bᵀσ and the
+/// assembly of Bᵀ C B. A new element implements this trait (and
+/// [`crate::fem::Discretisation`] for output); so does a distributed implementation, whose
+/// dofs and points are its rank's.
+pub trait ElementOperators: Debug + Send + Sync {
+    /// Number of free displacement dofs (the dimension of W_h).
+    fn n_dofs(&self) -> usize;
+    /// Number of stress points.
+    fn n_points(&self) -> usize;
+    /// Quadrature weights w_T of the stress points.
+    fn weights(&self) -> &[f64];
+    /// ε_T = (B u)_T at every point (theory §3).
+    fn strain(&self, u: &[f64], eps: &mut [Sym]);
+    /// f = Σ_T w_T B_Tᵀ σ_T: the internal forces of a stress field (Bᵀ of theory §3).
+    fn divergence(&self, sigma: &[Sym], f: &mut [f64]);
+    /// The strain operator B as explicit entries `(point, component, dof, value)`:
+    /// `ε_T[c] = Σ value · u[dof]` (Mandel components), for solvers that need B as a matrix
+    /// (conic formulations).
+    fn strain_entries(&self) -> Vec<(usize, usize, usize, f64)>;
+    /// Sparsity pattern of assembled matrices (lower triangle).
+    fn pattern(&self) -> &SymmetricPattern;
+    /// values = Σ_T w_T B_Tᵀ C_T B_T on [`ElementOperators::pattern`].
+    fn assemble(&self, material: Material<'_>, values: &mut [f64]);
+
+    /// The rigid-body motions on the free dofs (the near-nullspace of the elastic stiffness,
+    /// what a multigrid preconditioner must reproduce); `None` when the element has no nodal
+    /// dofs.
+    fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+        None
+    }
+
+    /// The assembled matrix Σ_T w_T B_Tᵀ C_T B_T (values on the pattern).
+    fn stiffness(&self, material: Material<'_>) -> Vec<f64> {
+        let mut v = vec![0.0; self.pattern().nnz()];
+        self.assemble(material, &mut v);
+        v
+    }
+}
