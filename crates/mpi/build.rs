@@ -302,6 +302,10 @@ mod petsc {
             .blocklist_type("MPI_Comm")
             .blocklist_type("ompi_communicator_t")
             .raw_line("pub use mpi::ffi::MPI_Comm;")
+            // An int, or from PETSc 3.19 with --with-strict-petscerrorcode an enum spanning int's
+            // range: an int at the ABI either way.
+            .blocklist_type("PetscErrorCode")
+            .raw_line("pub type PetscErrorCode = ::std::os::raw::c_int;")
             .default_enum_style(bindgen::EnumVariation::NewType { is_bitfield: false, is_global: false })
             .prepend_enum_name(false)
             .derive_default(false)

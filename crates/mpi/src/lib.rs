@@ -5,7 +5,7 @@
 //!
 //! Everything is behind features, off by default: without them the crate is empty and needs no
 //! MPI, no PETSc, no libclang.
-//! * `partition`: [`partition_elements`] (METIS, vendored; no MPI).
+//! * `partition`: `partition_elements` (METIS, vendored; no MPI).
 //! * `petsc`: the rest (and `partition`); the facade's feature `mpi` turns it on.
 //!
 //! # Installing (Debian 12 / Ubuntu)
@@ -36,16 +36,16 @@
 //! PETSc must be ≥ 3.18, configured with real double scalars (`--with-scalar-type=real
 //! --with-precision=double`); the build stops with a message naming the setting otherwise. The
 //! width of `PetscInt` is read from `petscconf.h` (`PETSC_USE_64BIT_INDICES`: 64-bit, else
-//! 32-bit); the bindings follow it and [`Index`] is that type, so both builds work. A compile-time
+//! 32-bit); the bindings follow it and `Index` is that type, so both builds work. A compile-time
 //! check refuses headers whose `PetscInt` disagrees with the `petscconf.h` that was read (two
 //! PETSc installations mixed on the include path). Global indices above 2³¹ − 1 need a 64-bit
 //! PETSc (`--with-64-bit-indices`); counts that do not fit are reported as
-//! [`Error::IndexOverflow`].
+//! `Error::IndexOverflow`.
 //!
 //! # Errors
 //! PETSc's default error handler (print a traceback, sometimes abort) is replaced by one that
-//! records the message; every PETSc call's code is checked and becomes [`PetscError`] with
-//! PETSc's message. An error on one rank reaches every rank through [`agree`], so that all end
+//! records the message; every PETSc call's code is checked and becomes `PetscError` with
+//! PETSc's message. An error on one rank reaches every rank through `agree`, so that all end
 //! together instead of waiting in the next collective.
 //!
 //! # Threads
@@ -56,6 +56,7 @@
 mod collective;
 #[cfg(feature = "petsc")]
 mod error;
+/// The raw bindings (an allowlist of PETSc's API): for extending the safe wrappers.
 #[cfg(feature = "petsc")]
 pub mod ffi;
 #[cfg(feature = "petsc")]

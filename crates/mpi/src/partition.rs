@@ -12,8 +12,8 @@
 //!   balance is the elements' assembly and local-law work; and the cut faces are the interface
 //!   between ranks, whose nodes are the ghosts to exchange. The nodal graph would partition
 //!   nodes and leave the elements on the interface to be assigned by a second rule; adjacency by
-//!   a shared vertex (METIS's `ncommon = 1`) would add many edges per element (about 100 around a
-//!   vertex of a tetrahedral mesh instead of 4) for no better interface.
+//!   a shared vertex (METIS's `ncommon = 1`) would give each element tens of neighbours instead
+//!   of at most 4, a larger graph for no better interface.
 //!
 //! Only the four vertices of each element are read, so 10-node tetrahedra partition alike.
 

@@ -88,7 +88,8 @@ impl Petsc {
     /// Adds PETSc options from a string (a scene's `[solver.petsc] options = "-pc_gamg_threshold
     /// 0.02 …"`), parsed as PETSc parses the command line. An option the command line (or
     /// `PETSC_OPTIONS`) already set keeps its value there: the command line has the last word, as
-    /// it has over PETSc's options files.
+    /// it has over PETSc's options files. Call it on every rank with the same string, before
+    /// creating the objects that read the options.
     pub fn insert_options(&self, options: &str) -> Result<()> {
         let text =
             CString::new(options).map_err(|_| Error::Nul { what: "the PETSc options", value: options.into() })?;
