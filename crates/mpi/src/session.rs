@@ -14,7 +14,9 @@ use std::ptr;
 /// The session guard: while it lives, MPI and PETSc are initialised. Create it once per process,
 /// first thing in `main`; PETSc objects ([`crate::GhostVector`], [`crate::Matrix`],
 /// [`crate::Ksp`]) are created from it. Dropping it finalises PETSc (printing `-log_view`), then
-/// MPI; PETSc objects still alive then are left to the process's exit.
+/// MPI; PETSc objects still alive then are left to the process's exit. Every rank must drop it
+/// (finalising is collective): share an error with [`crate::agree`] before returning it from one
+/// rank; a panic unwinding through it aborts every rank.
 pub struct Petsc {
     world: SimpleCommunicator,
     threading: Threading,
@@ -125,7 +127,12 @@ impl Petsc {
 }
 
 impl Drop for Petsc {
+    /// Finalises PETSc then MPI. Unwinding from a panic, it aborts every rank instead: finalising
+    /// is collective, and the other ranks would wait for this one in their next collective.
     fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.world.abort(101);
+        }
         // SAFETY: PETSc was initialised by `initialize_with_args`; MPI is finalised after (field drop).
         discard(unsafe { ffi::PetscFinalize() });
     }
