@@ -1,0 +1,71 @@
+//! Collectives on rsmpi communicators: reductions of numbers and arrays, broadcasts of byte and
+//! number arrays, and [`agree`], the agreement on failure that makes an error on any rank end
+//! every rank (never a hang in the next collective).
+
+use crate::error::{Error, Result};
+use mpi::collective::SystemOperation;
+use mpi::datatype::Equivalence;
+use mpi::traits::{Communicator, CommunicatorCollectives, Root};
+use std::fmt::Display;
+
+/// Σ over ranks of `value` (f64, usize, …).
+pub fn sum<T: Equivalence + Copy, C: Communicator>(comm: &C, value: T) -> T {
+    reduce(comm, value, SystemOperation::sum())
+}
+
+/// The maximum over ranks of `value`.
+pub fn max<T: Equivalence + Copy, C: Communicator>(comm: &C, value: T) -> T {
+    reduce(comm, value, SystemOperation::max())
+}
+
+/// The minimum over ranks of `value`.
+pub fn min<T: Equivalence + Copy, C: Communicator>(comm: &C, value: T) -> T {
+    reduce(comm, value, SystemOperation::min())
+}
+
+/// Entrywise Σ over ranks of `values`, in place (the same length on every rank).
+pub fn sum_in_place<T: Equivalence + Copy, C: Communicator>(comm: &C, values: &mut [T]) {
+    let send = values.to_vec();
+    comm.all_reduce_into(&send[..], values, SystemOperation::sum());
+}
+
+fn reduce<T: Equivalence + Copy, C: Communicator>(comm: &C, value: T, op: SystemOperation) -> T {
+    let mut out = value;
+    comm.all_reduce_into(&value, &mut out, op);
+    out
+}
+
+/// Broadcasts `data` from rank `root`: on return every rank holds root's array (its length too).
+pub fn broadcast<T: Equivalence + Copy + Default, C: Communicator>(comm: &C, root: usize, data: &mut Vec<T>) {
+    let process = comm.process_at_rank(root as i32);
+    let mut len = data.len() as u64;
+    process.broadcast_into(&mut len);
+    data.resize(len as usize, T::default());
+    process.broadcast_into(&mut data[..]);
+}
+
+/// Broadcasts bytes (a serialised mesh, a message) from rank `root`.
+pub fn broadcast_bytes<C: Communicator>(comm: &C, root: usize, data: &mut Vec<u8>) {
+    broadcast(comm, root, data)
+}
+
+/// Agreement on failure, to be called by every rank with its own result: all ranks return `Ok`
+/// when all succeeded, else all return [`Error::Rank`] with the lowest failing rank's message
+/// and the number of failing ranks. Two reductions and a broadcast.
+pub fn agree<T, E: Display, C: Communicator>(comm: &C, result: std::result::Result<T, E>) -> Result<T> {
+    let size = comm.size() as usize;
+    let rank = comm.rank() as usize;
+    let failing = min(comm, if result.is_err() { rank } else { size });
+    let result = match result {
+        // every rank succeeded (a failure here would make `failing` ≤ this rank)
+        Ok(value) if failing == size => return Ok(value),
+        other => other,
+    };
+    let failed = sum(comm, usize::from(result.is_err()));
+    let mut message = match &result {
+        Err(e) if rank == failing => e.to_string().into_bytes(),
+        _ => Vec::new(),
+    };
+    broadcast_bytes(comm, failing, &mut message);
+    Err(Error::Rank { rank: failing, failed, size, message: String::from_utf8_lossy(&message).into_owned() })
+}
