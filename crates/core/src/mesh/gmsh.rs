@@ -1080,9 +1080,11 @@ impl Reader<'_> {
 mod tests {
     use super::*;
 
-    /// Two tetrahedra sharing the face (2, 3, 4): nodes 1..5, the triangle (1, 2, 3) on z = 0 in
-    /// the physical surface "bottom", the volume in "body".
-    const TINY: &str = "$MeshFormat
+    /// The sections of [`TINY`] and [`TINY_P2`] before `$Nodes`: the physical surface "bottom"
+    /// (tag 1) on surface 1, the physical volume "body" (tag 2) on volume 1.
+    macro_rules! tiny_head {
+        () => {
+            "$MeshFormat
 4.1 0 8
 $EndMeshFormat
 $PhysicalNames
@@ -1095,7 +1097,15 @@ $Entities
 1 0 0 0 1 1 0 1 1 0
 1 0 0 0 1 1 1 1 2 1 1
 $EndEntities
-$Nodes
+"
+        };
+    }
+
+    /// Two tetrahedra sharing the face (2, 3, 4): nodes 1..5, the triangle (1, 2, 3) on z = 0 in
+    /// the physical surface "bottom", the volume in "body".
+    const TINY: &str = concat!(
+        tiny_head!(),
+        "$Nodes
 1 5 1 5
 3 1 0 5
 1
@@ -1117,7 +1127,8 @@ $Elements
 2 1 2 3 4
 3 2 3 4 5
 $EndElements
-";
+"
+    );
 
     fn read(text: &str) -> Result<GmshImport, String> {
         parse_msh(text.as_bytes(), 1.0, Path::new("tiny.msh")).map_err(|e| {
@@ -1271,20 +1282,9 @@ $EndElements
     /// 6-node one. Vertices 1, 2, 3, 4 and 14 (the apex of the second tetrahedron); the edge
     /// nodes 6 (1–2), 7 (2–3), 8 (1–3), 9 (1–4), 10 (2–4), 11 (3–4), 12 (2–14), 13 (3–14) and
     /// 5 (4–14), at the midpoints; the elements list them in Gmsh's local order.
-    const TINY_P2: &str = "$MeshFormat
-4.1 0 8
-$EndMeshFormat
-$PhysicalNames
-2
-2 1 \"bottom\"
-3 2 \"body\"
-$EndPhysicalNames
-$Entities
-0 0 1 1
-1 0 0 0 1 1 0 1 1 0
-1 0 0 0 1 1 1 1 2 1 1
-$EndEntities
-$Nodes
+    const TINY_P2: &str = concat!(
+        tiny_head!(),
+        "$Nodes
 1 14 1 14
 3 1 0 14
 1
@@ -1324,7 +1324,8 @@ $Elements
 2 1 2 3 4 6 7 8 9 11 10
 3 2 3 4 14 7 11 10 12 5 13
 $EndElements
-";
+"
+    );
 
     fn tags_of(imp: &GmshImport, nodes: &[usize]) -> Vec<u64> {
         nodes.iter().map(|&n| imp.node_tags[n]).collect()
