@@ -53,7 +53,7 @@
 
 use crate::error::{MeshError, ParameterError, check, join};
 use crate::mesh::{MeshSource, TRI_EDGES, TetMesh};
-use mshio::{ElementType, MshHeader};
+use mshio::{ElementBlock, ElementType, Elements, Entities, MshData, MshHeader, NodeBlock, Nodes};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -176,310 +176,563 @@ pub fn parse_msh(bytes: &[u8], scale: f64, origin: &Path) -> Result<GmshImport, 
 const SAVE_HINT: &str = "when a model has physical groups Gmsh saves only their elements: put the volume in a \
                          physical group (e.g. \"body\") or set Mesh.SaveAll = 1";
 
+/// The import in stages: the file's sections, its physical groups, its nodes, its elements by
+/// dimension and order, the dense numbering of the tetrahedra's nodes, the tetrahedra, the
+/// physical surfaces as facet groups, the mesh (checked by [`TetMesh::new`]), and at order 2
+/// its edge nodes.
 fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
     if !(scale.is_finite() && scale > 0.0) {
         return Err(format!("scale = {scale}: must be a finite number > 0"));
     }
-    let binary = check_format(bytes)?;
-    let names = physical_names(bytes)?;
-    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| parse_error(bytes, &e, binary))?;
-    let missing = |section: &str| {
-        let hint = if truncated(bytes) { TRUNCATED } else { "" };
-        format!("the file has no {section} section{hint}")
-    };
-    let nodes_section = msh.data.nodes.as_ref().ok_or_else(|| missing("$Nodes"))?;
-    let elements_section = msh.data.elements.as_ref().ok_or_else(|| missing("$Elements"))?;
-
-    // Physical tags of every entity, by (dim, entity tag).
-    let mut entity_groups: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-    if let Some(e) = &msh.data.entities {
-        for p in &e.points {
-            entity_groups.insert((0, p.tag), p.physical_tags.clone());
-        }
-        for c in &e.curves {
-            entity_groups.insert((1, c.tag), c.physical_tags.clone());
-        }
-        for s in &e.surfaces {
-            entity_groups.insert((2, s.tag), s.physical_tags.clone());
-        }
-        for v in &e.volumes {
-            entity_groups.insert((3, v.tag), v.physical_tags.clone());
-        }
-    }
-    let mut group_tags: BTreeSet<(i32, i32)> = BTreeSet::new();
-    for (&(dim, _), tags) in &entity_groups {
-        group_tags.extend(tags.iter().map(|&t| (dim, t)));
-    }
-    for ((dim, tag), name) in &names {
-        if !group_tags.contains(&(*dim, *tag)) {
-            return Err(format!(
-                "$PhysicalNames: the name {name:?} (dimension {dim}, physical tag {tag}) refers to nothing: no {} \
-                 of $Entities carries physical tag {tag}",
-                ["point", "curve", "surface", "volume"].get(*dim as usize).unwrap_or(&"entity")
-            ));
-        }
-    }
-    let group_name = |dim: i32, tag: i32| names.get(&(dim, tag)).cloned().unwrap_or_else(|| format!("physical_{tag}"));
-
-    // Nodes: tag → position in file order.
-    let raw_tags = if nodes_section.node_blocks.iter().any(|b| b.node_tags.is_none()) {
-        Some(raw_node_tags(bytes, &msh.header, binary)?)
+    let sections = Sections::read(bytes)?;
+    let groups = PhysicalGroups::read(sections.entities, sections.names)?;
+    let nodes = FileNodes::read(bytes, &sections.header, sections.binary, &sections.nodes, scale)?;
+    let elements = FileElements::sort(&sections.elements, &groups)?;
+    let second_order = elements.second_order();
+    let numbering = Numbering::of_tetrahedra(&nodes, &elements.tets, second_order)?;
+    let tets = Tetrahedra::numbered(&elements.tets, &nodes, &numbering, second_order);
+    let surfaces = SurfaceFacets::read(&groups, &elements.triangles, &nodes, &numbering)?;
+    let ignored_groups = groups.ignored(&elements.group_elements);
+    let node_tags: Vec<u64> = numbering.order.iter().map(|&i| nodes.tags[i]).collect();
+    let mesh = TetMesh::new(numbering.coords(&nodes), tets.vertices, surfaces.named)
+        .map_err(|e| mesh_error(e, &tets.element_tags, &node_tags, &surfaces.facet_tags))?;
+    let (mesh, warnings) = if second_order {
+        let index = |n: &u64| numbering.index(&nodes, n);
+        with_edge_nodes(mesh, tets.edges, &tets.element_tags, &node_tags, &surfaces.triangle_edges, &index)?
     } else {
-        None
+        (mesh, Vec::new())
     };
-    let mut coords: Vec<[f64; 3]> = Vec::new();
-    let mut file_tags: Vec<u64> = Vec::new();
-    for (b, block) in nodes_section.node_blocks.iter().enumerate() {
-        let tags: Vec<u64> = match &block.node_tags {
-            Some(map) => {
-                let mut tags = vec![0; block.nodes.len()];
-                for (&tag, &i) in map {
-                    tags[i] = tag;
-                }
-                if map.len() != block.nodes.len() {
-                    return Err(format!(
-                        "$Nodes: node block {} (entity of dimension {}, tag {}) repeats a node tag",
-                        b + 1,
-                        block.entity_dim,
-                        block.entity_tag
-                    ));
-                }
-                tags
-            }
-            None => raw_tags.as_ref().and_then(|r| r.get(b)).cloned().unwrap_or_default(),
+    Ok(GmshImport {
+        mesh,
+        node_tags,
+        element_tags: tets.element_tags,
+        surface_groups: surfaces.groups,
+        ignored_groups,
+        unused_nodes: nodes.tags.len() - numbering.order.len(),
+        warnings,
+    })
+}
+
+/// The sections of an MSH file the import reads: the format, `$PhysicalNames` (read here) and
+/// mshio's `$Entities`, `$Nodes` and `$Elements`.
+struct Sections {
+    /// The file is binary (else ASCII).
+    binary: bool,
+    /// The `$MeshFormat` header, as mshio read it.
+    header: MshHeader,
+    /// `$PhysicalNames`: (dim, physical tag) → name.
+    names: BTreeMap<(i32, i32), String>,
+    /// `$Entities`, if the file has it.
+    entities: Option<Entities<i32, f64>>,
+    /// `$Nodes`.
+    nodes: Nodes<u64, i32, f64>,
+    /// `$Elements`.
+    elements: Elements<u64, i32>,
+}
+
+impl Sections {
+    /// Checks the format, reads `$PhysicalNames` and parses the rest with mshio; `$Nodes` and
+    /// `$Elements` must be there.
+    fn read(bytes: &[u8]) -> Result<Self, String> {
+        let binary = check_format(bytes)?;
+        let names = physical_names(bytes)?;
+        let msh = mshio::parse_msh_bytes(bytes).map_err(|e| parse_error(bytes, &e, binary))?;
+        let missing = |section: &str| {
+            let hint = if truncated(bytes) { TRUNCATED } else { "" };
+            format!("the file has no {section} section{hint}")
         };
-        if tags.len() != block.nodes.len() {
-            return Err(format!("$Nodes: cannot read the node tags of node block {}", b + 1));
-        }
-        for (tag, n) in tags.into_iter().zip(&block.nodes) {
-            let x = [n.x, n.y, n.z];
-            if x.iter().any(|c| !c.is_finite()) {
-                return Err(format!("node {tag} has a non-finite coordinate ({}, {}, {})", x[0], x[1], x[2]));
-            }
-            coords.push(x.map(|c| c * scale));
-            file_tags.push(tag);
-        }
+        let MshData { entities, nodes, elements, .. } = msh.data;
+        let nodes = nodes.ok_or_else(|| missing("$Nodes"))?;
+        let elements = elements.ok_or_else(|| missing("$Elements"))?;
+        Ok(Self { binary, header: msh.header, names, entities, nodes, elements })
     }
-    let mut position: HashMap<u64, usize> = HashMap::with_capacity(file_tags.len());
-    for (i, &tag) in file_tags.iter().enumerate() {
-        if position.insert(tag, i).is_some() {
-            return Err(format!("$Nodes: node tag {tag} appears twice"));
+}
+
+/// The physical groups of the file: the physical tags of each entity, the groups they make and
+/// the groups' names.
+struct PhysicalGroups {
+    /// Physical tags of every entity, by (dim, entity tag).
+    of_entity: HashMap<(i32, i32), Vec<i32>>,
+    /// Every group, (dim, physical tag), that some entity carries.
+    tags: BTreeSet<(i32, i32)>,
+    /// `$PhysicalNames`: (dim, physical tag) → name.
+    names: BTreeMap<(i32, i32), String>,
+}
+
+impl PhysicalGroups {
+    /// The groups of `$Entities`; every name of `$PhysicalNames` must name one of them.
+    fn read(entities: Option<Entities<i32, f64>>, names: BTreeMap<(i32, i32), String>) -> Result<Self, String> {
+        let mut of_entity: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
+        if let Some(e) = entities {
+            of_entity.extend(e.points.into_iter().map(|p| ((0, p.tag), p.physical_tags)));
+            of_entity.extend(e.curves.into_iter().map(|c| ((1, c.tag), c.physical_tags)));
+            of_entity.extend(e.surfaces.into_iter().map(|s| ((2, s.tag), s.physical_tags)));
+            of_entity.extend(e.volumes.into_iter().map(|v| ((3, v.tag), v.physical_tags)));
         }
+        let mut tags: BTreeSet<(i32, i32)> = BTreeSet::new();
+        for (&(dim, _), physical) in &of_entity {
+            tags.extend(physical.iter().map(|&t| (dim, t)));
+        }
+        for ((dim, tag), name) in &names {
+            if !tags.contains(&(*dim, *tag)) {
+                return Err(format!(
+                    "$PhysicalNames: the name {name:?} (dimension {dim}, physical tag {tag}) refers to nothing: no {} \
+                     of $Entities carries physical tag {tag}",
+                    entity_kind(*dim)
+                ));
+            }
+        }
+        Ok(Self { of_entity, tags, names })
     }
 
-    // Elements: tetrahedra (their vertices and, for 10-node ones, the tags of their edge nodes
-    // in the order of TET_EDGES), and the triangles of physical surfaces (corners and, for
-    // 6-node ones, edge nodes in the order of TRI_EDGES).
-    let mut tets: Vec<(u64, [u64; 4], [u64; 6])> = Vec::new();
-    // the type of the tetrahedra and where its first block is (a file mixing orders is refused)
-    let mut tet_type: Option<(ElementType, String)> = None;
-    let mut triangles: BTreeMap<i32, Vec<FileTriangle>> = BTreeMap::new();
-    // the first block of 6-node triangles in a physical surface: (group, where, count)
-    let mut tri6: Option<(i32, String, usize)> = None;
-    let mut group_elements: BTreeMap<(i32, i32), usize> = BTreeMap::new();
-    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
-    for block in &elements_section.element_blocks {
+    /// The physical tags of entity `entity` of dimension `dim` (none for an unknown entity).
+    fn of(&self, dim: i32, entity: i32) -> &[i32] {
+        self.of_entity.get(&(dim, entity)).map(Vec::as_slice).unwrap_or(&[])
+    }
+
+    /// A group's name: from `$PhysicalNames`, or `physical_<tag>`.
+    fn name(&self, dim: i32, tag: i32) -> String {
+        self.names.get(&(dim, tag)).cloned().unwrap_or_else(|| format!("physical_{tag}"))
+    }
+
+    /// The physical surfaces' tags, in increasing order.
+    fn surfaces(&self) -> impl Iterator<Item = i32> + '_ {
+        self.tags.iter().filter(|(d, _)| *d == 2).map(|&(_, t)| t)
+    }
+
+    /// The physical points, curves and volumes, with their numbers of elements.
+    fn ignored(&self, elements: &BTreeMap<(i32, i32), usize>) -> Vec<PhysicalGroup> {
+        self.tags
+            .iter()
+            .filter(|(d, _)| *d != 2)
+            .map(|&(dim, tag)| PhysicalGroup {
+                dim,
+                tag,
+                name: self.name(dim, tag),
+                elements: elements.get(&(dim, tag)).copied().unwrap_or(0),
+            })
+            .collect()
+    }
+}
+
+/// An entity of dimension `dim` in words.
+fn entity_kind(dim: i32) -> &'static str {
+    ["point", "curve", "surface", "volume"].get(dim as usize).unwrap_or(&"entity")
+}
+
+/// The nodes of `$Nodes` in file order: coordinates (scaled), tags, and each tag's position.
+struct FileNodes {
+    /// Coordinates times the scale.
+    coords: Vec<[f64; 3]>,
+    /// Gmsh node tags.
+    tags: Vec<u64>,
+    /// Node tag → position in file order.
+    position: HashMap<u64, usize>,
+}
+
+impl FileNodes {
+    /// Reads the node blocks, their tags from the raw section where mshio dropped them; the
+    /// coordinates must be finite and the tags distinct.
+    fn read(
+        bytes: &[u8],
+        header: &MshHeader,
+        binary: bool,
+        section: &Nodes<u64, i32, f64>,
+        scale: f64,
+    ) -> Result<Self, String> {
+        let mut raw_tags = if section.node_blocks.iter().any(|b| b.node_tags.is_none()) {
+            Some(raw_node_tags(bytes, header, binary)?)
+        } else {
+            None
+        };
+        let mut coords: Vec<[f64; 3]> = Vec::new();
+        let mut tags: Vec<u64> = Vec::new();
+        for (b, block) in section.node_blocks.iter().enumerate() {
+            let block_tags = node_block_tags(b, block, raw_tags.as_mut().and_then(|r| r.get_mut(b)))?;
+            for (tag, n) in block_tags.into_iter().zip(&block.nodes) {
+                let x = [n.x, n.y, n.z];
+                if x.iter().any(|c| !c.is_finite()) {
+                    return Err(format!("node {tag} has a non-finite coordinate ({}, {}, {})", x[0], x[1], x[2]));
+                }
+                coords.push(x.map(|c| c * scale));
+                tags.push(tag);
+            }
+        }
+        let mut position: HashMap<u64, usize> = HashMap::with_capacity(tags.len());
+        for (i, &tag) in tags.iter().enumerate() {
+            if position.insert(tag, i).is_some() {
+                return Err(format!("$Nodes: node tag {tag} appears twice"));
+            }
+        }
+        Ok(Self { coords, tags, position })
+    }
+}
+
+/// The tags of node block `b` in file order: mshio's map inverted, or else the raw section's
+/// (`raw`, taken).
+fn node_block_tags(b: usize, block: &NodeBlock<u64, i32, f64>, raw: Option<&mut Vec<u64>>) -> Result<Vec<u64>, String> {
+    let tags = match &block.node_tags {
+        Some(map) => {
+            let mut tags = vec![0; block.nodes.len()];
+            for (&tag, &i) in map {
+                tags[i] = tag;
+            }
+            if map.len() != block.nodes.len() {
+                return Err(format!(
+                    "$Nodes: node block {} (entity of dimension {}, tag {}) repeats a node tag",
+                    b + 1,
+                    block.entity_dim,
+                    block.entity_tag
+                ));
+            }
+            tags
+        }
+        None => raw.map(std::mem::take).unwrap_or_default(),
+    };
+    if tags.len() != block.nodes.len() {
+        return Err(format!("$Nodes: cannot read the node tags of node block {}", b + 1));
+    }
+    Ok(tags)
+}
+
+/// A tetrahedron as the file gives it: element tag, vertex tags, and the tags of its edge nodes
+/// in the order of [`TET_EDGES`](crate::mesh::TET_EDGES) (zeros for a 4-node tetrahedron).
+type FileTet = (u64, [u64; 4], [u64; 6]);
+
+/// A triangle of a physical surface as the file gives it: element tag, corner node tags, and
+/// for a 6-node triangle its edge node tags in the order of [`TRI_EDGES`].
+type FileTriangle = (u64, [u64; 3], Option<[u64; 3]>);
+
+/// The elements of `$Elements` by dimension and order: the tetrahedra, the triangles of the
+/// physical surfaces, and counts of the rest.
+#[derive(Default)]
+struct FileElements {
+    /// The tetrahedra.
+    tets: Vec<FileTet>,
+    /// The type of the tetrahedra and where its first block is (a file mixing orders is refused).
+    tet_type: Option<(ElementType, String)>,
+    /// The triangles of each physical surface, by physical tag.
+    triangles: BTreeMap<i32, Vec<FileTriangle>>,
+    /// The first block of 6-node triangles in a physical surface: (group, where, count).
+    tri6: Option<(i32, String, usize)>,
+    /// The number of elements of each group, by (dim, physical tag).
+    group_elements: BTreeMap<(i32, i32), usize>,
+    /// Elements not used, counted by kind in words.
+    skipped: BTreeMap<String, usize>,
+}
+
+impl FileElements {
+    /// Sorts the element blocks: tetrahedra of one order, triangles of physical surfaces, the
+    /// rest skipped; refuses other volume elements, orders above 2, other facets of physical
+    /// surfaces, a file without tetrahedra and 6-node facets on 4-node tetrahedra.
+    fn sort(section: &Elements<u64, i32>, groups: &PhysicalGroups) -> Result<Self, String> {
+        let mut sorted = Self::default();
+        for block in &section.element_blocks {
+            sorted.add_block(block, groups)?;
+        }
+        sorted.check_tetrahedra(groups)?;
+        Ok(sorted)
+    }
+
+    /// True when the tetrahedra are 10-node ones.
+    fn second_order(&self) -> bool {
+        matches!(self.tet_type, Some((ElementType::Tet10, _)))
+    }
+
+    /// Adds one block of elements by its type, or refuses it.
+    fn add_block(&mut self, block: &ElementBlock<u64, i32>, groups: &PhysicalGroups) -> Result<(), String> {
         let (dim, entity) = (block.entity_dim, block.entity_tag);
-        let groups = entity_groups.get(&(dim, entity)).map(Vec::as_slice).unwrap_or(&[]);
-        for &g in groups {
-            *group_elements.entry((dim, g)).or_default() += block.elements.len();
+        let in_groups = groups.of(dim, entity);
+        for &g in in_groups {
+            *self.group_elements.entry((dim, g)).or_default() += block.elements.len();
         }
         let ty = block.element_type;
         let (shape, nodes) = describe(ty);
-        let where_ =
-            format!("{} {entity}", ["point", "curve", "surface", "volume"].get(dim as usize).unwrap_or(&"entity"));
+        let where_ = format!("{} {entity}", entity_kind(dim));
         match ty {
-            ElementType::Tet4 | ElementType::Tet10 => {
-                match &tet_type {
-                    None => tet_type = Some((ty, where_.clone())),
-                    Some((first, first_where)) if *first != ty => {
-                        return Err(format!(
-                            "the file mixes first- and second-order tetrahedra: {}-node tetrahedra (element type {}) \
-                             in {first_where} and {nodes}-node tetrahedra (element type {}) in {where_}; all \
-                             tetrahedra must have the same order (Gmsh: Mesh.ElementOrder = 1 or 2)",
-                            describe(*first).1,
-                            *first as i32,
-                            ty as i32
-                        ));
-                    }
-                    Some(_) => {}
-                }
-                let second = ty == ElementType::Tet10;
-                for e in &block.elements {
-                    let n = &e.nodes;
-                    let edges = if second { GMSH_TET10_EDGE_NODES.map(|k| n[k]) } else { [0; 6] };
-                    tets.push((e.element_tag, [n[0], n[1], n[2], n[3]], edges));
-                }
-            }
+            ElementType::Tet4 | ElementType::Tet10 => self.add_tetrahedra(block, where_),
             ElementType::Tri3 | ElementType::Tri6 => {
-                let second = ty == ElementType::Tri6;
-                if groups.is_empty() {
-                    *skipped.entry(format!("{nodes}-node triangles outside physical surfaces")).or_default() +=
-                        block.elements.len();
-                } else if second && tri6.is_none() {
-                    tri6 = Some((groups[0], where_.clone(), block.elements.len()));
-                }
-                for &g in groups {
-                    let list = triangles.entry(g).or_default();
-                    list.extend(block.elements.iter().map(|e| {
-                        let n = &e.nodes;
-                        (e.element_tag, [n[0], n[1], n[2]], second.then(|| GMSH_TRI6_EDGE_NODES.map(|k| n[k])))
-                    }));
-                }
+                self.add_triangles(block, in_groups, where_);
+                Ok(())
             }
-            _ if dim >= 2 && beyond_second_order(ty) => {
-                return Err(format!(
-                    "elements of order 3 and higher are not supported; mesh with order 1 or 2 (Gmsh: \
-                     Mesh.ElementOrder = 1 or 2, or `gmsh -3 -order 2`): the file has {nodes}-node {shape} (element \
-                     type {}) in {where_}",
-                    ty as i32
-                ));
+            _ if dim >= 2 && beyond_second_order(ty) => Err(format!(
+                "elements of order 3 and higher are not supported; mesh with order 1 or 2 (Gmsh: Mesh.ElementOrder = \
+                 1 or 2, or `gmsh -3 -order 2`): the file has {nodes}-node {shape} (element type {}) in {where_}",
+                ty as i32
+            )),
+            _ if dim == 3 => Err(format!(
+                "only 4-node and 10-node tetrahedra are supported as volume elements: the file has {} {nodes}-node \
+                 {shape} (element type {}) in {where_}",
+                block.elements.len(),
+                ty as i32
+            )),
+            _ if dim == 2 && !in_groups.is_empty() => Err(format!(
+                "physical surface {:?} has {} {nodes}-node {shape} (element type {}) in {where_}: only 3-node \
+                 triangles (and 6-node ones in a second-order mesh) can be facets of a tetrahedral mesh",
+                groups.name(2, in_groups[0]),
+                block.elements.len(),
+                ty as i32
+            )),
+            _ => {
+                *self.skipped.entry(format!("{nodes}-node {shape}")).or_default() += block.elements.len();
+                Ok(())
             }
-            _ if dim == 3 => {
-                return Err(format!(
-                    "only 4-node and 10-node tetrahedra are supported as volume elements: the file has {} \
-                     {nodes}-node {shape} (element type {}) in {where_}",
-                    block.elements.len(),
-                    ty as i32
-                ));
-            }
-            _ if dim == 2 && !groups.is_empty() => {
-                return Err(format!(
-                    "physical surface {:?} has {} {nodes}-node {shape} (element type {}) in {where_}: only 3-node \
-                     triangles (and 6-node ones in a second-order mesh) can be facets of a tetrahedral mesh",
-                    group_name(2, groups[0]),
-                    block.elements.len(),
-                    ty as i32
-                ));
-            }
-            _ => *skipped.entry(format!("{nodes}-node {shape}")).or_default() += block.elements.len(),
         }
-    }
-    if tets.is_empty() {
-        let n_triangles: usize = triangles.values().map(Vec::len).sum();
-        let mut found: Vec<String> = skipped.iter().map(|(k, n)| format!("{n} {k}")).collect();
-        if n_triangles > 0 {
-            found.insert(0, format!("{n_triangles} triangle(s) of physical surfaces"));
-        }
-        let found = if found.is_empty() { "no elements".to_string() } else { found.join(", ") };
-        return Err(format!(
-            "the file has no tetrahedra (4-node or 10-node, element type 4 or 11), only {found}; {SAVE_HINT}; a 2D \
-             mesh cannot be used"
-        ));
-    }
-    let second_order = matches!(tet_type, Some((ElementType::Tet10, _)));
-    if let (false, Some((g, where_, n))) = (second_order, &tri6) {
-        return Err(format!(
-            "physical surface {:?} has {n} 6-node triangles (element type 9) in {where_}, but the tetrahedra are \
-             4-node (element type 4): the facets of a first-order mesh are 3-node triangles (mesh the surfaces and \
-             the volume with the same order)",
-            group_name(2, *g)
-        ));
     }
 
-    // Dense numbering of the nodes of the tetrahedra: the vertices in increasing tag order, then
-    // the edge nodes in increasing tag order.
-    const NONE: usize = usize::MAX;
-    // what each node of the file is: 0 on no tetrahedron, 1 a vertex, 2 an edge node only (a
-    // node that is both is a vertex, and `with_edge_nodes` refuses it as an edge node)
-    let mut role = vec![0u8; file_tags.len()];
-    for (etag, t, edges) in &tets {
-        for n in t {
-            match position.get(n) {
-                Some(&i) => role[i] = 1,
-                None => return Err(dangling("tetrahedron", *etag, *n, "")),
+    /// Adds a block of 4-node or 10-node tetrahedra (in `where_`): all must have one order.
+    fn add_tetrahedra(&mut self, block: &ElementBlock<u64, i32>, where_: String) -> Result<(), String> {
+        let ty = block.element_type;
+        match &self.tet_type {
+            None => self.tet_type = Some((ty, where_)),
+            Some((first, first_where)) if *first != ty => {
+                return Err(format!(
+                    "the file mixes first- and second-order tetrahedra: {}-node tetrahedra (element type {}) in \
+                     {first_where} and {}-node tetrahedra (element type {}) in {where_}; all tetrahedra must have the \
+                     same order (Gmsh: Mesh.ElementOrder = 1 or 2)",
+                    describe(*first).1,
+                    *first as i32,
+                    describe(ty).1,
+                    ty as i32
+                ));
             }
+            Some(_) => {}
         }
-        for n in edges.iter().filter(|_| second_order) {
-            match position.get(n) {
-                Some(&i) if role[i] == 0 => role[i] = 2,
-                Some(_) => {}
-                None => return Err(dangling("tetrahedron", *etag, *n, "")),
-            }
-        }
+        let second = ty == ElementType::Tet10;
+        self.tets.extend(block.elements.iter().map(|e| {
+            let n = &e.nodes;
+            let edges = if second { GMSH_TET10_EDGE_NODES.map(|k| n[k]) } else { [0; 6] };
+            (e.element_tag, [n[0], n[1], n[2], n[3]], edges)
+        }));
+        Ok(())
     }
-    let mut order: Vec<usize> = (0..file_tags.len()).filter(|&i| role[i] != 0).collect();
-    order.sort_unstable_by_key(|&i| (role[i], file_tags[i]));
-    let mut dense = vec![NONE; file_tags.len()];
-    for (k, &i) in order.iter().enumerate() {
-        dense[i] = k;
-    }
-    let node_tags: Vec<u64> = order.iter().map(|&i| file_tags[i]).collect();
-    let nodes: Vec<[f64; 3]> = order.iter().map(|&i| coords[i]).collect();
-    let index = |n: &u64| dense[position[n]];
-    // tetrahedra in the order of their first vertex (ties by tag): Gmsh lists them by geometric
-    // entity and in the mesher's order, scattered in memory against the nodes; the assembly
-    // visits the elements around each node in node order (unstructured 19.8k-dof mesh: Newton
-    // 1.24 s → 1.05 s). The edge nodes go with their tetrahedron (the vertices keep their local
-    // order, so edge k still joins the local vertices TET_EDGES[k]).
-    type Tet = (u64, [usize; 4], [usize; 6]);
-    let mut tets: Vec<Tet> = tets
-        .iter()
-        .map(|(e, t, edges)| (*e, t.map(|n| index(&n)), if second_order { edges.map(|n| index(&n)) } else { [0; 6] }))
-        .collect();
-    tets.sort_unstable_by_key(|(e, t, _)| (t.iter().min().copied(), *e));
-    let element_tags: Vec<u64> = tets.iter().map(|t| t.0).collect();
-    let tet_nodes: Vec<[usize; 4]> = tets.iter().map(|t| t.1).collect();
-    let tet_edges: Vec<[usize; 6]> = if second_order { tets.iter().map(|t| t.2).collect() } else { Vec::new() };
 
-    let mut named: Vec<(String, Vec<[usize; 3]>)> = Vec::new();
-    let mut facet_tags: HashMap<(String, [usize; 3]), u64> = HashMap::new();
-    // the 6-node triangles, to check their edge nodes against the tetrahedra's:
-    // (group, element tag, corners, edge node tags)
-    let mut triangle_edges: Vec<(String, u64, [usize; 3], [u64; 3])> = Vec::new();
-    let mut surface_groups = Vec::new();
-    let surface_tags: BTreeSet<i32> = group_tags.iter().filter(|(d, _)| *d == 2).map(|&(_, t)| t).collect();
-    for &g in &surface_tags {
-        let name = group_name(2, g);
-        let list = triangles.get(&g).map(Vec::as_slice).unwrap_or(&[]);
-        if list.is_empty() {
+    /// Adds a block of 3-node or 6-node triangles (in `where_`) to each of its physical
+    /// surfaces `in_groups`; outside any, it is skipped.
+    fn add_triangles(&mut self, block: &ElementBlock<u64, i32>, in_groups: &[i32], where_: String) {
+        let second = block.element_type == ElementType::Tri6;
+        if in_groups.is_empty() {
+            let nodes = describe(block.element_type).1;
+            *self.skipped.entry(format!("{nodes}-node triangles outside physical surfaces")).or_default() +=
+                block.elements.len();
+        } else if second && self.tri6.is_none() {
+            self.tri6 = Some((in_groups[0], where_, block.elements.len()));
+        }
+        for &g in in_groups {
+            self.triangles.entry(g).or_default().extend(block.elements.iter().map(|e| {
+                let n = &e.nodes;
+                (e.element_tag, [n[0], n[1], n[2]], second.then(|| GMSH_TRI6_EDGE_NODES.map(|k| n[k])))
+            }));
+        }
+    }
+
+    /// Checks that there are tetrahedra, and 6-node triangles only on 10-node ones.
+    fn check_tetrahedra(&self, groups: &PhysicalGroups) -> Result<(), String> {
+        if self.tets.is_empty() {
+            let n_triangles: usize = self.triangles.values().map(Vec::len).sum();
+            let mut found: Vec<String> = self.skipped.iter().map(|(k, n)| format!("{n} {k}")).collect();
+            if n_triangles > 0 {
+                found.insert(0, format!("{n_triangles} triangle(s) of physical surfaces"));
+            }
+            let found = if found.is_empty() { "no elements".to_string() } else { found.join(", ") };
             return Err(format!(
-                "physical surface {name:?} (tag {g}) refers to nothing: the file has no triangles in its surfaces"
+                "the file has no tetrahedra (4-node or 10-node, element type 4 or 11), only {found}; {SAVE_HINT}; a \
+                 2D mesh cannot be used"
             ));
         }
-        let mut facets = Vec::with_capacity(list.len());
-        for (etag, t, edges) in list {
-            let mut f = [0; 3];
-            for (k, n) in t.iter().enumerate() {
-                let Some(&i) = position.get(n) else {
-                    return Err(dangling("triangle", *etag, *n, &format!(" of physical surface {name:?}")));
-                };
-                if dense[i] == NONE {
-                    return Err(format!(
-                        "triangle {etag} of physical surface {name:?} uses node {n}, which belongs to no tetrahedron: \
-                         the surface is not part of the boundary of the meshed volume (mesh the surfaces and the \
-                         volume together, e.g. after a boolean fragment, so that they share nodes)"
-                    ));
-                }
-                f[k] = dense[i];
-            }
-            if let Some(edges) = edges {
-                if let Some(n) = edges.iter().find(|n| !position.contains_key(n)) {
-                    return Err(dangling("triangle", *etag, *n, &format!(" of physical surface {name:?}")));
-                }
-                triangle_edges.push((name.clone(), *etag, f, *edges));
-            }
-            let mut key = f;
-            key.sort_unstable();
-            facet_tags.insert((name.clone(), key), *etag);
-            facets.push(f);
+        if let (false, Some((g, where_, n))) = (self.second_order(), &self.tri6) {
+            return Err(format!(
+                "physical surface {:?} has {n} 6-node triangles (element type 9) in {where_}, but the tetrahedra are \
+                 4-node (element type 4): the facets of a first-order mesh are 3-node triangles (mesh the surfaces \
+                 and the volume with the same order)",
+                groups.name(2, *g)
+            ));
         }
-        surface_groups.push(PhysicalGroup { dim: 2, tag: g, name: name.clone(), elements: list.len() });
-        named.push((name, facets));
+        Ok(())
     }
-    let ignored_groups = group_tags
-        .iter()
-        .filter(|(d, _)| *d != 2)
-        .map(|&(dim, tag)| PhysicalGroup {
-            dim,
-            tag,
-            name: group_name(dim, tag),
-            elements: group_elements.get(&(dim, tag)).copied().unwrap_or(0),
-        })
-        .collect();
+}
 
+/// Marks a file node on no tetrahedron in [`Numbering::dense`].
+const NONE: usize = usize::MAX;
+
+/// The dense numbering of the nodes of the tetrahedra: the vertices in increasing tag order,
+/// then the edge nodes in increasing tag order; nodes on no tetrahedron are dropped.
+struct Numbering {
+    /// File position of each mesh node.
+    order: Vec<usize>,
+    /// Mesh index of each file node ([`NONE`] for a node on no tetrahedron).
+    dense: Vec<usize>,
+}
+
+impl Numbering {
+    /// Numbers the nodes of `tets` (their edge nodes too at `second_order`); every node tag
+    /// must be in `$Nodes`.
+    fn of_tetrahedra(nodes: &FileNodes, tets: &[FileTet], second_order: bool) -> Result<Self, String> {
+        // what each node of the file is: 0 on no tetrahedron, 1 a vertex, 2 an edge node only (a
+        // node that is both is a vertex, and `with_edge_nodes` refuses it as an edge node)
+        let mut role = vec![0u8; nodes.tags.len()];
+        for (etag, t, edges) in tets {
+            for n in t {
+                match nodes.position.get(n) {
+                    Some(&i) => role[i] = 1,
+                    None => return Err(dangling("tetrahedron", *etag, *n, "")),
+                }
+            }
+            for n in edges.iter().filter(|_| second_order) {
+                match nodes.position.get(n) {
+                    Some(&i) if role[i] == 0 => role[i] = 2,
+                    Some(_) => {}
+                    None => return Err(dangling("tetrahedron", *etag, *n, "")),
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..nodes.tags.len()).filter(|&i| role[i] != 0).collect();
+        order.sort_unstable_by_key(|&i| (role[i], nodes.tags[i]));
+        let mut dense = vec![NONE; nodes.tags.len()];
+        for (k, &i) in order.iter().enumerate() {
+            dense[i] = k;
+        }
+        Ok(Self { order, dense })
+    }
+
+    /// The mesh index of the node tagged `tag`, a node of `$Nodes`.
+    fn index(&self, nodes: &FileNodes, tag: &u64) -> usize {
+        self.dense[nodes.position[tag]]
+    }
+
+    /// The coordinates of the mesh nodes.
+    fn coords(&self, nodes: &FileNodes) -> Vec<[f64; 3]> {
+        self.order.iter().map(|&i| nodes.coords[i]).collect()
+    }
+}
+
+/// The tetrahedra in mesh indices, in the order of their first vertex (ties by tag).
+struct Tetrahedra {
+    /// Gmsh element tag of each tetrahedron.
+    element_tags: Vec<u64>,
+    /// The four vertices of each.
+    vertices: Vec<[usize; 4]>,
+    /// The six edge nodes of each, in the order of [`TET_EDGES`](crate::mesh::TET_EDGES)
+    /// (empty at order 1).
+    edges: Vec<[usize; 6]>,
+}
+
+impl Tetrahedra {
+    /// Maps the file's tetrahedra to mesh indices and orders them by their first vertex (ties by
+    /// tag): Gmsh lists them by geometric entity and in the mesher's order, scattered in memory
+    /// against the nodes; the assembly visits the elements around each node in node order
+    /// (unstructured 19.8k-dof mesh: Newton 1.24 s → 1.05 s). The edge nodes go with their
+    /// tetrahedron (the vertices keep their local order, so edge k still joins the local vertices
+    /// TET_EDGES[k]).
+    fn numbered(tets: &[FileTet], nodes: &FileNodes, numbering: &Numbering, second_order: bool) -> Self {
+        let index = |n: &u64| numbering.index(nodes, n);
+        type Tet = (u64, [usize; 4], [usize; 6]);
+        let mut tets: Vec<Tet> = tets
+            .iter()
+            .map(|(e, t, edges)| {
+                (*e, t.map(|n| index(&n)), if second_order { edges.map(|n| index(&n)) } else { [0; 6] })
+            })
+            .collect();
+        tets.sort_unstable_by_key(|(e, t, _)| (t.iter().min().copied(), *e));
+        Self {
+            element_tags: tets.iter().map(|t| t.0).collect(),
+            vertices: tets.iter().map(|t| t.1).collect(),
+            edges: if second_order { tets.iter().map(|t| t.2).collect() } else { Vec::new() },
+        }
+    }
+}
+
+/// A 6-node triangle of a physical surface, to check its edge nodes against the tetrahedra's:
+/// (group, element tag, corners in mesh indices, edge node tags in the order of [`TRI_EDGES`]).
+type TriangleEdges = (String, u64, [usize; 3], [u64; 3]);
+
+/// The physical surfaces as facet groups in mesh indices, with what the later checks need.
+struct SurfaceFacets {
+    /// Each surface's name and facets.
+    named: Vec<(String, Vec<[usize; 3]>)>,
+    /// The element tag of each facet, by (group, sorted corners).
+    facet_tags: HashMap<(String, [usize; 3]), u64>,
+    /// The 6-node triangles.
+    triangle_edges: Vec<TriangleEdges>,
+    /// The physical surfaces.
+    groups: Vec<PhysicalGroup>,
+}
+
+impl SurfaceFacets {
+    /// Maps the triangles of each physical surface to mesh indices: every surface must have
+    /// triangles, and their nodes must be nodes of the tetrahedra.
+    fn read(
+        groups: &PhysicalGroups,
+        triangles: &BTreeMap<i32, Vec<FileTriangle>>,
+        nodes: &FileNodes,
+        numbering: &Numbering,
+    ) -> Result<Self, String> {
+        let mut surfaces =
+            Self { named: Vec::new(), facet_tags: HashMap::new(), triangle_edges: Vec::new(), groups: Vec::new() };
+        for g in groups.surfaces() {
+            let name = groups.name(2, g);
+            let list = triangles.get(&g).map(Vec::as_slice).unwrap_or(&[]);
+            if list.is_empty() {
+                return Err(format!(
+                    "physical surface {name:?} (tag {g}) refers to nothing: the file has no triangles in its surfaces"
+                ));
+            }
+            let mut facets = Vec::with_capacity(list.len());
+            for (etag, t, edges) in list {
+                let f = facet_corners(*etag, t, &name, nodes, numbering)?;
+                if let Some(edges) = edges {
+                    if let Some(n) = edges.iter().find(|n| !nodes.position.contains_key(n)) {
+                        return Err(dangling("triangle", *etag, *n, &format!(" of physical surface {name:?}")));
+                    }
+                    surfaces.triangle_edges.push((name.clone(), *etag, f, *edges));
+                }
+                let mut key = f;
+                key.sort_unstable();
+                surfaces.facet_tags.insert((name.clone(), key), *etag);
+                facets.push(f);
+            }
+            surfaces.groups.push(PhysicalGroup { dim: 2, tag: g, name: name.clone(), elements: list.len() });
+            surfaces.named.push((name, facets));
+        }
+        Ok(surfaces)
+    }
+}
+
+/// The corners of triangle `etag` (node tags `t`) of physical surface `name` in mesh indices:
+/// each must be a node of the tetrahedra.
+fn facet_corners(
+    etag: u64,
+    t: &[u64; 3],
+    name: &str,
+    nodes: &FileNodes,
+    numbering: &Numbering,
+) -> Result<[usize; 3], String> {
+    let mut f = [0; 3];
+    for (k, n) in t.iter().enumerate() {
+        let Some(&i) = nodes.position.get(n) else {
+            return Err(dangling("triangle", etag, *n, &format!(" of physical surface {name:?}")));
+        };
+        if numbering.dense[i] == NONE {
+            return Err(format!(
+                "triangle {etag} of physical surface {name:?} uses node {n}, which belongs to no tetrahedron: the \
+                 surface is not part of the boundary of the meshed volume (mesh the surfaces and the volume \
+                 together, e.g. after a boolean fragment, so that they share nodes)"
+            ));
+        }
+        f[k] = numbering.dense[i];
+    }
+    Ok(f)
+}
+
+/// [`TetMesh::new`]'s error in the file's terms: element and node tags, the triangle's tag.
+fn mesh_error(
+    e: MeshError,
+    element_tags: &[u64],
+    node_tags: &[u64],
+    facet_tags: &HashMap<(String, [usize; 3]), u64>,
+) -> String {
     let tags = |t: &[usize]| t.iter().map(|&n| node_tags[n].to_string()).collect::<Vec<_>>().join(", ");
-    let mesh = TetMesh::new(nodes, tet_nodes, named).map_err(|e| match e {
+    match e {
         MeshError::Inverted { element, nodes, volume } => format!(
             "tetrahedron {} (nodes {}) is inverted: signed volume {volume:.3e} < 0 (index {element} in the imported \
              mesh); MSH tetrahedra must be positively oriented",
@@ -505,50 +758,49 @@ fn import(bytes: &[u8], scale: f64) -> Result<GmshImport, String> {
             )
         }
         other => other.to_string(),
-    })?;
+    }
+}
 
+/// The second-order mesh: `tet_edges` become its edge nodes ([`TetMesh::with_edge_nodes`],
+/// which moves them to the midpoints), the 6-node triangles' edge nodes are checked against
+/// them, and a warning says when curved elements were straightened.
+fn with_edge_nodes(
+    mesh: TetMesh,
+    tet_edges: Vec<[usize; 6]>,
+    element_tags: &[u64],
+    node_tags: &[u64],
+    triangle_edges: &[TriangleEdges],
+    index: &dyn Fn(&u64) -> usize,
+) -> Result<(TetMesh, Vec<String>), String> {
+    let (mesh, moved) = mesh.with_edge_nodes(tet_edges).map_err(|e| match e {
+        MeshError::BadEdgeNode { element, node, reason } => format!(
+            "10-node tetrahedron {}: its edge node {} is unusable: {reason} (the 10-node tetrahedra must share one \
+             node per edge, and no vertex can be an edge node)",
+            element_tags[element],
+            node_tags.get(node).map_or_else(|| format!("#{node}"), u64::to_string)
+        ),
+        other => other.to_string(),
+    })?;
+    check_triangle_edges(&mesh, triangle_edges, node_tags, index)?;
     let mut warnings = Vec::new();
-    let mesh = if second_order {
-        let (mesh, moved) = mesh.with_edge_nodes(tet_edges).map_err(|e| match e {
-            MeshError::BadEdgeNode { element, node, reason } => format!(
-                "10-node tetrahedron {}: its edge node {} is unusable: {reason} (the 10-node tetrahedra must share \
-                 one node per edge, and no vertex can be an edge node)",
-                element_tags[element],
-                node_tags.get(node).map_or_else(|| format!("#{node}"), u64::to_string)
-            ),
-            other => other.to_string(),
-        })?;
-        check_triangle_edges(&mesh, &triangle_edges, &node_tags, &|n: &u64| dense[position[n]])?;
-        if moved > CURVED_EDGE_TOLERANCE {
-            warnings.push(format!(
-                "the 10-node tetrahedra are curved: an edge node lies {moved:.2e} of its edge's length off the edge's \
-                 midpoint (more than {CURVED_EDGE_TOLERANCE:.0e}); the elements are treated as straight-sided, every \
-                 edge node moved to its edge's midpoint, so the curved edges are straightened (a curved boundary \
-                 becomes the flat facets through its vertices)"
-            ));
-        }
-        mesh
-    } else {
-        mesh
-    };
-    Ok(GmshImport {
-        mesh,
-        node_tags,
-        element_tags,
-        surface_groups,
-        ignored_groups,
-        unused_nodes: file_tags.len() - order.len(),
-        warnings,
-    })
+    if moved > CURVED_EDGE_TOLERANCE {
+        warnings.push(format!(
+            "the 10-node tetrahedra are curved: an edge node lies {moved:.2e} of its edge's length off the edge's \
+             midpoint (more than {CURVED_EDGE_TOLERANCE:.0e}); the elements are treated as straight-sided, every edge \
+             node moved to its edge's midpoint, so the curved edges are straightened (a curved boundary becomes the \
+             flat facets through its vertices)"
+        ));
+    }
+    Ok((mesh, warnings))
 }
 
 /// Checks that the edge nodes of the 6-node triangles of the facet groups are the tetrahedra's:
 /// `triangles` holds (group, element tag, corners, edge node tags in the order of
-/// [`TRI_EDGES`]); `index` maps a node tag to its mesh index (`usize::MAX` for a node on no
+/// [`TRI_EDGES`]); `index` maps a node tag to its mesh index ([`NONE`] for a node on no
 /// tetrahedron).
 fn check_triangle_edges(
     mesh: &TetMesh,
-    triangles: &[(String, u64, [usize; 3], [u64; 3])],
+    triangles: &[TriangleEdges],
     node_tags: &[u64],
     index: &dyn Fn(&u64) -> usize,
 ) -> Result<(), String> {
@@ -580,10 +832,6 @@ fn check_triangle_edges(
     }
     Ok(())
 }
-
-/// A triangle of a physical surface as the file gives it: element tag, corner node tags, and
-/// for a 6-node triangle its edge node tags in the order of [`TRI_EDGES`].
-type FileTriangle = (u64, [u64; 3], Option<[u64; 3]>);
 
 fn dangling(what: &str, element: u64, node: u64, context: &str) -> String {
     format!(
@@ -832,9 +1080,11 @@ impl Reader<'_> {
 mod tests {
     use super::*;
 
-    /// Two tetrahedra sharing the face (2, 3, 4): nodes 1..5, the triangle (1, 2, 3) on z = 0 in
-    /// the physical surface "bottom", the volume in "body".
-    const TINY: &str = "$MeshFormat
+    /// The sections of [`TINY`] and [`TINY_P2`] before `$Nodes`: the physical surface "bottom"
+    /// (tag 1) on surface 1, the physical volume "body" (tag 2) on volume 1.
+    macro_rules! tiny_head {
+        () => {
+            "$MeshFormat
 4.1 0 8
 $EndMeshFormat
 $PhysicalNames
@@ -847,7 +1097,15 @@ $Entities
 1 0 0 0 1 1 0 1 1 0
 1 0 0 0 1 1 1 1 2 1 1
 $EndEntities
-$Nodes
+"
+        };
+    }
+
+    /// Two tetrahedra sharing the face (2, 3, 4): nodes 1..5, the triangle (1, 2, 3) on z = 0 in
+    /// the physical surface "bottom", the volume in "body".
+    const TINY: &str = concat!(
+        tiny_head!(),
+        "$Nodes
 1 5 1 5
 3 1 0 5
 1
@@ -869,7 +1127,8 @@ $Elements
 2 1 2 3 4
 3 2 3 4 5
 $EndElements
-";
+"
+    );
 
     fn read(text: &str) -> Result<GmshImport, String> {
         parse_msh(text.as_bytes(), 1.0, Path::new("tiny.msh")).map_err(|e| {
@@ -1023,20 +1282,9 @@ $EndElements
     /// 6-node one. Vertices 1, 2, 3, 4 and 14 (the apex of the second tetrahedron); the edge
     /// nodes 6 (1–2), 7 (2–3), 8 (1–3), 9 (1–4), 10 (2–4), 11 (3–4), 12 (2–14), 13 (3–14) and
     /// 5 (4–14), at the midpoints; the elements list them in Gmsh's local order.
-    const TINY_P2: &str = "$MeshFormat
-4.1 0 8
-$EndMeshFormat
-$PhysicalNames
-2
-2 1 \"bottom\"
-3 2 \"body\"
-$EndPhysicalNames
-$Entities
-0 0 1 1
-1 0 0 0 1 1 0 1 1 0
-1 0 0 0 1 1 1 1 2 1 1
-$EndEntities
-$Nodes
+    const TINY_P2: &str = concat!(
+        tiny_head!(),
+        "$Nodes
 1 14 1 14
 3 1 0 14
 1
@@ -1076,7 +1324,8 @@ $Elements
 2 1 2 3 4 6 7 8 9 11 10
 3 2 3 4 14 7 11 10 12 5 13
 $EndElements
-";
+"
+    );
 
     fn tags_of(imp: &GmshImport, nodes: &[usize]) -> Vec<u64> {
         nodes.iter().map(|&n| imp.node_tags[n]).collect()
