@@ -2,7 +2,7 @@
 //! unloaded, theory §11) solved with 1, 2, 4, …, 64 equal steps each way: how the loaded
 //! displacement, the residual imprint and the residual stresses converge as the steps shrink,
 //! and how far the one-step (Hencky) answer is from the many-step (Prandtl–Reuss) one. Prints
-//! the README's table.
+//! the table of docs/load_paths.md.
 //!
 //! ```text
 //! cargo run --release --example indentation_study              # the scene's 32×32×16 cells

@@ -1,10 +1,10 @@
 //! Issue 5's stability table: every stiff and extreme case × every solver, the locking of P1
 //! displacements against ν, and the units check. Prints the tables and rewrites the block
-//! between `<!-- stability:begin -->` and `<!-- stability:end -->` in README.md.
+//! between `<!-- stability:begin -->` and `<!-- stability:end -->` in docs/stability.md.
 //!
 //! ```text
-//! cargo run --release --example stability            # about eight minutes on 2 cores (the P2 locking rows: 157k dofs, 4 GB)
-//! cargo run --release --example stability -- --print # print only, leave README.md alone
+//! cargo run --release --example stability            # a quarter of an hour on 2 cores (the P2 locking rows: 157k dofs, 4 GB)
+//! cargo run --release --example stability -- --print # print only, leave docs/stability.md alone
 //! ```
 
 use saddle::stability::{
@@ -46,16 +46,16 @@ fn main() {
     );
     println!("{block}");
     if !print_only {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
-        let readme = std::fs::read_to_string(&path).expect("README.md");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/stability.md");
+        let page = std::fs::read_to_string(&path).expect("docs/stability.md");
         let (begin, end) = ("<!-- stability:begin -->", "<!-- stability:end -->");
-        match (readme.find(begin), readme.find(end)) {
+        match (page.find(begin), page.find(end)) {
             (Some(b), Some(e)) if b < e => {
-                let new = format!("{}{begin}\n{block}\n{}", &readme[..b], &readme[e..]);
-                std::fs::write(&path, new).expect("write README.md");
-                eprintln!("README.md updated");
+                let new = format!("{}{begin}\n{block}\n{}", &page[..b], &page[e..]);
+                std::fs::write(&path, new).expect("write docs/stability.md");
+                eprintln!("docs/stability.md updated");
             }
-            _ => eprintln!("README.md has no {begin} … {end} block; printed only"),
+            _ => eprintln!("docs/stability.md has no {begin} … {end} block; printed only"),
         }
     }
 }

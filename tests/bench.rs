@@ -1,7 +1,11 @@
 //! `saddle bench` on a small size: writes its table, CSV and plot; every run converges; the
-//! baselines and ratios are finite; the AMG and direct backends of Newton agree on the KKT
-//! tolerance.
+//! baselines and ratios are finite; the AMG and direct backends of Newton, which the bench
+//! times side by side, give the same answer on the problem it measured.
 
+use saddle::bench::{cells_for, solver_spec};
+use saddle::core::{Silent, contact_set};
+use saddle::report::SceneSource;
+use saddle::report::runs::errors;
 use std::process::Command;
 
 #[test]
@@ -34,6 +38,48 @@ fn bench_writes_table_csv_and_plot_with_finite_ratios() {
             assert!(peak > 0.0, "{r:?}");
         }
     }
+    // the two Newton backends on the problem the bench measured (its size and scene): the same
+    // answer to their KKT tolerance
+    let source = SceneSource::read(scene.as_ref()).unwrap();
+    let base_dofs = source.problem(None).unwrap().element.n_dofs();
+    let l = source.problem(Some(cells_for(source.box_cells().unwrap(), base_dofs, 3000))).unwrap();
+    assert!(rows.iter().all(|r| r[col("dofs")] == l.element.n_dofs().to_string()), "the bench's size: {csv}");
+    let solve = |name: &str| {
+        let sol = solver_spec(name).unwrap().0.solve(&l.lagrangian(), &mut Silent).unwrap();
+        assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
+        sol
+    };
+    let (amg, direct) = (solve("newton-amg"), solve("newton-direct"));
+    let e = errors(&l.lagrangian(), &amg, &direct);
+    let force = |s: &saddle::core::Solution| s.lambda.iter().sum::<f64>();
+    let force_rel = (force(&amg) - force(&direct)).abs() / force(&direct);
+    println!(
+        "{} dofs, newton-amg against newton-direct: U {:.1e}, σ̂ {:.1e}, ε(u) {:.1e}, force {force_rel:.1e}, \
+         contact {} / {}, plastic {} / {}, KKT {:.1e} / {:.1e}",
+        l.element.n_dofs(),
+        e.u_rel,
+        e.stress_rel,
+        e.strain_rel,
+        contact_set(&amg.lambda).len(),
+        contact_set(&direct.lambda).len(),
+        amg.stress.n_plastic(),
+        direct.stress.n_plastic(),
+        amg.report.kkt.max(),
+        direct.report.kkt.max()
+    );
+    // Each answer is within about its KKT residual of the discrete solution: on the default
+    // scene's work–precision ladder (docs/report/report.md) every solver's σ̂, U and ε(u)
+    // errors are at most 1.22 × its KKT residual. So the two differ by at most
+    // 1.22 (KKT_amg + KKT_direct), taken as 2 (KKT_amg + KKT_direct): 6e-15 here, both backends
+    // ending below 2e-15 (their tolerance is 1e-10, Newton's last step overshoots it).
+    // Measured: 6.2e-16 in σ̂, 5.9e-16 in ε(u), 1.1e-16 in U, force equal; the same 22 contact
+    // nodes and 196 plastic elements.
+    let bound = 2.0 * (amg.report.kkt.max() + direct.report.kkt.max());
+    for (what, d) in [("U", e.u_rel), ("σ̂", e.stress_rel), ("ε(u)", e.strain_rel), ("force", force_rel)] {
+        assert!(d <= bound, "newton-amg and newton-direct differ in {what} by {d:e} > {bound:e}");
+    }
+    assert_eq!(e.contact_mismatch, 0, "the same contact set");
+    assert_eq!(amg.stress.n_plastic(), direct.stress.n_plastic(), "the same plastic elements");
     let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
     assert!(md.contains("| DOFs |") && md.contains("newton-amg:") && md.contains("elastic scene, uzawa"), "{md}");
     if cfg!(feature = "report") {

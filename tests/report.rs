@@ -331,8 +331,27 @@ fn report_quick_on_a_small_johnson_scene() {
     for run in &r.runs {
         assert!(run.converged, "{run:?}");
         let e = run.errors.unwrap();
-        // each run's error is of the order of its tolerance (relative KKT ≤ tol)
-        assert!(e.stress_rel < 1e-1 && e.u_rel < 1e-1, "{run:?}");
+        println!(
+            "{:>8} {:<40} KKT {:.2e}: U {:.2e} ({:.2}), σ̂ {:.2e} ({:.2}), ε(u) {:.2e} ({:.2})",
+            run.solver,
+            run.setting,
+            run.kkt,
+            e.u_rel,
+            e.u_rel / run.kkt,
+            e.stress_rel,
+            e.stress_rel / run.kkt,
+            e.strain_rel,
+            e.strain_rel / run.kkt
+        );
+        // Each run's errors against the reference (Newton to 1e-13, another solve of the same
+        // discrete problem) are bounded by its KKT residual: error ≤ C · KKT, C measured at most
+        // 1.07 here (the penalty's σ̂; Uzawa 0.78, Newton 0.57, SOCP 0.61) and 1.22 on the
+        // default scene's full ladder (docs/report/report.md). Asserted with C = 2, on the sum
+        // of the run's and the reference's residuals (both at round-off for the polished SOCP).
+        let bound = 2.0 * (run.kkt + reference.kkt);
+        for (what, err) in [("U", e.u_rel), ("σ̂", e.stress_rel), ("ε(u)", e.strain_rel)] {
+            assert!(err <= bound, "{} {}: {what} error {err:e} > 2 · KKT = {bound:e}", run.solver, run.setting);
+        }
     }
     let tight = saddle::report::tables::tightest(&r.runs);
     assert!(tight.iter().all(|t| t.errors.unwrap().stress_rel < 1e-6), "{tight:?}");
