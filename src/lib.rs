@@ -35,5 +35,6 @@ pub mod peer;
 pub mod report;
 pub mod run;
 pub mod scene;
+mod scene_de;
 pub mod stability;
 pub mod sweep;
