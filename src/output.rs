@@ -268,41 +268,74 @@ pub fn single_quantity(l: &dyn Discretisation, sol: &Solution, quantity: &str) -
     }
 }
 
+/// Each obstacle's report on its own rows, extras and multipliers, with its `imprint`: max_i
+/// (G u)_i over its rows, the largest displacement of its candidate nodes away from it (theory
+/// §11.4; generic, from the rows).
+fn reports_with_imprints(l: &dyn Discretisation, u: &[f64], extras: &[f64], lambda: &[f64]) -> Vec<ObstacleReport> {
+    let mut reports = l.contact_reports(extras, lambda);
+    for (r, p) in reports.iter_mut().zip(l.discrete_obstacles().parts()) {
+        let m = (0..p.rows.n_rows()).map(|i| p.rows.row_times(i, u)).fold(f64::NEG_INFINITY, f64::max);
+        if m.is_finite() {
+            r.report.quantities.push(("imprint".into(), m));
+        }
+    }
+    reports
+}
+
+/// The obstacles' quantities as `contact` holds them: plain names with one obstacle, else
+/// `name.quantity` (`obstacle[i].quantity` for an unnamed one).
+fn contact_entries(l: &dyn Discretisation, reports: &[ObstacleReport]) -> BTreeMap<String, f64> {
+    match reports {
+        [r] => r.report.quantities.iter().cloned().collect(),
+        _ => reports
+            .iter()
+            .enumerate()
+            .flat_map(|(i, r)| {
+                let name = r.name.clone().unwrap_or_else(|| l.obstacles().path("obstacle", i));
+                r.report.quantities.iter().map(move |(q, v)| (format!("{name}.{q}"), *v))
+            })
+            .collect(),
+    }
+}
+
+/// The quantities a summary of `l` reports by name, known before any solve (the obstacles'
+/// reports at zero): the keys of `contact` and of `extras`, sorted. What a load path's plot and a
+/// sweep's axes may name, besides `factor`.
+pub fn reported_quantities(l: &dyn Discretisation) -> Vec<String> {
+    let (u, extras, lambda) = (vec![0.0; l.n_dofs()], vec![0.0; l.n_extras()], vec![0.0; l.constraints().n_rows()]);
+    let reports = reports_with_imprints(l, &u, &extras, &lambda);
+    let mut names: Vec<String> = contact_entries(l, &reports).into_keys().chain(l.extra_names()).collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// `name` is a quantity of `known` or `factor`; otherwise an error on `field` that lists them.
+pub fn check_quantity(field: &str, name: &str, known: &[String]) -> Result<(), saddle_core::ParameterError> {
+    if name == "factor" || known.iter().any(|k| k == name) {
+        return Ok(());
+    }
+    let mut list: Vec<&str> = known.iter().map(String::as_str).collect();
+    list.push("factor");
+    Err(saddle_core::ParameterError::new(
+        field,
+        format!("{name:?}"),
+        format!("is not a reported quantity; known: {}", list.join(", ")),
+    ))
+}
+
 impl Summary {
     /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch.
     pub fn new(l: &dyn Discretisation, sol: &Solution, title: Option<String>) -> Self {
         let mut ws = Workspace::new(l);
         let kkt = l.kkt(&sol.iterate(), &mut ws);
         let j = l.energy(&sol.u, &sol.extras, &mut ws);
-        // each obstacle reports from its own rows, extras and multipliers
-        let mut reports = l.contact_reports(&sol.extras, &sol.lambda);
-        // the imprint of each obstacle: max_i (G u)_i over its rows, the largest displacement of
-        // its candidate nodes away from it (theory §11.4); generic, from the rows
-        let parts = l.discrete_obstacles().parts();
-        let imprints: Vec<f64> = parts
-            .iter()
-            .map(|p| (0..p.rows.n_rows()).map(|i| p.rows.row_times(i, &sol.u)).fold(f64::NEG_INFINITY, f64::max))
-            .collect();
-        for (r, m) in reports.iter_mut().zip(&imprints) {
-            if m.is_finite() {
-                r.report.quantities.push(("imprint".into(), *m));
-            }
-        }
+        let reports = reports_with_imprints(l, &sol.u, &sol.extras, &sol.lambda);
         let single = match reports.as_slice() {
             [r] => Some(&r.report),
             _ => None,
         };
-        let contact: BTreeMap<String, f64> = match single {
-            Some(r) => r.quantities.iter().cloned().collect(),
-            None => reports
-                .iter()
-                .enumerate()
-                .flat_map(|(i, r)| {
-                    let name = r.name.clone().unwrap_or_else(|| l.obstacles().path("obstacle", i));
-                    r.report.quantities.iter().map(move |(q, v)| (format!("{name}.{q}"), *v))
-                })
-                .collect(),
-        };
+        let contact = contact_entries(l, &reports);
         let extras = l.extra_names().into_iter().zip(sol.extras.iter().map(|v| Some(*v))).collect();
         let mut warnings = l.warnings();
         warnings.extend(sol.report.warnings.iter().cloned());

@@ -11,9 +11,11 @@
 //! saddle sweep examples/strip_punch.toml --factors 0.25,0.5,1,2,4 --out out/strip
 //! ```
 
-use crate::output::Summary;
+use crate::outdir::{OutDir, OutError};
+use crate::output::{Summary, check_quantity, reported_quantities};
 use crate::run::{self, RunError};
 use crate::scene::Scene;
+use saddle_core::error::{check, number};
 use saddle_core::{SceneError, Silent};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -30,6 +32,12 @@ pub enum SweepError {
     /// `--solver` names no solver.
     #[error(transparent)]
     Run(#[from] RunError),
+    /// `--out` cannot be used, or a file in it cannot be written.
+    #[error(transparent)]
+    Out(#[from] OutError),
+    /// `--x` or `--y` names no reported quantity.
+    #[error("{0}")]
+    Axis(String),
     /// No factors, or a factor that is not finite and ≥ 0.
     #[error("--factors: {0}")]
     Factors(String),
@@ -95,6 +103,8 @@ pub struct Sweep {
     pub points: Vec<SweepPoint>,
     /// The plotted quantities.
     pub axes: (String, String),
+    /// The files written (`sweep.csv`, `sweep.md`, and the plot when it was drawn).
+    pub written: Vec<String>,
 }
 
 impl Sweep {
@@ -105,11 +115,14 @@ impl Sweep {
     }
 
     /// The plateau indicator: d ln y / d ln x over the last interval of converged points (1 for
-    /// a linear response through the origin, → 0 on a plateau); None with fewer than two.
+    /// a linear response through the origin, → 0 on a plateau): between the last point and the
+    /// last one before it at another x, both with x, y > 0 (a repeated factor adds no interval);
+    /// None without two such points.
     pub fn last_log_slope(&self) -> Option<f64> {
-        let c = self.curve();
-        let [.., (x0, y0), (x1, y1)] = c.as_slice() else { return None };
-        Some((y1 / y0).ln() / (x1 / x0).ln())
+        let c: Vec<(f64, f64)> = self.curve().into_iter().filter(|&(x, y)| x > 0.0 && y > 0.0).collect();
+        let &(x1, y1) = c.last()?;
+        let &(x0, y0) = c.iter().rev().find(|p| p.0 != x1)?;
+        Some((y1 / y0).ln() / (x1 / x0).ln()).filter(|k| k.is_finite())
     }
 }
 
@@ -124,7 +137,14 @@ pub fn generate(
         return Err(SweepError::Factors("give at least one factor".into()));
     }
     if let Some(f) = opts.factors.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
-        return Err(SweepError::Factors(format!("{f} is not a finite factor >= 0")));
+        return Err(SweepError::Factors(format!("{} is not a finite factor >= 0", number(*f))));
+    }
+    if let Some(f) = opts.factors.iter().find(|f| **f > check::MAX_MAGNITUDE) {
+        return Err(SweepError::Factors(format!(
+            "{} exceeds {:e}, the largest magnitude a scene's value may have (larger ones overflow the solvers)",
+            number(*f),
+            check::MAX_MAGNITUDE
+        )));
     }
     let mut scene = Scene::from_file(scene_path)?;
     if let Some(name) = &opts.element {
@@ -138,10 +158,47 @@ pub fn generate(
     // every scaled scene is checked before the first solve
     let scenes = opts.factors.iter().map(|&f| scene.with_load_factor(f)).collect::<Result<Vec<_>, _>>()?;
     let mesh = scene.build_mesh()?;
+    // the folder is claimed before the first solve; left as it was if no point can be solved
+    let mut out_dir: Option<OutDir> = None;
+    let points = match solve_points(scenes, &mesh, &solver, opts, out, &mut out_dir, progress) {
+        Ok(points) => points,
+        Err(e) => {
+            if let Some(o) = out_dir {
+                o.abandon();
+            }
+            return Err(e);
+        }
+    };
+    let mut sweep = Sweep { title, points, axes: opts.axes.clone(), written: Vec::new() };
+    let mut out = out_dir.expect("at least one factor: claimed before its solve");
+    write(&sweep, &mut out)?;
+    sweep.written = out.finish()?;
+    Ok(sweep)
+}
+
+/// Solves the scaled scenes in turn; before the first solve, checks the axes and claims `out`
+/// into `out_dir`.
+fn solve_points(
+    scenes: Vec<Scene>,
+    mesh: &saddle_core::TetMesh,
+    solver: &Option<Box<dyn saddle_core::Solver>>,
+    opts: &SweepOptions,
+    out: &Path,
+    out_dir: &mut Option<OutDir>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<SweepPoint>, SweepError> {
     let mut points = Vec::with_capacity(scenes.len());
     for (&factor, scaled) in opts.factors.iter().zip(scenes) {
         let started = Instant::now();
         let (problem, own) = scaled.assemble(mesh.clone())?;
+        if out_dir.is_none() {
+            // before the first solve: the axes name reported quantities, the folder is usable
+            let known = reported_quantities(&problem);
+            for (flag, q) in [("--x", &opts.axes.0), ("--y", &opts.axes.1)] {
+                check_quantity(flag, q, &known).map_err(|e| SweepError::Axis(e.to_string()))?;
+            }
+            *out_dir = Some(OutDir::claim(out)?);
+        }
         let solver = solver.clone().or(own).unwrap_or_else(run::default_solver);
         let point = match solver.solve(&problem, &mut Silent) {
             Ok(sol) => {
@@ -172,7 +229,8 @@ pub fn generate(
         };
         let shown: Vec<String> = point.quantities.iter().map(|(k, v)| format!("{k} {v:.6e}")).collect();
         progress(&format!(
-            "factor {factor}: {} in {} iterations, {} plastic, {}",
+            "factor {}: {} in {} iterations, {} plastic, {}",
+            number(factor),
             point.status,
             point.iterations,
             point.plastic_elements,
@@ -180,18 +238,16 @@ pub fn generate(
         ));
         points.push(point);
     }
-    let sweep = Sweep { title, points, axes: opts.axes.clone() };
-    write(&sweep, out)?;
-    Ok(sweep)
+    Ok(points)
 }
 
-/// Writes `sweep.csv`, `sweep.md` and (feature `report`) the plot.
-fn write(sweep: &Sweep, out: &Path) -> Result<(), SweepError> {
+/// Writes `sweep.csv`, `sweep.md` and (feature `report`) the plot, when it has two points.
+fn write(sweep: &Sweep, out: &mut OutDir) -> Result<(), SweepError> {
     let io = |path: PathBuf| move |e: std::io::Error| SweepError::Io { path, message: e.to_string() };
-    std::fs::create_dir_all(out).map_err(io(out.to_path_buf()))?;
     for (name, text) in [("sweep.csv", csv(sweep)), ("sweep.md", markdown(sweep))] {
-        let path = out.join(name);
+        let path = out.path(name);
         std::fs::write(&path, text).map_err(io(path.clone()))?;
+        out.wrote(name)?;
     }
     #[cfg(feature = "report")]
     {
@@ -200,8 +256,10 @@ fn write(sweep: &Sweep, out: &Path) -> Result<(), SweepError> {
             sweep.points.iter().filter_map(|p| Some((p.get(x)?, p.get(y)?, p.converged))).collect();
         if points.len() >= 2 {
             let title = format!("saddle sweep: {}", sweep.title);
-            crate::report::plot::curve(&title, (x, y), &points, &out.join("sweep.png"), &out.join("sweep.svg"))
-                .map_err(|e| SweepError::Io { path: out.join("sweep.png"), message: e.to_string() })?;
+            crate::report::plot::curve(&title, (x, y), &points, &out.path("sweep.png"), &out.path("sweep.svg"))
+                .map_err(|e| SweepError::Io { path: out.path("sweep.png"), message: e.to_string() })?;
+            out.wrote("sweep.png")?;
+            out.wrote("sweep.svg")?;
         }
     }
     Ok(())
@@ -228,7 +286,13 @@ pub fn csv(sweep: &Sweep) -> String {
         let _ = write!(
             s,
             "{},{},{status},{},{:.3e},{},{},{:.3}",
-            p.factor, p.converged, p.iterations, p.kkt_residual, p.contact_nodes, p.plastic_elements, p.wall_s
+            number(p.factor),
+            p.converged,
+            p.iterations,
+            p.kkt_residual,
+            p.contact_nodes,
+            p.plastic_elements,
+            p.wall_s
         );
         for n in &names {
             let _ = write!(s, ",{}", p.quantities.get(n).map_or(String::new(), |v| format!("{v:.12e}")));
@@ -249,7 +313,7 @@ pub fn markdown(sweep: &Sweep) -> String {
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {:.1e} | {} | {} |",
-            p.factor,
+            number(p.factor),
             show(p.get(x)),
             show(p.get(y)),
             p.status,
@@ -267,7 +331,9 @@ pub fn markdown(sweep: &Sweep) -> String {
                  limit load when the material is perfectly plastic)."
             );
         }
-        None => s.push_str("\nFewer than two converged points: no plateau indicator.\n"),
+        None => s.push_str(
+            "\nNo plateau indicator: it needs two converged points at different positive x with positive y.\n",
+        ),
     }
     s
 }
