@@ -87,8 +87,9 @@ fn writes_step_file(k: usize, n: usize) -> bool {
 
 /// Solves the steps of `path` for `loaded` and writes every output into `out_dir` (module docs);
 /// `progress` gets a line per step. The outcome holds the last step's solution and summary (its
-/// `steps` and `load_path` filled). Before any solve: the plotted quantities are checked (an
-/// unknown one is an error on `load_path.plot[i]` listing the known ones) and the folder is
+/// `steps` and `load_path` filled). Before any solve: the plotted quantities the scene names are
+/// checked (an unknown one is an error on `load_path.plot[i]` listing the known ones; the
+/// default axes are plotted when reported) and the folder is
 /// claimed ([`OutDir::claim`]). Errors: output that cannot be written, and a first step that
 /// fails (nothing to summarise; the folder is left as it was); a later failure is recorded in
 /// the summary, not an error. Each step costs O(1) output besides its VTU file: the series and
@@ -102,7 +103,7 @@ pub fn solve_and_write(
 ) -> Result<Outcome, RunError> {
     let l: &dyn Discretisation = &loaded.problem;
     let known = reported_quantities(l);
-    for (i, q) in path.plot.iter().enumerate() {
+    for (i, q) in path.plot.iter().flatten().enumerate() {
         check_quantity(&format!("load_path.plot[{i}]"), q, &known).map_err(SceneError::from)?;
     }
     let mut out = OutDir::claim(out_dir)?;
@@ -212,7 +213,7 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
 
 /// The progress line of a step.
 fn step_line(s: &StepSummary, path: &LoadPath) -> String {
-    let [x, y] = &path.plot;
+    let [x, y] = &path.axes();
     let show = |n: &str| s.get(n).map_or("-".to_string(), |v| format!("{v:.6e}"));
     format!(
         "step {} (factor {}): {} in {} iterations, KKT {:.1e}, {} plastic, {x} {}, {y} {}",
@@ -366,7 +367,7 @@ pub fn csv(steps: &[StepSummary]) -> String {
 /// points. True when the plot was written.
 #[cfg(feature = "report")]
 fn plot(summary: &Summary, path: &LoadPath, out_dir: &Path) -> Result<bool, RunError> {
-    let [x, y] = &path.plot;
+    let [x, y] = &path.axes();
     let points: Vec<(f64, f64, bool)> =
         summary.steps.iter().filter_map(|s| Some((s.get(x)?, s.get(y)?, s.converged))).collect();
     if points.len() < 2 {

@@ -249,21 +249,23 @@ pub struct LoadPath {
     pub substeps: usize,
     /// The quantities on the axes of `load_path.png` (x, y): any quantity the obstacles report
     /// (`U`, `force`, `imprint` — the largest displacement of the contact zone away from the
-    /// obstacle, defined also at zero load), an extra, or `factor`. Default: imprint and force,
-    /// the load–depth loop of an indentation.
-    #[serde(default = "default_plot")]
-    pub plot: [String; 2],
+    /// obstacle, defined also at zero load), an extra, or `factor`; a name the scene does not
+    /// report is an error before any solve. Absent: imprint and force, the load–depth loop of an
+    /// indentation, drawn when the obstacles report both ([`LoadPath::axes`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plot: Option<[String; 2]>,
 }
 
 fn one() -> usize {
     1
 }
 
-fn default_plot() -> [String; 2] {
-    ["imprint".to_string(), "force".to_string()]
-}
-
 impl LoadPath {
+    /// The plotted quantities (x, y): `plot`, or imprint and force when absent.
+    pub fn axes(&self) -> [String; 2] {
+        self.plot.clone().unwrap_or_else(|| ["imprint".to_string(), "force".to_string()])
+    }
+
     /// The factors of the steps, sub-steps included.
     pub fn step_factors(&self) -> Vec<f64> {
         saddle_core::step_factors(&self.factors, self.substeps)
@@ -380,6 +382,11 @@ fn field_error(root: &toml::Value, e: serde_path_to_error::Error<toml::de::Error
     };
     if let Some(leaf) = leaf {
         path = leaf;
+    }
+    // a missing field is named by its own path: `mesh.cells: missing (a required field)`
+    if let Some(field) = rule.strip_prefix("missing field `").and_then(|r| r.strip_suffix('`')) {
+        let field = if path == "." { field.to_string() } else { format!("{path}.{field}") };
+        return format!("{field}: missing (a required field)");
     }
     match lookup(root, &path) {
         _ if path == "." => rule,
