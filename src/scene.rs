@@ -37,7 +37,7 @@
 //!
 //! Several obstacles (K = K₁ ∩ K₂ ∩ …, theory §8) are an array of tables, each with a unique
 //! `name`; their extras are named `name.U`, … and their errors `obstacle[i].…`. A single
-//! `[obstacle]` table may carry a `name` too. The `name` is read before the plugin reads the rest
+//! `[obstacle]` table may carry a `name` too. The `name` is set aside as the plugin reads the rest
 //! of its table ([`saddle_core::Obstacles`]).
 //!
 //! ```toml
