@@ -150,7 +150,8 @@ pub struct StepSummary {
     pub J: Option<f64>,
     /// Wall time of the step: set-up, solve, summary and output.
     pub wall_s: f64,
-    /// The step's VTU file (null when the solver failed).
+    /// The step's VTU file (null when the solver failed, or beyond 100 steps for a step whose
+    /// file is not written: `path::MAX_STEP_FILES`).
     pub file: Option<String>,
     /// Warnings of the step.
     pub warnings: Vec<String>,
