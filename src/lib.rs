@@ -28,6 +28,7 @@ pub use saddle_yield as yield_surfaces;
 pub mod bench;
 pub mod conformance;
 pub mod locking;
+pub mod outdir;
 pub mod output;
 pub mod path;
 #[cfg(feature = "gmsh")]
@@ -35,5 +36,6 @@ pub mod peer;
 pub mod report;
 pub mod run;
 pub mod scene;
+mod scene_de;
 pub mod stability;
 pub mod sweep;

@@ -73,7 +73,7 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Load factors, comma-separated, in the order solved.
-        #[arg(long, value_delimiter = ',', required = true)]
+        #[arg(long, value_delimiter = ',', required = true, allow_hyphen_values = true)]
         factors: Vec<f64>,
         /// Use this solver type with its default parameters instead of the scene's.
         #[arg(long)]
@@ -279,16 +279,11 @@ fn run(
     bar.bar.finish_and_clear();
     let outcome = result?;
     print_summary(&outcome.summary);
-    match &outcome.summary.load_path {
-        Some(p) => println!(
-            "  wrote {}/summary.json, load_path.csv, solution.pvd and solution_NNNN.vtu ({} of {} steps{})",
-            outcome.out_dir.display(),
-            p.steps_done,
-            p.step_factors.len(),
-            if p.completed { "" } else { ", stopped" }
-        ),
-        None => println!("  wrote {}/summary.json and solution.vtu", outcome.out_dir.display()),
+    if let Some(p) = &outcome.summary.load_path {
+        let stopped = if p.completed { "" } else { ", stopped" };
+        println!("  load path: {} of {} steps{stopped}", p.steps_done, p.step_factors.len());
     }
+    println!("  wrote {}: {}", outcome.out_dir.display(), saddle::outdir::describe(&outcome.written));
     Ok(if outcome.summary.converged { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
 
@@ -357,7 +352,7 @@ fn sweep(
     })
     .map_err(|e| e.to_string())?;
     println!("{}", saddle::sweep::markdown(&s));
-    println!("  wrote {}/sweep.csv, sweep.md, sweep.png, sweep.svg", out.display());
+    println!("  wrote {}: {}", out.display(), saddle::outdir::describe(&s.written));
     // as `run`: 2 when a point stopped without converging
     Ok(if s.points.iter().all(|p| p.converged) { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
@@ -380,8 +375,22 @@ fn bench_meshes(_: PathBuf, _: PathBuf, _: Vec<PathBuf>, _: Vec<PathBuf>) -> Res
     Err("--meshes reads Gmsh files: build with the `gmsh` feature".into())
 }
 
+/// Exit statuses: 0 done (converged), 1 bad input or usage (the command line included) or any
+/// other error, 2 stopped without converging with the outputs written.
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind::{DisplayHelp, DisplayVersion};
+            let _ = e.print();
+            // usage errors exit 1 (clap's own 2 is the status of a solve that did not converge)
+            return if matches!(e.kind(), DisplayHelp | DisplayVersion) {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            };
+        }
+    };
     let result = match cli.command {
         Command::Run { scene, out, solver, discretisation, quiet } => {
             run(scene, out, solver, discretisation, quiet).map_err(|e| e.to_string())

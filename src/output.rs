@@ -153,7 +153,8 @@ pub struct StepSummary {
     pub J: Option<f64>,
     /// Wall time of the step: set-up, solve, summary and output.
     pub wall_s: f64,
-    /// The step's VTU file (null when the solver failed).
+    /// The step's VTU file (null when the solver failed, or beyond 100 steps for a step whose
+    /// file is not written: `path::MAX_STEP_FILES`).
     pub file: Option<String>,
     /// Warnings of the step.
     pub warnings: Vec<String>,
@@ -271,6 +272,76 @@ pub fn single_quantity(p: ProblemView<'_>, sol: &Solution, quantity: &str) -> Op
     }
 }
 
+/// Each obstacle's report on the solution (`u`, `extras`, `lambda`), with its imprint
+/// max_i (G u)_i over its rows, the largest displacement of its candidate nodes away from it
+/// (theory §11.4; generic, from the rows), and the quantities named like an extra in
+/// `undetermined` (theory §11.3) NaN: written null.
+fn reports_with_imprints(
+    p: ProblemView<'_>,
+    u: &[f64],
+    extras: &[f64],
+    lambda: &[f64],
+    undetermined: &[usize],
+) -> Vec<ObstacleReport> {
+    let mut reports = p.contact_reports(extras, lambda);
+    let names = p.extra_names();
+    for (r, part) in reports.iter_mut().zip(p.obstacles.parts()) {
+        let m = (0..part.rows.n_rows()).map(|i| part.rows.row_times(i, u)).fold(f64::NEG_INFINITY, f64::max);
+        if m.is_finite() {
+            r.report.quantities.push(("imprint".into(), m));
+        }
+        for k in part.extra_range.clone().filter(|k| undetermined.contains(k)) {
+            let local = names[k].rsplit_once('.').map_or(names[k].as_str(), |(_, q)| q);
+            if let Some(q) = r.report.quantities.iter_mut().find(|(n, _)| n == local) {
+                q.1 = f64::NAN;
+            }
+        }
+    }
+    reports
+}
+
+/// The obstacles' quantities as `contact` holds them: plain names with one obstacle, else
+/// `name.quantity` (`obstacle[i].quantity` for an unnamed one).
+fn contact_entries(p: ProblemView<'_>, reports: &[ObstacleReport]) -> BTreeMap<String, f64> {
+    match reports {
+        [r] => r.report.quantities.iter().cloned().collect(),
+        _ => reports
+            .iter()
+            .enumerate()
+            .flat_map(|(i, r)| {
+                let name = r.name.clone().unwrap_or_else(|| p.obstacles.obstacles().path("obstacle", i));
+                r.report.quantities.iter().map(move |(q, v)| (format!("{name}.{q}"), *v))
+            })
+            .collect(),
+    }
+}
+
+/// The quantities a summary of `p` reports by name, known before any solve (the obstacles'
+/// reports at zero): the keys of `contact` and of `extras`, sorted. What a load path's plot and a
+/// sweep's axes may name, besides `factor`.
+pub fn reported_quantities(p: ProblemView<'_>) -> Vec<String> {
+    let (u, extras, lambda) = (vec![0.0; p.l.n_dofs()], vec![0.0; p.l.n_extras()], vec![0.0; p.l.n_rows()]);
+    let reports = reports_with_imprints(p, &u, &extras, &lambda, &[]);
+    let mut names: Vec<String> = contact_entries(p, &reports).into_keys().chain(p.extra_names()).collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// `name` is a quantity of `known` or `factor`; otherwise an error on `field` that lists them.
+pub fn check_quantity(field: &str, name: &str, known: &[String]) -> Result<(), saddle_core::ParameterError> {
+    if name == "factor" || known.iter().any(|k| k == name) {
+        return Ok(());
+    }
+    let mut list: Vec<&str> = known.iter().map(String::as_str).collect();
+    list.push("factor");
+    Err(saddle_core::ParameterError::new(
+        field,
+        format!("{name:?}"),
+        format!("is not a reported quantity; known: {}", list.join(", ")),
+    ))
+}
+
 impl Summary {
     /// Summarises `sol`, recomputing J, the dual energy and the KKT residuals from scratch. The
     /// extras the solution marks undetermined (theory §11.3) are null, and so are the obstacles'
@@ -280,46 +351,13 @@ impl Summary {
         let mut ws = Workspace::new(l);
         let kkt = kkt(l, &sol.iterate(), &mut ws);
         let j = energy(l, &sol.u, &sol.extras, &mut ws);
-        // each obstacle reports from its own rows, extras and multipliers
-        let mut reports = p.contact_reports(&sol.extras, &sol.lambda);
-        // the imprint of each obstacle: max_i (G u)_i over its rows, the largest displacement of
-        // its candidate nodes away from it (theory §11.4); generic, from the rows
-        let parts = p.obstacles.parts();
-        let imprints: Vec<f64> = parts
-            .iter()
-            .map(|p| (0..p.rows.n_rows()).map(|i| p.rows.row_times(i, &sol.u)).fold(f64::NEG_INFINITY, f64::max))
-            .collect();
-        for (r, m) in reports.iter_mut().zip(&imprints) {
-            if m.is_finite() {
-                r.report.quantities.push(("imprint".into(), *m));
-            }
-        }
-        // an undetermined extra shows as null, in its obstacle's quantities too
-        let names = p.extra_names();
-        for (o, part) in parts.iter().enumerate() {
-            for k in part.extra_range.clone().filter(|k| sol.undetermined.contains(k)) {
-                let local = names[k].rsplit_once('.').map_or(names[k].as_str(), |(_, q)| q);
-                if let Some(q) = reports[o].report.quantities.iter_mut().find(|(n, _)| n == local) {
-                    q.1 = f64::NAN;
-                }
-            }
-        }
+        let reports = reports_with_imprints(p, &sol.u, &sol.extras, &sol.lambda, &sol.undetermined);
         let single = match reports.as_slice() {
             [r] => Some(&r.report),
             _ => None,
         };
-        let contact: BTreeMap<String, f64> = match single {
-            Some(r) => r.quantities.iter().cloned().collect(),
-            None => reports
-                .iter()
-                .enumerate()
-                .flat_map(|(i, r)| {
-                    let name = r.name.clone().unwrap_or_else(|| p.obstacles.obstacles().path("obstacle", i));
-                    r.report.quantities.iter().map(move |(q, v)| (format!("{name}.{q}"), *v))
-                })
-                .collect(),
-        };
-        let extras = (names.into_iter().enumerate())
+        let contact = contact_entries(p, &reports);
+        let extras = (p.extra_names().into_iter().enumerate())
             .map(|(k, n)| (n, (!sol.undetermined.contains(&k)).then_some(sol.extras[k])))
             .collect();
         let mut warnings = p.warnings();

@@ -22,13 +22,16 @@
 //! }
 //! ```
 
-use crate::output::{StepSummary, Summary, write_vtu};
+use crate::outdir::OutDir;
+use crate::output::{StepSummary, Summary, check_quantity, reported_quantities, write_vtu};
 use crate::run::{Loaded, Outcome, RunError};
 use crate::scene::LoadPath;
-use saddle_core::{Evolution, Monitor, PathError, Solution};
+use saddle_core::{Evolution, Monitor, PathError, SceneError, StepSolution};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::fs::{File, OpenOptions};
+use std::io::{Seek, SeekFrom, Write as _};
 use std::path::Path;
 use std::time::Instant;
 
@@ -69,10 +72,28 @@ pub struct ResidualState {
     pub max_equivalent_plastic_strain: f64,
 }
 
+/// The most `solution_NNNN.vtu` files a load path writes: with more planned steps, every k-th
+/// step's (k = ⌈steps / 100⌉), the last planned step's and the step that stops the path; a step
+/// without a file has `file` null in `summary.json`. `load_path.csv` and `summary.json` keep
+/// every step (a few hundred bytes each), so a path writes O(steps) in all.
+pub const MAX_STEP_FILES: usize = 100;
+
+/// Whether step `k` of `n` planned steps writes its VTU file ([`MAX_STEP_FILES`]); a step that
+/// stops the path always does.
+fn writes_step_file(k: usize, n: usize) -> bool {
+    let stride = n.div_ceil(MAX_STEP_FILES).max(1);
+    k.is_multiple_of(stride) || k + 1 == n
+}
+
 /// Solves the steps of `path` for `loaded` and writes every output into `out_dir` (module docs);
 /// `progress` gets a line per step. The outcome holds the last step's solution and summary (its
-/// `steps` and `load_path` filled). Errors: output that cannot be written, and a first step that
-/// fails (nothing to summarise); a later failure is recorded in the summary, not an error.
+/// `steps` and `load_path` filled). Before any solve: the plotted quantities the scene names are
+/// checked (an unknown one is an error on `load_path.plot[i]` listing the known ones; the
+/// default axes are plotted when reported) and the folder is
+/// claimed ([`OutDir::claim`]). Errors: output that cannot be written, and a first step that
+/// fails (nothing to summarise; the folder is left as it was); a later failure is recorded in
+/// the summary, not an error. Each step costs O(1) output besides its VTU file: the series and
+/// the table are appended to, not rewritten.
 pub fn solve_and_write(
     loaded: &Loaded,
     path: &LoadPath,
@@ -80,17 +101,18 @@ pub fn solve_and_write(
     monitor: &mut dyn Monitor,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, RunError> {
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |source| RunError::Io { path: p, source }
-    };
-    let created = !out_dir.exists();
-    std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
+    let known = reported_quantities(loaded.problem.view());
+    for (i, q) in path.plot.iter().flatten().enumerate() {
+        check_quantity(&format!("load_path.plot[{i}]"), q, &known).map_err(SceneError::from)?;
+    }
+    let mut out = OutDir::claim(out_dir)?;
     let mut timer = loaded.timer.clone();
     let factors = path.step_factors();
+    let names = loaded.problem.view().extra_names();
     let mut evolution = Evolution::new(&loaded.problem);
+    let mut series = Series::new(&known, &names);
     let mut steps: Vec<StepSummary> = Vec::new();
-    let mut last: Option<(Summary, Solution)> = None;
+    let mut last: Option<(Summary, StepSolution)> = None;
     let mut failure: Option<(usize, String)> = None;
     for (k, &factor) in factors.iter().enumerate() {
         let started = Instant::now();
@@ -102,39 +124,41 @@ pub fn solve_and_write(
                     PathError::Scene { source, .. } => source.to_string(),
                 };
                 progress(&format!("step {k} (factor {factor}): failed: {why}"));
-                steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
-                failure = Some((k, why));
                 if last.is_none() {
-                    // nothing was written: leave no empty folder behind (as a failed one-step run)
-                    if created {
-                        let _ = std::fs::remove_dir(out_dir);
-                    }
+                    // nothing was written: the folder is left as it was (as a failed one-step run)
+                    out.abandon();
                     return Err(RunError::Path(e));
                 }
+                steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
+                timer.time("write", || series.append(&mut out, &steps))?;
+                failure = Some((k, why));
                 break;
             }
         };
         let mut s = timer.time("summary", || Summary::new(step.problem.view(), &step.solution, loaded.title.clone()));
         s.warnings.extend(step.warnings.iter().cloned());
-        let file = format!("solution_{k:04}.vtu");
-        timer
-            .time("write", || write_vtu(&out_dir.join(&file), step.problem.view(), &step.solution))
-            .map_err(io(&out_dir.join(&file)))?;
-        let entry = StepSummary::new(k, factor, &s, Some(file), started.elapsed().as_secs_f64());
+        let converged = step.converged();
+        let file = (writes_step_file(k, factors.len()) || !converged).then(|| format!("solution_{k:04}.vtu"));
+        if let Some(f) = &file {
+            timer
+                .time("write", || write_vtu(&out.path(f), step.problem.view(), &step.solution))
+                .map_err(io(&out.path(f)))?;
+            out.wrote(f)?;
+        }
+        let entry = StepSummary::new(k, factor, &s, file, started.elapsed().as_secs_f64());
         progress(&step_line(&entry, path));
         steps.push(entry);
-        let converged = step.converged();
+        // the series and the table so far, so that an interrupted path leaves them readable
+        timer.time("write", || series.append(&mut out, &steps))?;
         if !converged {
             failure = Some((k, format!("the solver stopped without converging ({:?})", s.stop_reason)));
         }
-        last = Some((s, step.solution));
-        // the series and the table so far, so that an interrupted path leaves them readable
-        timer.time("write", || write_series(out_dir, &steps)).map_err(io(out_dir))?;
+        last = Some((s, step));
         if !converged {
             break;
         }
     }
-    let (mut summary, solution) = last.expect("a first step that fails returns above");
+    let (mut summary, step) = last.expect("a first step that fails returns above");
     let completed = failure.is_none();
     if let Some((k, why)) = &failure {
         summary.converged = false;
@@ -164,24 +188,31 @@ pub fn solve_and_write(
     });
     summary.steps = steps;
     // solution.vtu: the last step solved, as a one-step run writes it
-    let last_file = summary.steps.iter().rev().find_map(|s| s.file.clone());
-    if let Some(f) = last_file {
-        timer
-            .time("write", || std::fs::copy(out_dir.join(&f), out_dir.join("solution.vtu")))
-            .map_err(io(&out_dir.join("solution.vtu")))?;
-    }
+    let vtu = out.path("solution.vtu");
+    timer.time("write", || write_vtu(&vtu, step.problem.view(), &step.solution)).map_err(io(&vtu))?;
+    out.wrote("solution.vtu")?;
     #[cfg(feature = "report")]
-    plot(&summary, path, out_dir)?;
+    if plot(&summary, path, out.dir())? {
+        out.wrote("load_path.png")?;
+        out.wrote("load_path.svg")?;
+    }
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
-    let json = out_dir.join("summary.json");
+    let json = out.path("summary.json");
     summary.write(&json).map_err(io(&json))?;
-    Ok(Outcome { solution, summary, out_dir: out_dir.to_path_buf() })
+    out.wrote("summary.json")?;
+    let written = out.finish()?;
+    Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
+    let path = path.to_path_buf();
+    move |source| RunError::Io { path, source }
 }
 
 /// The progress line of a step.
 fn step_line(s: &StepSummary, path: &LoadPath) -> String {
-    let [x, y] = &path.plot;
+    let [x, y] = &path.axes();
     let show = |n: &str| s.get(n).map_or("-".to_string(), |v| format!("{v:.6e}"));
     format!(
         "step {} (factor {}): {} in {} iterations, KKT {:.1e}, {} plastic, {x} {}, {y} {}",
@@ -196,43 +227,105 @@ fn step_line(s: &StepSummary, path: &LoadPath) -> String {
     )
 }
 
+/// The closing lines of `solution.pvd`, rewritten after each appended step.
+const PVD_TAIL: &str = "  </Collection>\n</VTKFile>\n";
+
 /// `solution.pvd` (the steps' VTU files as a ParaView series, the step index as time) and
-/// `load_path.csv`.
-fn write_series(out_dir: &Path, steps: &[StepSummary]) -> std::io::Result<()> {
-    let mut pvd = String::from(
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
-    );
-    for s in steps {
-        if let Some(f) = &s.file {
-            let _ = writeln!(pvd, "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{f}\"/>", s.step);
-        }
-    }
-    pvd.push_str("  </Collection>\n</VTKFile>\n");
-    std::fs::write(out_dir.join("solution.pvd"), pvd)?;
-    std::fs::write(out_dir.join("load_path.csv"), csv(steps))
+/// `load_path.csv`, written as the steps go: each step appends its line (the series' closing
+/// lines rewritten after it), so both stay readable and cost O(1) per step. The table's columns
+/// are the extras and the reported quantities, known before the first step; a step reporting
+/// another quantity (no plugin does) has the table rewritten with a column for it.
+struct Series {
+    columns: Columns,
+    files: Option<(File, File)>,
 }
 
-/// `load_path.csv`: one row per step; an undetermined or unreported value is left empty.
-pub fn csv(steps: &[StepSummary]) -> String {
-    let mut extras: Vec<String> = steps.iter().flat_map(|s| s.extras.keys().cloned()).collect();
-    extras.sort();
-    extras.dedup();
-    let mut quantities: Vec<String> =
-        steps.iter().flat_map(|s| s.contact.keys().cloned()).filter(|k| !extras.contains(k)).collect();
-    quantities.sort();
-    quantities.dedup();
-    let mut out = String::from(
-        "step,factor,converged,stop_reason,iterations,kkt_residual,contact_nodes,plastic_points,plastic_elements,\
-         max_von_mises,max_equivalent_plastic_strain,wall_s",
-    );
-    for n in extras.iter().chain(&quantities) {
-        let _ = write!(out, ",{n}");
+impl Series {
+    fn new(known: &[String], extras: &[String]) -> Self {
+        let mut extras = extras.to_vec();
+        extras.sort();
+        let quantities = known.iter().filter(|k| !extras.contains(k)).cloned().collect();
+        Self { columns: Columns { extras, quantities }, files: None }
     }
-    out.push('\n');
-    let num = |v: Option<f64>| v.filter(|v| v.is_finite()).map_or(String::new(), |v| format!("{v:.12e}"));
-    for s in steps {
-        let _ = write!(
-            out,
+
+    /// Appends the last of `steps` to both files (creating them at the first step).
+    fn append(&mut self, out: &mut OutDir, steps: &[StepSummary]) -> Result<(), RunError> {
+        let s = steps.last().expect("a step to append");
+        let (pvd_path, csv_path) = (out.path("solution.pvd"), out.path("load_path.csv"));
+        if self.files.is_none() {
+            let pvd = File::create(&pvd_path).map_err(io(&pvd_path))?;
+            let csv = File::create(&csv_path).map_err(io(&csv_path))?;
+            let mut files = (pvd, csv);
+            files.0.write_all(PVD_HEAD.as_bytes()).map_err(io(&pvd_path))?;
+            files.0.write_all(PVD_TAIL.as_bytes()).map_err(io(&pvd_path))?;
+            files.1.write_all(self.columns.header().as_bytes()).map_err(io(&csv_path))?;
+            self.files = Some(files);
+            out.wrote("solution.pvd")?;
+            out.wrote("load_path.csv")?;
+        }
+        let (pvd, csv) = self.files.as_mut().expect("created above");
+        if let Some(f) = &s.file {
+            let line = format!("    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{f}\"/>\n{PVD_TAIL}", s.step);
+            pvd.seek(SeekFrom::End(-(PVD_TAIL.len() as i64)))
+                .and_then(|_| pvd.write_all(line.as_bytes()))
+                .map_err(io(&pvd_path))?;
+        }
+        if self.columns.covers(s) {
+            csv.write_all(self.columns.row(s).as_bytes()).map_err(io(&csv_path))?;
+        } else {
+            self.columns = Columns::of(steps);
+            std::fs::write(&csv_path, self::csv(steps)).map_err(io(&csv_path))?;
+            *csv = OpenOptions::new().append(true).open(&csv_path).map_err(io(&csv_path))?;
+        }
+        Ok(())
+    }
+}
+
+/// The opening lines of `solution.pvd`.
+const PVD_HEAD: &str = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+
+/// The columns of `load_path.csv` after the fixed ones: the extras, then the other reported
+/// quantities, each sorted.
+struct Columns {
+    extras: Vec<String>,
+    quantities: Vec<String>,
+}
+
+impl Columns {
+    /// The columns every step of `steps` needs.
+    fn of(steps: &[StepSummary]) -> Self {
+        let mut extras: Vec<String> = steps.iter().flat_map(|s| s.extras.keys().cloned()).collect();
+        extras.sort();
+        extras.dedup();
+        let mut quantities: Vec<String> =
+            steps.iter().flat_map(|s| s.contact.keys().cloned()).filter(|k| !extras.contains(k)).collect();
+        quantities.sort();
+        quantities.dedup();
+        Self { extras, quantities }
+    }
+
+    /// True when every value of `s` has its column.
+    fn covers(&self, s: &StepSummary) -> bool {
+        s.extras.keys().all(|k| self.extras.contains(k))
+            && s.contact.keys().all(|k| self.extras.contains(k) || self.quantities.contains(k))
+    }
+
+    fn header(&self) -> String {
+        let mut out = String::from(
+            "step,factor,converged,stop_reason,iterations,kkt_residual,contact_nodes,plastic_points,plastic_elements,\
+             max_von_mises,max_equivalent_plastic_strain,wall_s",
+        );
+        for n in self.extras.iter().chain(&self.quantities) {
+            let _ = write!(out, ",{n}");
+        }
+        out.push('\n');
+        out
+    }
+
+    /// The row of step `s`; an undetermined or unreported value is left empty.
+    fn row(&self, s: &StepSummary) -> String {
+        let num = |v: Option<f64>| v.filter(|v| v.is_finite()).map_or(String::new(), |v| format!("{v:.12e}"));
+        let mut out = format!(
             "{},{},{},{},{},{},{},{},{},{},{},{:.3}",
             s.step,
             s.factor,
@@ -247,30 +340,41 @@ pub fn csv(steps: &[StepSummary]) -> String {
             num(Some(s.max_equivalent_plastic_strain)),
             s.wall_s
         );
-        for n in &extras {
+        for n in &self.extras {
             let _ = write!(out, ",{}", num(s.extras.get(n).copied().flatten()));
         }
-        for n in &quantities {
+        for n in &self.quantities {
             let _ = write!(out, ",{}", num(s.contact.get(n).copied()));
         }
         out.push('\n');
+        out
+    }
+}
+
+/// `load_path.csv`: one row per step; an undetermined or unreported value is left empty.
+pub fn csv(steps: &[StepSummary]) -> String {
+    let columns = Columns::of(steps);
+    let mut out = columns.header();
+    for s in steps {
+        out.push_str(&columns.row(s));
     }
     out
 }
 
 /// `load_path.{png,svg}`: the path's y against x in step order (the hysteresis loop of an
 /// indentation), steps where either is undetermined left out; nothing with fewer than two
-/// points.
+/// points. True when the plot was written.
 #[cfg(feature = "report")]
-fn plot(summary: &Summary, path: &LoadPath, out_dir: &Path) -> Result<(), RunError> {
-    let [x, y] = &path.plot;
+fn plot(summary: &Summary, path: &LoadPath, out_dir: &Path) -> Result<bool, RunError> {
+    let [x, y] = &path.axes();
     let points: Vec<(f64, f64, bool)> =
         summary.steps.iter().filter_map(|s| Some((s.get(x)?, s.get(y)?, s.converged))).collect();
     if points.len() < 2 {
-        return Ok(());
+        return Ok(false);
     }
     let title = format!("load path: {}", summary.title.clone().unwrap_or_default());
     let (png, svg) = (out_dir.join("load_path.png"), out_dir.join("load_path.svg"));
     crate::report::plot::curve(&title, (x, y), &points, &png, &svg)
-        .map_err(|e| RunError::Io { path: png, source: std::io::Error::other(e.to_string()) })
+        .map_err(|e| RunError::Io { path: png, source: std::io::Error::other(e.to_string()) })?;
+    Ok(true)
 }

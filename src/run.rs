@@ -1,6 +1,7 @@
 //! Running a scene file end to end: read and validate, assemble, solve, summarise, write
 //! `summary.json` and `solution.vtu`. Nothing is written unless the solve returns a solution.
 
+use crate::outdir::{OutDir, OutError};
 use crate::output::{Summary, write_vtu};
 use crate::scene::Scene;
 use saddle_core::{
@@ -27,6 +28,9 @@ pub enum RunError {
     /// The first step of a load path failed (a later one is recorded in the summary).
     #[error("load path: {0}")]
     Path(#[from] saddle_core::PathError),
+    /// `--out` cannot be used, or a file in it cannot be written.
+    #[error(transparent)]
+    Out(#[from] OutError),
 }
 
 /// The solver used when a scene names none: the paper's Uzawa method.
@@ -94,9 +98,13 @@ pub struct Outcome {
     pub summary: Summary,
     /// Where the files went.
     pub out_dir: PathBuf,
+    /// The files written into it, in order (the folder's manifest, [`crate::outdir`]).
+    pub written: Vec<String>,
 }
 
 /// Solves a loaded problem and writes `out_dir/summary.json` and `out_dir/solution.vtu`. The
+/// folder is claimed before the solve ([`OutDir::claim`]: an unusable `--out` fails before any
+/// work) and, once written, holds only this run's files of saddle ([`OutDir::finish`]). The
 /// summary's `end_to_end` holds the wall time of every phase the user waits for: `read` and
 /// `setup` (from [`load`]), `solve`, `summary` (the KKT residuals and energies recomputed from
 /// the solution) and `write` (solution.vtu; summary.json is written last, after the clock).
@@ -116,15 +124,22 @@ pub fn solve_and_write_with(
     if let Some(path) = &loaded.load_path {
         return crate::path::solve_and_write(loaded, path, out_dir, monitor, progress);
     }
+    let mut out = OutDir::claim(out_dir)?;
     let mut timer = loaded.timer.clone();
     // one step at the scene's load from the zero state: the stationary problem, through the same
     // load-scaling path as sweeps and load paths (an obstacle without load leaves its extras
     // undetermined, theory §11.3)
     let mut evolution = Evolution::new(&loaded.problem);
-    let step = timer.time("solve", || evolution.step(1.0, loaded.solver.as_ref(), monitor)).map_err(|e| match e {
-        PathError::Solve { source, .. } => RunError::Solve(source),
-        PathError::Scene { source, .. } => RunError::Scene(source),
-    })?;
+    let step = match timer.time("solve", || evolution.step(1.0, loaded.solver.as_ref(), monitor)) {
+        Ok(step) => step,
+        Err(e) => {
+            out.abandon();
+            return Err(match e {
+                PathError::Solve { source, .. } => RunError::Solve(source),
+                PathError::Scene { source, .. } => RunError::Scene(source),
+            });
+        }
+    };
     let view = step.problem.view();
     let mut summary = timer.time("summary", || Summary::new(view, &step.solution, loaded.title.clone()));
     summary.warnings.extend(step.warnings.iter().cloned());
@@ -132,7 +147,10 @@ pub fn solve_and_write_with(
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
     write_summary(out_dir, &summary, &vtu_tmp, &vtu)?;
-    Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf() })
+    out.wrote("solution.vtu")?;
+    out.wrote("summary.json")?;
+    let written = out.finish()?;
+    Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
@@ -140,9 +158,8 @@ fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
     move |source| RunError::Io { path, source }
 }
 
-/// Writes solution.vtu under a temporary name in `out_dir` (created): (temporary, final) path.
+/// Writes solution.vtu under a temporary name in `out_dir`: (temporary, final) path.
 fn write_vtu_file(out_dir: &Path, p: ProblemView<'_>, sol: &Solution) -> Result<(PathBuf, PathBuf), RunError> {
-    std::fs::create_dir_all(out_dir).map_err(io_error(out_dir))?;
     let vtu = out_dir.join("solution.vtu");
     let vtu_tmp = out_dir.join(".solution.vtu.partial");
     write_vtu(&vtu_tmp, p, sol).map_err(io_error(&vtu))?;

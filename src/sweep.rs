@@ -11,10 +11,12 @@
 //! saddle sweep examples/strip_punch.toml --factors 0.25,0.5,1,2,4 --out out/strip
 //! ```
 
-use crate::output::Summary;
+use crate::outdir::{OutDir, OutError};
+use crate::output::{Summary, check_quantity, reported_quantities};
 use crate::run::{self, RunError};
 use crate::scene::Scene;
-use saddle_core::{Evolution, SceneError, Silent};
+use saddle_core::error::{check, number};
+use saddle_core::{DiscreteProblem, Evolution, SceneError, Silent, Solver};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -30,6 +32,12 @@ pub enum SweepError {
     /// `--solver` names no solver.
     #[error(transparent)]
     Run(#[from] RunError),
+    /// `--out` cannot be used, or a file in it cannot be written.
+    #[error(transparent)]
+    Out(#[from] OutError),
+    /// `--x` or `--y` names no reported quantity.
+    #[error("{0}")]
+    Axis(String),
     /// No factors, or a factor that is not finite and ≥ 0.
     #[error("--factors: {0}")]
     Factors(String),
@@ -95,6 +103,8 @@ pub struct Sweep {
     pub points: Vec<SweepPoint>,
     /// The plotted quantities.
     pub axes: (String, String),
+    /// The files written (`sweep.csv`, `sweep.md`, and the plot when it was drawn).
+    pub written: Vec<String>,
 }
 
 impl Sweep {
@@ -105,11 +115,14 @@ impl Sweep {
     }
 
     /// The plateau indicator: d ln y / d ln x over the last interval of converged points (1 for
-    /// a linear response through the origin, → 0 on a plateau); None with fewer than two.
+    /// a linear response through the origin, → 0 on a plateau): between the last point and the
+    /// last one before it at another x, both with x, y > 0 (a repeated factor adds no interval);
+    /// None without two such points.
     pub fn last_log_slope(&self) -> Option<f64> {
-        let c = self.curve();
-        let [.., (x0, y0), (x1, y1)] = c.as_slice() else { return None };
-        Some((y1 / y0).ln() / (x1 / x0).ln())
+        let c: Vec<(f64, f64)> = self.curve().into_iter().filter(|&(x, y)| x > 0.0 && y > 0.0).collect();
+        let &(x1, y1) = c.last()?;
+        let &(x0, y0) = c.iter().rev().find(|p| p.0 != x1)?;
+        Some((y1 / y0).ln() / (x1 / x0).ln()).filter(|k| k.is_finite())
     }
 }
 
@@ -122,6 +135,13 @@ pub fn generate(
 ) -> Result<Sweep, SweepError> {
     if opts.factors.is_empty() {
         return Err(SweepError::Factors("give at least one factor".into()));
+    }
+    if let Some(f) = opts.factors.iter().find(|f| f.abs() > check::MAX_MAGNITUDE) {
+        return Err(SweepError::Factors(format!(
+            "{} exceeds {:e} in magnitude, the largest a scene's value may have (larger ones overflow the solvers)",
+            number(*f),
+            check::MAX_MAGNITUDE
+        )));
     }
     let mut scene = Scene::from_file(scene_path)?;
     if let Some(name) = &opts.element {
@@ -139,12 +159,45 @@ pub fn generate(
     let mesh = scene.build_mesh()?;
     let (problem, own) = scene.assemble(mesh)?;
     let solver = solver.or(own).unwrap_or_else(run::default_solver);
+    // the folder is claimed before the first solve; left as it was if no point can be solved
+    let mut out_dir: Option<OutDir> = None;
+    let points = match solve_points(&problem, solver.as_ref(), opts, out, &mut out_dir, progress) {
+        Ok(points) => points,
+        Err(e) => {
+            if let Some(o) = out_dir {
+                o.abandon();
+            }
+            return Err(e);
+        }
+    };
+    let mut sweep = Sweep { title, points, axes: opts.axes.clone(), written: Vec::new() };
+    let mut out = out_dir.expect("at least one factor: claimed before its solve");
+    write(&sweep, &mut out)?;
+    sweep.written = out.finish()?;
+    Ok(sweep)
+}
+
+/// Solves `problem` at each factor in turn, each point from zero: one load step at the factor
+/// from the zero state, the load scaled as a load path scales it (theory §11.2). Before the
+/// first solve, checks the axes and claims `out` into `out_dir`.
+fn solve_points(
+    problem: &DiscreteProblem,
+    solver: &dyn Solver,
+    opts: &SweepOptions,
+    out: &Path,
+    out_dir: &mut Option<OutDir>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<SweepPoint>, SweepError> {
+    // the axes name reported quantities, the folder is usable
+    let known = reported_quantities(problem.view());
+    for (flag, q) in [("--x", &opts.axes.0), ("--y", &opts.axes.1)] {
+        check_quantity(flag, q, &known).map_err(|e| SweepError::Axis(e.to_string()))?;
+    }
+    *out_dir = Some(OutDir::claim(out)?);
     let mut points = Vec::with_capacity(opts.factors.len());
     for &factor in &opts.factors {
         let started = Instant::now();
-        // each point from zero: one load step at the factor from the zero state, the load scaled
-        // as a load path scales it (theory §11.2)
-        let point = match Evolution::new(&problem).step(factor, solver.as_ref(), &mut Silent) {
+        let point = match Evolution::new(problem).step(factor, solver, &mut Silent) {
             Ok(step) => {
                 let s = Summary::new(step.problem.view(), &step.solution, None);
                 SweepPoint {
@@ -174,7 +227,8 @@ pub fn generate(
         };
         let shown: Vec<String> = point.quantities.iter().map(|(k, v)| format!("{k} {v:.6e}")).collect();
         progress(&format!(
-            "factor {factor}: {} in {} iterations, {} plastic, {}",
+            "factor {}: {} in {} iterations, {} plastic, {}",
+            number(factor),
             point.status,
             point.iterations,
             point.plastic_elements,
@@ -182,18 +236,16 @@ pub fn generate(
         ));
         points.push(point);
     }
-    let sweep = Sweep { title, points, axes: opts.axes.clone() };
-    write(&sweep, out)?;
-    Ok(sweep)
+    Ok(points)
 }
 
-/// Writes `sweep.csv`, `sweep.md` and (feature `report`) the plot.
-fn write(sweep: &Sweep, out: &Path) -> Result<(), SweepError> {
+/// Writes `sweep.csv`, `sweep.md` and (feature `report`) the plot, when it has two points.
+fn write(sweep: &Sweep, out: &mut OutDir) -> Result<(), SweepError> {
     let io = |path: PathBuf| move |e: std::io::Error| SweepError::Io { path, message: e.to_string() };
-    std::fs::create_dir_all(out).map_err(io(out.to_path_buf()))?;
     for (name, text) in [("sweep.csv", csv(sweep)), ("sweep.md", markdown(sweep))] {
-        let path = out.join(name);
+        let path = out.path(name);
         std::fs::write(&path, text).map_err(io(path.clone()))?;
+        out.wrote(name)?;
     }
     #[cfg(feature = "report")]
     {
@@ -202,8 +254,10 @@ fn write(sweep: &Sweep, out: &Path) -> Result<(), SweepError> {
             sweep.points.iter().filter_map(|p| Some((p.get(x)?, p.get(y)?, p.converged))).collect();
         if points.len() >= 2 {
             let title = format!("saddle sweep: {}", sweep.title);
-            crate::report::plot::curve(&title, (x, y), &points, &out.join("sweep.png"), &out.join("sweep.svg"))
-                .map_err(|e| SweepError::Io { path: out.join("sweep.png"), message: e.to_string() })?;
+            crate::report::plot::curve(&title, (x, y), &points, &out.path("sweep.png"), &out.path("sweep.svg"))
+                .map_err(|e| SweepError::Io { path: out.path("sweep.png"), message: e.to_string() })?;
+            out.wrote("sweep.png")?;
+            out.wrote("sweep.svg")?;
         }
     }
     Ok(())
@@ -230,7 +284,13 @@ pub fn csv(sweep: &Sweep) -> String {
         let _ = write!(
             s,
             "{},{},{status},{},{:.3e},{},{},{:.3}",
-            p.factor, p.converged, p.iterations, p.kkt_residual, p.contact_nodes, p.plastic_elements, p.wall_s
+            number(p.factor),
+            p.converged,
+            p.iterations,
+            p.kkt_residual,
+            p.contact_nodes,
+            p.plastic_elements,
+            p.wall_s
         );
         for n in &names {
             let _ = write!(s, ",{}", p.quantities.get(n).map_or(String::new(), |v| format!("{v:.12e}")));
@@ -251,7 +311,7 @@ pub fn markdown(sweep: &Sweep) -> String {
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {:.1e} | {} | {} |",
-            p.factor,
+            number(p.factor),
             show(p.get(x)),
             show(p.get(y)),
             p.status,
@@ -269,7 +329,9 @@ pub fn markdown(sweep: &Sweep) -> String {
                  limit load when the material is perfectly plastic)."
             );
         }
-        None => s.push_str("\nFewer than two converged points: no plateau indicator.\n"),
+        None => s.push_str(
+            "\nNo plateau indicator: it needs two converged points at different positive x with positive y.\n",
+        ),
     }
     s
 }

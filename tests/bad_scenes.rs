@@ -74,7 +74,7 @@ fn base_scenes() -> Vec<(String, toml::Table)> {
     t.insert(
         "load".into(),
         table(
-            "v = [ { type = \"traction\", on = { group = \"zmax\" }, t = [0.0, 0.0, 0.01] }, \
+            "v = [ { type = \"traction\", on = { group = \"zmin\" }, t = [0.0, 0.0, 0.01] }, \
              { type = \"body_force\", b = [0.0, 0.0, -0.001] } ]",
         ),
     );

@@ -53,7 +53,8 @@ impl Paraboloid {
 impl GapShape for Paraboloid {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "R", self.R)?;
-        check::finite_all(path, "center", &self.center)
+        check::scale(path, "R", self.R, false)?;
+        check::bounded_all(path, "center", &self.center)
     }
 
     fn phi(&self, x1: f64, x2: f64) -> f64 {
@@ -88,8 +89,10 @@ impl GapShape for EllipticParaboloid {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "R1", self.R1)?;
         check::positive(path, "R2", self.R2)?;
-        check::finite(path, "c1", self.c1)?;
-        check::finite(path, "c2", self.c2)?;
+        check::scale(path, "R1", self.R1, false)?;
+        check::scale(path, "R2", self.R2, false)?;
+        check::bounded(path, "c1", self.c1)?;
+        check::bounded(path, "c2", self.c2)?;
         Ok(())
     }
 
@@ -115,7 +118,7 @@ pub struct Flat {
 #[typetag::serde(name = "flat")]
 impl GapShape for Flat {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        check::finite_all(path, "center", &self.center)
+        check::bounded_all(path, "center", &self.center)
     }
 
     fn phi(&self, _x1: f64, _x2: f64) -> f64 {

@@ -197,9 +197,12 @@ impl AdmissibleDisplacements for RigidPunch {
         Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
     }
 
-    /// F finite and ≥ 0 (`{path}.F`; 0: no load, U undetermined), the zone and the gap shape.
+    /// F finite and ≥ 0 (`{path}.F`; 0: no load, U undetermined), at most
+    /// [`check::MAX_MAGNITUDE`] (a force enters the solvers' products with the moduli and
+    /// lengths), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::non_negative(path, "F", self.F)?;
+        check::bounded(path, "F", self.F)?;
         self.punch().validate(path)
     }
 
@@ -247,9 +250,9 @@ impl AdmissibleDisplacements for RigidPunchDisplacement {
         Some(Box::new(Self { U: self.U * factor, ..self.clone() }))
     }
 
-    /// U finite (`{path}.U`), the zone and the gap shape.
+    /// U finite with |U| ≤ [`check::MAX_MAGNITUDE`] (`{path}.U`), the zone and the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        check::finite(path, "U", self.U)?;
+        check::bounded(path, "U", self.U)?;
         self.punch().validate(path)
     }
 

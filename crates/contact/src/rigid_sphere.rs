@@ -27,6 +27,7 @@
 
 use crate::zone::{Selection, candidate_nodes_with, rim_rows_facing, rim_warning};
 use saddle_core::error::{check, join};
+use saddle_core::mesh::signed_volume;
 use saddle_core::{
     AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, ParameterError, Region, SceneError, TetMesh,
     contact_set,
@@ -136,8 +137,45 @@ impl RigidSphere {
         (y.map(|v| v / dist), dist)
     }
 
-    /// A zone node strictly inside the sphere (the deepest one) is an error on `{path}.center`.
+    /// The element that holds the centre c (its closure: a centre on the body's surface is half
+    /// embedded too), if any (barycentric coordinates by signed volumes, each at least
+    /// −[`INSIDE_TOL`] of the element's volume).
+    fn element_holding_centre(&self, mesh: &TetMesh) -> Option<usize> {
+        let c = self.center;
+        (0..mesh.n_elements()).find(|&e| {
+            let t = mesh.tets[e];
+            let vol = signed_volume(&mesh.nodes, &t);
+            (0..4).all(|k| {
+                let mut nodes = t.map(|n| mesh.nodes[n]);
+                nodes[k] = c;
+                signed_volume(&nodes, &[0, 1, 2, 3]) >= -INSIDE_TOL * vol
+            })
+        })
+    }
+
+    /// A zone node strictly inside the sphere (the deepest one) is an error on `{path}.center`,
+    /// and so is a centre inside the body (the sphere would start embedded in the material,
+    /// whatever the zone).
     fn check_outside(&self, mesh: &TetMesh, nodes: &[usize], path: &str) -> Result<(), SceneError> {
+        self.check_zone_outside(mesh, nodes, path)?;
+        let Some(e) = self.element_holding_centre(mesh) else {
+            return Ok(());
+        };
+        let c = self.center;
+        Err(SceneError::Parameter(ParameterError::new(
+            join(path, "center"),
+            format!("[{}, {}, {}]", c[0], c[1], c[2]),
+            format!(
+                "lies in the body (in element {e}): the sphere would start embedded in the material, penetrating \
+                 it at the reference configuration; the body must start outside the obstacle (theory §8): move {} \
+                 outside the mesh",
+                join(path, "center")
+            ),
+        )))
+    }
+
+    /// A zone node strictly inside the sphere (the deepest one) is an error on `{path}.center`.
+    fn check_zone_outside(&self, mesh: &TetMesh, nodes: &[usize], path: &str) -> Result<(), SceneError> {
         let inside: Vec<(usize, f64)> = nodes
             .iter()
             .map(|&n| (n, self.radial(mesh, n).1))
@@ -186,10 +224,12 @@ impl AdmissibleDisplacements for RigidSphere {
 
     /// `center` finite, R finite and > 0, `direction` finite and nonzero (`{path}.direction`
     /// with the vector), exactly one of F (finite, ≥ 0) and V (finite) — both or neither is an
-    /// error on `{path}.F` whose message names `{path}.V` — and the zone.
+    /// error on `{path}.F` whose message names `{path}.V` — and the zone. Lengths, F and V lie
+    /// within [`check::MAX_MAGNITUDE`] (they enter the solvers' products).
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        check::finite_all(path, "center", &self.center)?;
+        check::bounded_all(path, "center", &self.center)?;
         check::positive(path, "R", self.R)?;
+        check::bounded(path, "R", self.R)?;
         if self.unit_direction().is_none() {
             let d = self.direction;
             return Err(ParameterError::new(
@@ -202,9 +242,10 @@ impl AdmissibleDisplacements for RigidSphere {
         match (self.F, self.V) {
             (Some(f), None) => {
                 check::non_negative(path, "F", f)?;
+                check::bounded(path, "F", f)?;
             }
             (None, Some(v)) => {
-                check::finite(path, "V", v)?;
+                check::bounded(path, "V", v)?;
             }
             (Some(f), Some(v)) => {
                 return Err(ParameterError::new(

@@ -190,11 +190,14 @@ impl AdmissibleDisplacements for TiltingPunch {
         Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
     }
 
-    /// F finite and ≥ 0 (`{path}.F`), `at` finite (`{path}.at[k]`), the zone and the gap shape.
+    /// F finite and ≥ 0 (`{path}.F`) and at most [`check::MAX_MAGNITUDE`] (a force enters the
+    /// solvers' products), `at` finite and within that magnitude (`{path}.at[k]`), the zone and
+    /// the gap shape.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::non_negative(path, "F", self.F)?;
+        check::bounded(path, "F", self.F)?;
         if let Some(a) = &self.at {
-            check::finite_all(path, "at", a)?;
+            check::bounded_all(path, "at", a)?;
         }
         self.zone.validate(&join(path, "zone"))?;
         validate_gap(self.gap.as_ref(), path)

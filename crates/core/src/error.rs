@@ -25,6 +25,13 @@ impl ParameterError {
     }
 }
 
+/// A number as an error shows it: as written for ordinary magnitudes (`0.3`, `-100`), in
+/// scientific notation beyond (`1e308`, not 309 digits).
+pub fn number(x: f64) -> String {
+    let plain = x.to_string();
+    if plain.len() > 16 { format!("{x:e}") } else { plain }
+}
+
 /// Joins a table path and a field name: `join("material", "E") == "material.E"`.
 pub fn join(path: &str, field: &str) -> String {
     if path.is_empty() { field.to_string() } else { format!("{path}.{field}") }
@@ -32,27 +39,31 @@ pub fn join(path: &str, field: &str) -> String {
 
 /// Checks for scene parameters: every numeric field rejects NaN and infinities first.
 pub mod check {
-    use super::{ParameterError, join};
+    use super::{ParameterError, join, number};
 
     /// `value` is a finite number.
     pub fn finite(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
         if value.is_finite() {
             Ok(value)
         } else {
-            Err(ParameterError::new(join(path, field), value, "must be a finite number"))
+            Err(ParameterError::new(join(path, field), number(value), "must be a finite number"))
         }
     }
 
     /// `value` is finite and > 0.
     pub fn positive(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
         finite(path, field, value)?;
-        if value > 0.0 { Ok(value) } else { Err(ParameterError::new(join(path, field), value, "must be > 0")) }
+        if value > 0.0 { Ok(value) } else { Err(ParameterError::new(join(path, field), number(value), "must be > 0")) }
     }
 
     /// `value` is finite and ≥ 0.
     pub fn non_negative(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
         finite(path, field, value)?;
-        if value >= 0.0 { Ok(value) } else { Err(ParameterError::new(join(path, field), value, "must be >= 0")) }
+        if value >= 0.0 {
+            Ok(value)
+        } else {
+            Err(ParameterError::new(join(path, field), number(value), "must be >= 0"))
+        }
     }
 
     /// `lo < value < hi`.
@@ -61,7 +72,11 @@ pub mod check {
         if value > lo && value < hi {
             Ok(value)
         } else {
-            Err(ParameterError::new(join(path, field), value, format!("must lie in the open interval ({lo}, {hi})")))
+            Err(ParameterError::new(
+                join(path, field),
+                number(value),
+                format!("must lie in the open interval ({lo}, {hi})"),
+            ))
         }
     }
 
@@ -76,6 +91,62 @@ pub mod check {
             finite(path, &format!("{field}[{i}]"), *v)?;
         }
         Ok(())
+    }
+
+    /// The largest magnitude of a scene's physical parameter (a modulus, a force, a
+    /// displacement, a yield stress, a coordinate). The solvers form products of up to about six
+    /// of them (σ = Cε with ε from F/(E L²), then |σ|², E·|ε|² in the energies and residual
+    /// norms): with every factor within [1e-50, 1e50] each such product lies within
+    /// [1e-300, 1e300], inside f64's range (2.2e-308 to 1.8e308), so valid input never
+    /// overflows to the "NaN or infinite entries" of a matrix. Physical data in any consistent
+    /// unit system lie tens of decades inside (steel: E ≈ 2e11 Pa).
+    pub const MAX_MAGNITUDE: f64 = 1e50;
+
+    /// The smallest scale ([`scale`]): 1/[`MAX_MAGNITUDE`].
+    pub const MIN_SCALE: f64 = 1e-50;
+
+    /// `value` is finite with |value| ≤ [`MAX_MAGNITUDE`].
+    pub fn bounded(path: &str, field: &str, value: f64) -> Result<f64, ParameterError> {
+        finite(path, field, value)?;
+        if value.abs() <= MAX_MAGNITUDE {
+            Ok(value)
+        } else {
+            Err(ParameterError::new(
+                join(path, field),
+                number(value),
+                format!(
+                    "must lie in [-{MAX_MAGNITUDE:e}, {MAX_MAGNITUDE:e}] (larger magnitudes overflow the solvers' \
+                     products; rescale the units)"
+                ),
+            ))
+        }
+    }
+
+    /// Every entry of an array is finite with magnitude ≤ [`MAX_MAGNITUDE`].
+    pub fn bounded_all(path: &str, field: &str, values: &[f64]) -> Result<(), ParameterError> {
+        for (i, v) in values.iter().enumerate() {
+            bounded(path, &format!("{field}[{i}]"), *v)?;
+        }
+        Ok(())
+    }
+
+    /// A scale whose inverse enters the solvers too (a modulus: the compliance A = C⁻¹, the
+    /// hardening metric ξη/h; a radius of curvature: φ = r²/2R): finite, in
+    /// [[`MIN_SCALE`], [`MAX_MAGNITUDE`]], or exactly 0 when `zero_allowed` (no hardening).
+    pub fn scale(path: &str, field: &str, value: f64, zero_allowed: bool) -> Result<f64, ParameterError> {
+        finite(path, field, value)?;
+        if (zero_allowed && value == 0.0) || (MIN_SCALE..=MAX_MAGNITUDE).contains(&value) {
+            return Ok(value);
+        }
+        let zero = if zero_allowed { "0 or " } else { "" };
+        Err(ParameterError::new(
+            join(path, field),
+            number(value),
+            format!(
+                "must be {zero}in [{MIN_SCALE:e}, {MAX_MAGNITUDE:e}] (it and its inverse enter the solvers' \
+                 products; rescale the units)"
+            ),
+        ))
     }
 }
 

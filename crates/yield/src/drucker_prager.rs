@@ -69,11 +69,16 @@ impl DruckerPrager {
 
 #[typetag::serde(name = "drucker_prager")]
 impl AdmissibleStresses for DruckerPrager {
-    /// k₀, α and h finite and ≥ 0 (fields `{path}.k0`, `{path}.alpha`, `{path}.h`).
+    /// k₀ ≥ 0 and α ≥ 0 with magnitudes ≤ [`check::MAX_MAGNITUDE`]; h ≥ 0, 0 or a scale in
+    /// [1e-50, 1e50] ([`check::scale`]: 1/h enters the hardening metric), so that the solvers'
+    /// products stay finite.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::non_negative(path, "k0", self.k0)?;
+        check::bounded(path, "k0", self.k0)?;
         check::non_negative(path, "alpha", self.alpha)?;
+        check::bounded(path, "alpha", self.alpha)?;
         check::non_negative(path, "h", self.h)?;
+        check::scale(path, "h", self.h, true)?;
         Ok(())
     }
 

@@ -311,10 +311,14 @@ impl Tresca {
 
 #[typetag::serde(name = "tresca")]
 impl AdmissibleStresses for Tresca {
-    /// σ₀ finite and > 0, h finite and ≥ 0 (fields `{path}.sigma0`, `{path}.h`).
+    /// σ₀ > 0 with σ₀ ≤ [`check::MAX_MAGNITUDE`]; h ≥ 0, 0 or a scale in [1e-50, 1e50]
+    /// ([`check::scale`]: 1/h enters the hardening metric), so that the solvers' products stay
+    /// finite.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "sigma0", self.sigma0)?;
+        check::bounded(path, "sigma0", self.sigma0)?;
         check::non_negative(path, "h", self.h)?;
+        check::scale(path, "h", self.h, true)?;
         Ok(())
     }
 

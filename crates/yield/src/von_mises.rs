@@ -66,10 +66,25 @@ impl VonMises {
 
 #[typetag::serde(name = "von_mises")]
 impl AdmissibleStresses for VonMises {
-    /// k₀ and h finite and ≥ 0 (fields `{path}.k0`, `{path}.h`).
+    /// k₀ ≥ 0 with k₀ ≤ [`check::MAX_MAGNITUDE`]; h ≥ 0, either 0 (perfect plasticity) or a
+    /// scale in [1e-50, 1e50] ([`check::scale`]: 1/h enters the hardening metric ξη/h), so that
+    /// the solvers' products stay finite; not both 0 (a body that carries no deviatoric stress at
+    /// all has no shear stiffness: its displacement is not determined).
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::non_negative(path, "k0", self.k0)?;
+        check::bounded(path, "k0", self.k0)?;
         check::non_negative(path, "h", self.h)?;
+        check::scale(path, "h", self.h, true)?;
+        if self.k0 == 0.0 && self.h == 0.0 {
+            return Err(ParameterError::new(
+                format!("{path}.k0"),
+                0,
+                format!(
+                    "with {path}.h = 0 the body carries no deviatoric stress at all (no resistance to shear, its \
+                     displacement undetermined): give k0 > 0 or h > 0"
+                ),
+            ));
+        }
         Ok(())
     }
 

@@ -93,11 +93,16 @@ impl VonMisesKinematic {
 
 #[typetag::serde(name = "von_mises_kinematic")]
 impl AdmissibleStresses for VonMisesKinematic {
-    /// k₀ and h finite and ≥ 0, c finite and > 0 (fields `{path}.k0`, `{path}.h`, `{path}.c`).
+    /// k₀ ≥ 0 with k₀ ≤ [`check::MAX_MAGNITUDE`]; h ≥ 0, 0 or a scale in [1e-50, 1e50]; c > 0,
+    /// a scale in [1e-50, 1e50] ([`check::scale`]: 1/h and 1/c enter the hardening metric), so
+    /// that the solvers' products stay finite.
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::non_negative(path, "k0", self.k0)?;
+        check::bounded(path, "k0", self.k0)?;
         check::non_negative(path, "h", self.h)?;
+        check::scale(path, "h", self.h, true)?;
         check::positive(path, "c", self.c)?;
+        check::scale(path, "c", self.c, false)?;
         Ok(())
     }
 

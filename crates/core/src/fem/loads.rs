@@ -36,14 +36,15 @@ impl Load {
         }
     }
 
-    /// Checks the numbers; `path` names this load (`load[0]`).
+    /// Checks the numbers (finite, magnitudes within [`check::MAX_MAGNITUDE`]: a load enters the
+    /// solvers' products with the moduli and lengths); `path` names this load (`load[0]`).
     pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
         match self {
             Load::Traction { on, t } => {
                 on.validate(&join(path, "on"))?;
-                check::finite_all(path, "t", t)
+                check::bounded_all(path, "t", t)
             }
-            Load::BodyForce { b } => check::finite_all(path, "b", b),
+            Load::BodyForce { b } => check::bounded_all(path, "b", b),
         }
     }
 }
@@ -53,14 +54,21 @@ impl Load {
 /// force, each node of a tetrahedron a quarter of its force; on a second-order mesh (P2) the
 /// edge nodes of a facet receive a third each and its vertices none, and a tetrahedron gives
 /// −1/20 of its force to each vertex and 1/5 to each edge node.
+///
+/// A nonzero traction none of whose components reaches a free dof of its facets (every node
+/// fixed in every loaded component: the load would do nothing) is an error on `load[i].on`.
 pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<f64>, SceneError> {
     let mut f = vec![0.0; dofs.n_free];
+    // adds a share of `force` to the free dofs of `node`; true when a nonzero component landed
     let mut add = |node: usize, force: [f64; 3], share: f64| {
+        let mut landed = false;
         for (c, fc) in force.iter().enumerate() {
             if let Some(j) = dofs.free(node, c) {
                 f[j] += share * fc;
+                landed |= *fc != 0.0;
             }
         }
+        landed
     };
     for (i, load) in loads.iter().enumerate() {
         let path = format!("load[{i}]");
@@ -78,6 +86,8 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
                 if facets.is_empty() {
                     return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
                 }
+                let n_facets = facets.len();
+                let mut landed = false;
                 for fi in facets {
                     let [a, b, c] = mesh.boundary[fi].map(|n| mesh.nodes[n]);
                     let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
@@ -85,10 +95,20 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
                     let area = 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
                     // ∫N over a triangle: ⅓|F| for P1; 0 at the vertices and ⅓|F| at the edge
                     // nodes for P2
-                    match &mesh.second_order {
-                        None => mesh.boundary[fi].iter().for_each(|&node| add(node, *t, area / 3.0)),
-                        Some(so) => so.facet_edges[fi].iter().for_each(|&node| add(node, *t, area / 3.0)),
-                    }
+                    landed |= match &mesh.second_order {
+                        None => mesh.boundary[fi].iter().fold(false, |l, &node| add(node, *t, area / 3.0) | l),
+                        Some(so) => so.facet_edges[fi].iter().fold(false, |l, &node| add(node, *t, area / 3.0) | l),
+                    };
+                }
+                if !landed && t.iter().any(|x| *x != 0.0) {
+                    return Err(SceneError::Region {
+                        field,
+                        message: format!(
+                            "the traction t = {t:?} acts on {n_facets} facet(s) whose nodes are all fixed by the \
+                             [[dirichlet]] conditions in every loaded component: the load would do nothing; load \
+                             facets that are free to move, or release them"
+                        ),
+                    });
                 }
             }
             Load::BodyForce { b } => {
@@ -97,10 +117,16 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
                     // ∫N over a tetrahedron: ¼|T| for P1; −|T|/20 at the vertices and |T|/5 at
                     // the edge nodes for P2
                     match &mesh.second_order {
-                        None => tet.iter().for_each(|&node| add(node, *b, vol / 4.0)),
+                        None => tet.iter().for_each(|&node| {
+                            add(node, *b, vol / 4.0);
+                        }),
                         Some(so) => {
-                            tet.iter().for_each(|&node| add(node, *b, -vol / 20.0));
-                            so.tet_edges[e].iter().for_each(|&node| add(node, *b, vol / 5.0));
+                            tet.iter().for_each(|&node| {
+                                add(node, *b, -vol / 20.0);
+                            });
+                            so.tet_edges[e].iter().for_each(|&node| {
+                                add(node, *b, vol / 5.0);
+                            });
                         }
                     }
                 }

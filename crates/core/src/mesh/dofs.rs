@@ -2,7 +2,7 @@
 //! Dirichlet conditions eliminated. A Dirichlet condition fixes chosen components on the nodes
 //! of the selected facets (closure): all three is clamped, one is a roller.
 
-use crate::error::SceneError;
+use crate::error::{ParameterError, SceneError, join};
 use crate::mesh::TetMesh;
 use crate::mesh::region::Region;
 use serde::{Deserialize, Serialize};
@@ -51,6 +51,21 @@ impl Dirichlet {
     pub fn roller(on: Region, c: Component) -> Self {
         Self { on, components: vec![c] }
     }
+
+    /// Checks the region's numbers (`{path}.on`) and that at least one component is fixed: an
+    /// empty `components` fixes nothing, an error on `{path}.components`.
+    pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        self.on.validate(&join(path, "on"))?;
+        if self.components.is_empty() {
+            return Err(ParameterError::new(
+                join(path, "components"),
+                "[]",
+                "fixes no component, so the condition would do nothing: list the fixed components (\"x\", \"y\", \
+                 \"z\"), or omit the key to clamp all three",
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Marker of an eliminated (fixed) degree of freedom.
@@ -71,6 +86,7 @@ impl DofMap {
     pub fn new(mesh: &TetMesh, conditions: &[Dirichlet]) -> Result<Self, SceneError> {
         let mut fixed = vec![[false; 3]; mesh.n_nodes()];
         for (i, c) in conditions.iter().enumerate() {
+            c.validate(&format!("dirichlet[{i}]"))?;
             let field = format!("dirichlet[{i}].on");
             let missing = c.on.missing_groups(mesh);
             if !missing.is_empty() {

@@ -44,8 +44,21 @@ pub enum Region {
 const TOL: f64 = 1e-10;
 
 impl Region {
-    /// Checks numbers and group names; `path` names this region in the scene.
+    /// Checks numbers and lists; `path` names this region in the scene. An empty `all` or `any`
+    /// is an error: the intersection of nothing is the whole boundary and the union of nothing
+    /// selects nothing, neither what a scene means to write.
     pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
+        if let Region::All(rs) | Region::Any(rs) = self
+            && rs.is_empty()
+        {
+            let key = if matches!(self, Region::All(_)) { "all" } else { "any" };
+            return Err(ParameterError::new(
+                join(path, key),
+                "[]",
+                "an empty list (`all` of nothing is the whole boundary, `any` of nothing selects nothing): list at \
+                 least one region, or write \"boundary\" for the whole boundary",
+            ));
+        }
         match self {
             Region::Boundary | Region::Group(_) => Ok(()),
             Region::Box { min, max } => {

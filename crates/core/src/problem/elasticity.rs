@@ -25,9 +25,11 @@ impl Elasticity {
         Ok(e)
     }
 
-    /// E > 0 and −1 < ν < 1/2, naming the field under `path` otherwise.
+    /// E > 0 within the moduli's range ([`check::scale`]: E and 1/E both enter the solvers, C
+    /// and A = C⁻¹) and −1 < ν < 1/2, naming the field under `path` otherwise.
     pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::positive(path, "E", self.young)?;
+        check::scale(path, "E", self.young, false)?;
         check::open_interval(path, "nu", self.poisson, -1.0, 0.5)?;
         Ok(())
     }

@@ -19,8 +19,8 @@
 //! gap = { type = "paraboloid", R = 5.0, center = [0.5, 0.0] }
 //! ```
 //!
-//! The `name` key is read (and removed) here before the plugin reads the rest of its table, so
-//! plugins keep `deny_unknown_fields`. Nothing in this module knows a particular plugin: every
+//! The `name` key is set aside here as the plugin reads the rest of its table, so plugins keep
+//! `deny_unknown_fields`. Nothing in this module knows a particular plugin: every
 //! obstacle reports its own quantities on its own rows, extras and multipliers
 //! ([`DiscreteObstacles::reports`]).
 
@@ -210,10 +210,10 @@ impl Obstacles {
         self.list.iter().flat_map(|o| o.k.load()).collect()
     }
 
-    /// Checks the names and every obstacle's parameters under its own path: `path` for a single
-    /// table, `path[i]` in an array.
+    /// Checks every obstacle's parameters under its own path: `path` for a single table,
+    /// `path[i]` in an array. (The names were checked when the list was made: [`Obstacles::new`],
+    /// [`Obstacles::single`].)
     pub fn validate(&self, path: &str) -> Result<(), ParameterError> {
-        check_names(&self.list)?;
         for (i, o) in self.list.iter().enumerate() {
             o.k.validate(&self.path(path, i))?;
         }
@@ -227,7 +227,81 @@ impl Obstacles {
         let rows = (self.list.iter().enumerate())
             .map(|(i, o)| o.k.discretise(mesh, dofs, &self.path(path, i)))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(DiscreteObstacles::concatenate(self, rows, path))
+        let discrete = DiscreteObstacles::concatenate(self, rows, path);
+        discrete.obstacles.check_independent_at_shared_nodes(&discrete.parts, mesh, path)?;
+        Ok(discrete)
+    }
+}
+
+/// Relative tolerance of the parallel test of two rows: |a·b| ≥ (1 − tol)|a||b|.
+const PARALLEL_TOL: f64 = 1e-10;
+
+impl Obstacles {
+    /// Two obstacles whose rows at a shared candidate node are parallel (two punches on
+    /// overlapping zones push the node in the same direction) are an error naming both: the two
+    /// rows are linearly dependent, their multipliers (contact forces) are not unique, and none of
+    /// the solvers accepts such rows (the Delassus matrix G M⁻¹ Gᵀ is singular, and the
+    /// solvers that factor the rows refuse dependent ones). Rows of different obstacles at one
+    /// node with independent directions (a floor and an oblique sphere) are fine (theory §8).
+    fn check_independent_at_shared_nodes(
+        &self,
+        parts: &[ObstacleRows],
+        mesh: &TetMesh,
+        path: &str,
+    ) -> Result<(), SceneError> {
+        if parts.len() < 2 {
+            return Ok(());
+        }
+        // (node, obstacle, row) sorted by node: the rows of one node are adjacent
+        let mut at: Vec<(usize, usize, usize)> = parts
+            .iter()
+            .enumerate()
+            .flat_map(|(o, p)| (0..p.rows.n_rows()).map(move |i| (p.rows.node[i], o, i)))
+            .collect();
+        at.sort_unstable();
+        let row = |o: usize, i: usize| parts[o].rows.row(i);
+        let dot = |(ca, va): (&[usize], &[f64]), (cb, vb): (&[usize], &[f64])| -> f64 {
+            ca.iter().zip(va).map(|(j, x)| cb.iter().position(|k| k == j).map_or(0.0, |p| x * vb[p])).sum()
+        };
+        let mut dependent: Option<(usize, usize, usize)> = None; // (node, first obstacle, second obstacle)
+        let mut count = 0;
+        for group in at.chunk_by(|a, b| a.0 == b.0) {
+            let pair = group.iter().enumerate().find_map(|(k, &(n, oa, ia))| {
+                group[k + 1..].iter().filter(|b| b.1 != oa).find_map(|&(_, ob, ib)| {
+                    let (a, b) = (row(oa, ia), row(ob, ib));
+                    let (aa, bb, ab) = (dot(a, a), dot(b, b), dot(a, b));
+                    (aa > 0.0 && bb > 0.0 && ab.abs() >= (1.0 - PARALLEL_TOL) * (aa * bb).sqrt()).then_some((
+                        n,
+                        oa.min(ob),
+                        oa.max(ob),
+                    ))
+                })
+            });
+            if let Some(p) = pair {
+                count += 1;
+                dependent.get_or_insert(p);
+            }
+        }
+        let Some((n, first, second)) = dependent else {
+            return Ok(());
+        };
+        let name = |o: usize| {
+            let p = self.path(path, o);
+            self.list[o].name.as_ref().map_or(p.clone(), |name| format!("{p} ({name:?})"))
+        };
+        let x = mesh.nodes[n];
+        Err(SceneError::Region {
+            field: self.path(path, second),
+            message: format!(
+                "pushes {count} node(s) in the same direction as {}, e.g. node {n} at ({}, {}, {}): the candidate \
+                 zones overlap, so the two rows at such a node are linearly dependent and the contact forces there \
+                 are not unique; no solver can solve this. Make the obstacles' candidate zones disjoint",
+                name(first),
+                x[0],
+                x[1],
+                x[2]
+            ),
+        })
     }
 }
 
@@ -388,18 +462,38 @@ impl DiscreteObstacles {
 
 // ---- scene files: absent, one table, or an array of tables ----
 
-/// A table with its `name` removed, the rest read by the plugin.
-fn named_from_table<E: de::Error>(mut table: toml::Table) -> Result<NamedObstacle, E> {
-    let name = match table.remove("name") {
-        None => None,
-        Some(toml::Value::String(s)) => Some(s),
-        Some(other) => {
-            return Err(E::custom(format!("name = {other}: must be a string")));
+/// An obstacle's table as the plugin sees it: every key but `name`, which is set aside as the
+/// keys go by. The plugin reads the table in one pass from the scene's own deserializer (no
+/// table rebuilt, the path of a bad field kept), and keeps `deny_unknown_fields`.
+struct WithoutName<A> {
+    map: A,
+    name: Option<String>,
+}
+
+impl<'de, A: MapAccess<'de>> MapAccess<'de> for WithoutName<A> {
+    type Error = A::Error;
+
+    fn next_key_seed<K: de::DeserializeSeed<'de>>(&mut self, seed: K) -> Result<Option<K::Value>, A::Error> {
+        while let Some(key) = self.map.next_key::<String>()? {
+            if key == "name" {
+                self.name = Some(self.map.next_value()?);
+                continue;
+            }
+            return seed.deserialize(de::IntoDeserializer::<A::Error>::into_deserializer(key)).map(Some);
         }
-    };
-    let k: Box<dyn AdmissibleDisplacements> =
-        toml::Value::Table(table).try_into().map_err(|e: toml::de::Error| E::custom(e.message().trim_end()))?;
-    Ok(NamedObstacle { name, k })
+        Ok(None)
+    }
+
+    fn next_value_seed<V: de::DeserializeSeed<'de>>(&mut self, seed: V) -> Result<V::Value, A::Error> {
+        self.map.next_value_seed(seed)
+    }
+}
+
+/// An obstacle table: its `name`, the rest read by the plugin.
+fn named_from_map<'de, A: MapAccess<'de>>(map: A) -> Result<NamedObstacle, A::Error> {
+    let mut rest = WithoutName { map, name: None };
+    let k = Box::<dyn AdmissibleDisplacements>::deserialize(de::value::MapAccessDeserializer::new(&mut rest))?;
+    Ok(NamedObstacle { name: rest.name, k })
 }
 
 /// One element of `[[obstacle]]`.
@@ -407,8 +501,19 @@ struct Entry(NamedObstacle);
 
 impl<'de> Deserialize<'de> for Entry {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let table = toml::Table::deserialize(d)?;
-        named_from_table(table).map(Entry)
+        struct EntryVisitor;
+        impl<'de> Visitor<'de> for EntryVisitor {
+            type Value = Entry;
+
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("an [[obstacle]] table")
+            }
+
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Entry, A::Error> {
+                named_from_map(map).map(Entry)
+            }
+        }
+        d.deserialize_map(EntryVisitor)
     }
 }
 
@@ -434,8 +539,7 @@ impl<'de> Visitor<'de> for ObstaclesVisitor {
     }
 
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Obstacles, A::Error> {
-        let table = toml::Table::deserialize(de::value::MapAccessDeserializer::new(map))?;
-        Obstacles::single(named_from_table(table)?).map_err(de::Error::custom)
+        Obstacles::single(named_from_map(map)?).map_err(de::Error::custom)
     }
 
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Obstacles, A::Error> {
