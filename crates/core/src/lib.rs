@@ -16,6 +16,7 @@
 //! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
 //! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), the element's operators [`ElementOperators`], **L** [`Lagrangian`] (operators and data) with its energies and KKT residuals, the [`Solver`] interface | `error`, `mesh` |
 //! | [`fem`] | the elements [`P1P0Element`], [`P2Element`]; loads as nodal forces; [`DiscreteProblem`], an element with the problem's data | `error`, `mesh`, `problem` |
+//! | [`distributed`] | a problem split over ranks (theory §12): partitions, a rank's part of the mesh and dofs — plain data, no MPI | `mesh`, `problem` |
 //! | [`evolution`] | load paths (theory §11): [`LoadStep`] (L at a load factor from a [`PlasticState`]), [`Evolution`] (the steps one after another) | `problem`, `fem` |
 //!
 //! Linear algebra knows no mesh and no mechanics (the multigrid takes its near-nullspace as
@@ -23,6 +24,7 @@
 //! bring the two together. Scenes (TOML files) and output files live in the facade crate
 //! `saddle`.
 
+pub mod distributed;
 pub mod error;
 pub mod evolution;
 pub mod fem;

@@ -35,9 +35,11 @@
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper};
+use crate::distributed_system::DistributedSystem;
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::residual;
+use crate::row_basis::RowBasis;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
@@ -380,7 +382,7 @@ struct Run<'a> {
     settings: &'a Newton,
     l: &'a Lagrangian<'a>,
     name: &'a str,
-    system: ActiveSetSystem,
+    system: Systems,
     /// The elastic stiffness C.
     c_elastic: SymOp,
     /// c_i of the active-set test (theory §4.2 step 2): the elastic stiffness at row i's dof.
@@ -395,6 +397,31 @@ struct Run<'a> {
     work: Scratch,
     /// The KKT residual of every iterate.
     history: Vec<f64>,
+}
+
+/// Newton's linear systems: on one process the direct or multigrid backend, on a distributed
+/// problem the operators' distributed solver (theory §12).
+enum Systems {
+    Serial(ActiveSetSystem),
+    Distributed(DistributedSystem),
+}
+
+impl Systems {
+    /// The rows' coordinates (theory §8.1).
+    fn basis(&self) -> &RowBasis {
+        match self {
+            Systems::Serial(s) => s.basis(),
+            Systems::Distributed(d) => d.basis(),
+        }
+    }
+
+    /// The serial system, if that is the one.
+    fn serial(&mut self) -> Option<&mut ActiveSetSystem> {
+        match self {
+            Systems::Serial(s) => Some(s),
+            Systems::Distributed(_) => None,
+        }
+    }
 }
 
 impl<'a> Run<'a> {
@@ -414,6 +441,9 @@ impl<'a> Run<'a> {
         monitor.phase("analysis");
         let mut count = Counts::default();
         let c_elastic = l.data.elasticity.stiffness_matrix();
+        if l.distributed_solver().is_some() {
+            return Self::set_up_distributed(settings, l, start, name, count, timer);
+        }
         // a warm start may take the set-up the previous step kept (a load path, theory §11.2)
         let (key, k_el, kept) = if reuse {
             let k_el = timer.time("assembly", || l.stiffness(Material::Uniform(&c_elastic)));
@@ -455,9 +485,63 @@ impl<'a> Run<'a> {
             }
         }
         let cold = start.is_none() && elastic_start.is_none();
+        let (state, work) = Self::state_and_scratch(l, elastic_start.or(start), cold);
+        Ok(Self {
+            settings,
+            l,
+            name,
+            system: Systems::Serial(system),
+            c_elastic,
+            row_stiffness,
+            key,
+            cold,
+            state,
+            count,
+            work,
+            history: Vec::new(),
+        })
+    }
+
+    /// Stage 0 on a distributed problem (theory §12): the operators' distributed solver, and no
+    /// exact elastic start (its Delassus columns would cost a solve per row): from a cold start
+    /// the elastic phase finds the elastic contact set.
+    fn set_up_distributed(
+        settings: &'a Newton,
+        l: &'a Lagrangian<'a>,
+        start: Option<Start>,
+        name: &'a str,
+        count: Counts,
+        timer: &mut PhaseTimer,
+    ) -> Result<Self, SolveError> {
+        let c_elastic = l.data.elasticity.stiffness_matrix();
+        let mut system = timer.time("analysis", || DistributedSystem::new(l, name))?;
+        let k_el = timer.time("assembly", || l.stiffness(Material::Uniform(&c_elastic)));
+        let row_stiffness = system.row_stiffness(l, &k_el)?;
+        let cold = start.is_none();
+        let (state, work) = Self::state_and_scratch(l, start, cold);
+        Ok(Self {
+            settings,
+            l,
+            name,
+            system: Systems::Distributed(system),
+            c_elastic,
+            row_stiffness,
+            key: None,
+            cold,
+            state,
+            count,
+            work,
+            history: Vec::new(),
+        })
+    }
+
+    /// The state at `start` (zero without one; in the elastic phase from a `cold` start with
+    /// plasticity) and the scratch of the stages.
+    fn state_and_scratch(l: &Lagrangian<'_>, start: Option<Start>, cold: bool) -> (State, Scratch) {
+        let nr = l.data.rows.n_rows();
         let (n, ne, np) = (l.n_dofs(), l.n_extras(), l.n_points());
         let Start { u, extras: v, lambda } =
-            elastic_start.or(start).unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
+            start.unwrap_or(Start { u: vec![0.0; n], extras: vec![0.0; ne], lambda: vec![0.0; nr] });
         let elastic_phase = cold && l.data.plasticity().is_some();
         let state = State {
             u,
@@ -480,20 +564,7 @@ impl<'a> Run<'a> {
             g_trial: vec![0.0; nr],
             elastic_sigma: vec![Sym::zeros(); if elastic_phase { np } else { 0 }],
         };
-        Ok(Self {
-            settings,
-            l,
-            name,
-            system,
-            c_elastic,
-            row_stiffness,
-            key,
-            cold,
-            state,
-            count,
-            work,
-            history: Vec::new(),
-        })
+        (state, work)
     }
 
     /// The linear backend for `l` (theory §4.2): the multigrid, the symbolic analysis, or the
@@ -568,17 +639,24 @@ impl<'a> Run<'a> {
             changed += (a != s.active[i]) as usize;
             s.active[i] = a;
         }
-        // an extra with a load needs a touching row: the one with the smallest gap
+        // an extra with a load needs a touching row: the one with the smallest gap (over every
+        // rank's rows; on a tie of gaps, the lowest rank's)
+        let comm = l.comm();
         for (kx, f) in l.data.load.iter().enumerate() {
             let touching = (0..rows.n_rows()).filter(|&i| rows.extra_row(i)[kx] != 0.0);
-            if *f != 0.0
-                && !touching.clone().any(|i| s.active[i])
-                && let Some(i) = touching.min_by(|&a, &b| w.gap[a].total_cmp(&w.gap[b]))
-            {
+            if *f == 0.0 || comm.any(touching.clone().any(|i| s.active[i])) {
+                continue;
+            }
+            let closest = touching.min_by(|&a, &b| w.gap[a].total_cmp(&w.gap[b]));
+            let gap = comm.min(closest.map_or(f64::INFINITY, |i| w.gap[i]));
+            let mine = closest.filter(|&i| w.gap[i] == gap);
+            let first = comm.min(if mine.is_some() { comm.rank() as f64 } else { f64::INFINITY });
+            if let Some(i) = mine.filter(|_| first == comm.rank() as f64) {
                 s.active[i] = true;
                 changed += 1;
             }
         }
+        let changed = comm.sum_count(changed);
         // the elastic phase ends once its active set has settled: the last step solved it
         if s.elastic_phase && s.it > 0 && (changed == 0 || s.it >= ELASTIC_PHASE_MAX_STEPS) {
             s.elastic_phase = false;
@@ -612,11 +690,22 @@ impl<'a> Run<'a> {
     fn solve(&mut self, r: f64, timer: &mut PhaseTimer) -> Result<Step, SolveError> {
         let l = self.l;
         // a linear problem (no plasticity, no contact) is solved in one step to the tolerance
-        let linear_problem = l.data.plasticity().is_none() && l.data.rows.n_rows() == 0;
+        let linear_problem = l.data.plasticity().is_none() && l.comm().sum_count(l.data.rows.n_rows()) == 0;
         let cg_tol = self.settings.cg_tol(r, linear_problem);
-        let phase = if self.system.iterative().is_some() { "CG solves" } else { "factorisation and solves" };
         let (s, w) = (&self.state, &self.work);
-        let step = timer.time(phase, || self.system.step(l, &w.k, &s.active, &w.grad, &w.gap, cg_tol))?;
+        let step = match &mut self.system {
+            Systems::Serial(system) => {
+                let phase = if system.iterative().is_some() { "CG solves" } else { "factorisation and solves" };
+                timer.time(phase, || system.step(l, &w.k, &s.active, &w.grad, &w.gap, cg_tol))?
+            }
+            Systems::Distributed(system) => {
+                // the tangent of the stage's assembly: elastic in the elastic phase
+                let material =
+                    if s.elastic_phase { Material::Uniform(&self.c_elastic) } else { Material::PerPoint(&w.tangents) };
+                timer
+                    .time("distributed solves", || system.step(l, material, &w.k, &s.active, &w.grad, &w.gap, cg_tol))?
+            }
+        };
         if step.du.iter().chain(&step.dv).chain(&step.lambda).any(|x| !x.is_finite()) {
             return Err(SolveError::NonFinite {
                 solver: self.name.into(),
@@ -632,7 +721,8 @@ impl<'a> Run<'a> {
     /// when the predicted decrease is below the round-off of J.
     fn line_search(&mut self, step: &Step, timer: &mut PhaseTimer) -> f64 {
         let (l, s, w) = (self.l, &mut self.state, &mut self.work);
-        s.nu = s.nu.max(NU_FACTOR * max_abs(&step.lambda));
+        let comm = l.comm();
+        s.nu = s.nu.max(NU_FACTOR * comm.max(max_abs(&step.lambda)));
         if !self.settings.line_search || s.elastic_phase {
             return 1.0;
         }
@@ -640,11 +730,12 @@ impl<'a> Run<'a> {
         let (active, nu) = (&s.active, s.nu);
         // ℓ₁ violation of the *active* rows only: rows that a full step drives into the
         // obstacle join the active set at the next iteration (PDAS), they do not block
-        let violation = |g: &[f64]| (0..rows.n_rows()).filter(|&i| active[i]).map(|i| g[i].abs()).sum::<f64>();
+        let violation =
+            |g: &[f64]| comm.sum((0..rows.n_rows()).filter(|&i| active[i]).map(|i| g[i].abs()).sum::<f64>());
         let backtracks = &mut self.count.backtracks;
         timer.time("line search", || {
             let j0 = energy(l, &s.u, &s.v, &mut w.ws) + nu * violation(&w.gap);
-            let slope = w.grad.iter().zip(&step.du).map(|(a, b)| a * b).sum::<f64>()
+            let slope = comm.sum(w.grad.iter().zip(&step.du).map(|(a, b)| a * b).sum::<f64>())
                 - l.data.load.iter().zip(&step.dv).map(|(a, b)| a * b).sum::<f64>()
                 - nu * violation(&w.gap);
             let mut alpha = 1.0;
@@ -679,26 +770,37 @@ impl<'a> Run<'a> {
     /// The solution and its report (theory §5): the iterate, `stop` and the last residuals
     /// `kkt`, the counters, and the phases of `timer`.
     fn finish(mut self, stop: StopReason, kkt: KktResiduals, timer: &mut PhaseTimer) -> Solution {
-        let (sys, c) = (&mut self.system, &self.count);
+        let c = &self.count;
         let elastic_factorisations = (c.elastic_contact_solves > 0) as usize;
         let mut counters = BTreeMap::new();
         let mut put = |k: &str, x: usize| counters.insert(k.to_string(), x as f64);
-        put("factorisations", sys.factorisations + elastic_factorisations);
-        put("symbolic_analyses", sys.symbolic_analyses);
-        put("triangular_solve_pairs", sys.solves + c.elastic_contact_solves);
-        put("elastic_contact_solves", c.elastic_contact_solves);
-        if let Some(iterative) = sys.iterative() {
-            put("pcg_iterations", iterative.iterations);
-            put("pcg_unconverged", iterative.unconverged);
+        match &mut self.system {
+            Systems::Serial(sys) => {
+                put("factorisations", sys.factorisations + elastic_factorisations);
+                put("symbolic_analyses", sys.symbolic_analyses);
+                put("triangular_solve_pairs", sys.solves + c.elastic_contact_solves);
+                put("elastic_contact_solves", c.elastic_contact_solves);
+                if let Some(iterative) = sys.iterative() {
+                    put("pcg_iterations", iterative.iterations);
+                    put("pcg_unconverged", iterative.unconverged);
+                }
+            }
+            Systems::Distributed(d) => {
+                put("distributed_assemblies", d.assemblies);
+                put("distributed_solves", d.solves);
+                put("krylov_iterations", d.iterations);
+                put("krylov_unconverged", d.unconverged);
+            }
         }
         put("line_search_backtracks", c.backtracks);
         put("active_set_changes", c.active_changes);
         put("return_mappings", c.return_mappings);
         put("elastic_phase_steps", c.elastic_phase_steps);
-        put("contact_rows_active", self.state.active.iter().filter(|a| **a).count());
+        let comm = self.l.comm();
+        put("contact_rows_active", comm.sum_count(self.state.active.iter().filter(|a| **a).count()));
         put("setup_reused", c.setup_reused as usize);
         put("stiffness_nonzeros", self.l.pattern().nnz());
-        if let Some(chol) = sys.direct() {
+        if let Some(chol) = self.system.serial().and_then(|s| s.direct()) {
             counters.insert("factor_nonzeros".into(), chol.nnz_l() as f64);
             counters.insert("factor_flops".into(), chol.factor_flops());
         }
@@ -706,11 +808,11 @@ impl<'a> Run<'a> {
             counters.insert("auto_direct_cost".into(), direct);
             counters.insert("auto_amg_cost".into(), amg);
         }
-        if let Some(key) = self.key.take() {
+        if let (Some(key), Systems::Serial(system)) = (self.key.take(), self.system) {
             let cost_estimates = self.count.cost_estimates;
             self.settings.setup_cache.keep(CachedSetup {
                 key,
-                system: self.system,
+                system,
                 row_stiffness: self.row_stiffness,
                 cost_estimates,
             });

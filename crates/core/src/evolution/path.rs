@@ -167,20 +167,23 @@ struct Unloaded {
 }
 
 /// The obstacles with extras whose loads are all zero and with a column of H of one strict
-/// sign: their multipliers vanish (Hᵀλ = 0, λ ≥ 0) and their extras are undetermined.
+/// sign: their multipliers vanish (Hᵀλ = 0, λ ≥ 0) and their extras are undetermined. The rows
+/// may be split over ranks: every test is over all of them, so every rank finds the same.
 fn unloaded_obstacles(problem: &LoadStep<'_>) -> Vec<Unloaded> {
     let rows = problem.obstacles().rows();
     let load = problem.obstacles().load();
     let parts = problem.obstacles().parts();
+    let comm = problem.base().element.comm();
     parts
         .iter()
         .enumerate()
-        .filter(|(_, p)| !p.extra_range.is_empty() && !p.row_range.is_empty())
+        .filter(|(_, p)| !p.extra_range.is_empty() && comm.any(!p.row_range.is_empty()))
         .filter(|(_, p)| load[p.extra_range.clone()].iter().all(|f| *f == 0.0))
         .filter_map(|(o, p)| {
             let one_signed = |k: usize| {
-                let h = p.row_range.clone().map(|i| rows.extra_row(i)[k]);
-                h.clone().all(|x| x < 0.0) || h.clone().all(|x| x > 0.0)
+                let mut h = p.row_range.clone().map(|i| rows.extra_row(i)[k]);
+                let (not_negative, not_positive) = (h.clone().any(|x| x >= 0.0), h.any(|x| x <= 0.0));
+                !comm.any(not_negative) || !comm.any(not_positive)
             };
             p.extra_range.clone().find(|&k| one_signed(k)).map(|extra| Unloaded { obstacle: o, extra })
         })
@@ -229,11 +232,14 @@ fn expand(
         let p = &parts[un.obstacle];
         // g_i + H_ik t ≥ 0 on the obstacle's rows; the t at which the first row closes: the
         // least −g/H when H < 0 (t ≤ −g/H for every row), the largest when H > 0
+        // (over every rank's rows: H has one strict sign over all of them)
+        let comm = problem.base().element.comm();
         let bounds = p.row_range.clone().map(|i| -gap[i] / rows.extra_row(i)[un.extra]);
-        let t = if rows.extra_row(p.row_range.start)[un.extra] < 0.0 {
-            bounds.fold(f64::INFINITY, f64::min)
+        let negative = comm.any(p.row_range.clone().any(|i| rows.extra_row(i)[un.extra] < 0.0));
+        let t = if negative {
+            comm.min(bounds.fold(f64::INFINITY, f64::min))
         } else {
-            bounds.fold(f64::NEG_INFINITY, f64::max)
+            comm.max(bounds.fold(f64::NEG_INFINITY, f64::max))
         };
         extras[un.extra] += t;
         undetermined.extend(p.extra_range.clone());

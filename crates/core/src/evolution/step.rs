@@ -36,7 +36,8 @@ impl<'a> LoadStep<'a> {
         let element = &*base.element;
         let obstacles = base.obstacles.at_factor(factor, element.mesh(), element.dofs())?;
         let nodal_load = base.nodal_load.iter().map(|f| factor * f).collect();
-        let state = (!state.is_zero()).then_some(state);
+        // zero on every rank (a collective decision: the state's force is a global norm)
+        let state = element.comm().any(!state.is_zero()).then_some(state);
         let locked_in = state.as_ref().map_or(0.0, |st| locked_in_force(element, &base.elasticity, st));
         Ok(Self { base, factor, state, locked_in, obstacles, nodal_load })
     }

@@ -31,9 +31,19 @@ pub trait FiniteElement: Debug + Send + Sync + dyn_clone::DynClone {
     fn validate(&self, _path: &str) -> Result<(), ParameterError> {
         Ok(())
     }
+    /// The mesh of the order the element needs (P1 drops a second-order mesh's edge nodes, P2
+    /// adds them to a first-order one).
+    fn prepare_mesh(&self, mesh: TetMesh) -> TetMesh;
+    /// The element on a mesh of its order ([`FiniteElement::prepare_mesh`]) with the dof
+    /// numbering `dofs`.
+    fn build_with_dofs(&self, mesh: TetMesh, dofs: DofMap) -> Box<dyn Discretisation>;
     /// The element on `mesh` (either order: each element takes the nodes it needs) with the
     /// Dirichlet conditions `dirichlet`.
-    fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError>;
+    fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError> {
+        let mesh = self.prepare_mesh(mesh);
+        let dofs = DofMap::new(&mesh, dirichlet)?;
+        Ok(self.build_with_dofs(mesh, dofs))
+    }
 }
 
 dyn_clone::clone_trait_object!(FiniteElement);

@@ -24,8 +24,13 @@ pub struct P1 {}
 
 #[typetag::serde(name = "p1")]
 impl super::FiniteElement for P1 {
-    fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError> {
-        Ok(Box::new(P1P0Element::new(mesh, dirichlet)?))
+    /// The vertices of a second-order mesh: P1 has no edge nodes.
+    fn prepare_mesh(&self, mesh: TetMesh) -> TetMesh {
+        if mesh.is_second_order() { mesh.first_order() } else { mesh }
+    }
+
+    fn build_with_dofs(&self, mesh: TetMesh, dofs: DofMap) -> Box<dyn Discretisation> {
+        Box::new(P1P0Element::with_dofs(mesh, dofs))
     }
 }
 
@@ -42,10 +47,17 @@ impl P1P0Element {
     /// The element on the vertices of `mesh` (a second-order mesh's edge nodes are dropped)
     /// with the Dirichlet conditions `dirichlet`.
     pub fn new(mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Self, SceneError> {
-        // the vertices of a second-order mesh: P1 has no edge nodes
-        let mesh = if mesh.is_second_order() { mesh.first_order() } else { mesh };
-        let (parts, weights) = NodalParts::new(mesh, dirichlet, |m, d| element_topology(&m.tets, m.n_nodes(), d))?;
-        Ok(Self { parts, weights })
+        let mesh = super::FiniteElement::prepare_mesh(&P1::default(), mesh);
+        let dofs = DofMap::new(&mesh, dirichlet)?;
+        Ok(Self::with_dofs(mesh, dofs))
+    }
+
+    /// The element on the first-order `mesh` with the dof numbering `dofs` (a rank's part of a
+    /// distributed problem numbers its own, theory §12).
+    pub fn with_dofs(mesh: TetMesh, dofs: DofMap) -> Self {
+        assert!(!mesh.is_second_order(), "P1 takes a first-order mesh (FiniteElement::prepare_mesh)");
+        let (parts, weights) = NodalParts::new(mesh, dofs, |m, d| element_topology(&m.tets, m.n_nodes(), d));
+        Self { parts, weights }
     }
 
     /// Column j of Σ_T |T| B_Tᵀ C_T B_T (rows ≥ j), gathered from the elements around its node.

@@ -56,8 +56,13 @@ impl Default for P2 {
 
 #[typetag::serde(name = "p2")]
 impl super::FiniteElement for P2 {
-    fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError> {
-        Ok(Box::new(P2Element::new(mesh, dirichlet)?.with_mean_dilatation(self.mean_dilatation)))
+    /// The second-order mesh (a node at the midpoint of every edge of a first-order one).
+    fn prepare_mesh(&self, mesh: TetMesh) -> TetMesh {
+        if mesh.is_second_order() { mesh } else { mesh.second_order() }
+    }
+
+    fn build_with_dofs(&self, mesh: TetMesh, dofs: DofMap) -> Box<dyn Discretisation> {
+        Box::new(P2Element::with_dofs(mesh, dofs).with_mean_dilatation(self.mean_dilatation))
     }
 }
 
@@ -115,17 +120,24 @@ impl P2Element {
     /// midpoint of every edge, [`TetMesh::second_order`]) with the Dirichlet conditions
     /// `dirichlet`, and the mean-dilatation B̄ strain.
     pub fn new(mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Self, SceneError> {
-        let mesh = if mesh.is_second_order() { mesh } else { mesh.second_order() };
-        let so = mesh.second_order.as_ref().expect("second order");
+        let mesh = super::FiniteElement::prepare_mesh(&P2::default(), mesh);
+        let dofs = DofMap::new(&mesh, dirichlet)?;
+        Ok(Self::with_dofs(mesh, dofs))
+    }
+
+    /// The element on the second-order `mesh` with the dof numbering `dofs` (a rank's part of
+    /// a distributed problem numbers its own, theory §12), with the mean-dilatation B̄ strain.
+    pub fn with_dofs(mesh: TetMesh, dofs: DofMap) -> Self {
+        let so = mesh.second_order.as_ref().expect("P2 takes a second-order mesh (FiniteElement::prepare_mesh)");
         let nodes: Vec<[usize; NODES]> = mesh
             .tets
             .iter()
             .zip(&so.tet_edges)
             .map(|(t, ed)| std::array::from_fn(|a| if a < 4 { t[a] } else { ed[a - 4] }))
             .collect();
-        let (parts, volumes) = NodalParts::new(mesh, dirichlet, |m, d| element_topology(&nodes, m.n_nodes(), d))?;
+        let (parts, volumes) = NodalParts::new(mesh, dofs, |m, d| element_topology(&nodes, m.n_nodes(), d));
         let weights = volumes.iter().flat_map(|v| [v / POINTS as f64; POINTS]).collect();
-        Ok(Self { parts, weights, nodes, mean_dilatation: true })
+        Self { parts, weights, nodes, mean_dilatation: true }
     }
 
     /// The same problem with the volumetric strain pointwise (`false`: plain P2, which locks as

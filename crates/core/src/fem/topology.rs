@@ -2,9 +2,8 @@
 //! barycentric coordinates, the node → element adjacency and the sparsity pattern of the
 //! stiffness, for elements of N nodes each: 4 for P1, 10 for P2), and column assembly.
 
-use crate::error::SceneError;
 use crate::mesh::TetMesh;
-use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
+use crate::mesh::dofs::{DofMap, FIXED};
 use crate::problem::operators::RigidBodyModes;
 use crate::problem::pattern::SymmetricPattern;
 use nalgebra::Matrix3;
@@ -135,20 +134,15 @@ pub struct NodalParts {
 }
 
 impl NodalParts {
-    /// The parts on `mesh` with the Dirichlet conditions `dirichlet`, and the element volumes;
-    /// `topology` gives the adjacency and the pattern of the element's nodes
-    /// ([`element_topology`] of the vertices for P1, of the ten nodes for P2).
-    pub fn new(
-        mesh: TetMesh,
-        dirichlet: &[Dirichlet],
-        topology: impl FnOnce(&TetMesh, &DofMap) -> Topology,
-    ) -> Result<(Self, Vec<f64>), SceneError> {
-        let dofs = DofMap::new(&mesh, dirichlet)?;
+    /// The parts on `mesh` with the dof numbering `dofs`, and the element volumes; `topology`
+    /// gives the adjacency and the pattern of the element's nodes ([`element_topology`] of the
+    /// vertices for P1, of the ten nodes for P2).
+    pub fn new(mesh: TetMesh, dofs: DofMap, topology: impl FnOnce(&TetMesh, &DofMap) -> Topology) -> (Self, Vec<f64>) {
         let (grads, volumes): (Vec<_>, Vec<_>) =
             (0..mesh.n_elements()).into_par_iter().map(|e| element_gradients(&mesh, e)).unzip();
         let (adj_ptr, adj, pattern) = topology(&mesh, &dofs);
         let (dof_node, dof_comp) = dofs.owners();
-        Ok((Self { mesh, dofs, grads, adj_ptr, adj, dof_node, dof_comp, pattern }, volumes))
+        (Self { mesh, dofs, grads, adj_ptr, adj, dof_node, dof_comp, pattern }, volumes)
     }
 
     /// The displacement of node `n` from the free dofs `u` (fixed components 0).

@@ -9,6 +9,7 @@ pub mod cholesky;
 pub mod csr;
 pub mod csr32;
 pub mod dense_qp;
+pub mod distributed;
 pub mod error;
 pub mod pcg;
 
@@ -17,5 +18,6 @@ pub use cholesky::SparseCholesky;
 pub use csr::{Csr, LowerCsc};
 pub use csr32::Csr32;
 pub use dense_qp::{DenseQp, QpError, QpSolution};
+pub use distributed::{DistributedError, DistributedSolve, DistributedSpd};
 pub use error::{AmgError, LinalgError, PcgError};
 pub use pcg::{Identity, Jacobi, Pcg, PcgReport, Preconditioner};

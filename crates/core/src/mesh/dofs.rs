@@ -107,6 +107,11 @@ impl DofMap {
                 }
             }
         }
+        Ok(Self::from_fixed(&fixed))
+    }
+
+    /// The numbering of the components not `fixed` (per node, per component), node-major.
+    pub fn from_fixed(fixed: &[[bool; 3]]) -> Self {
         let mut n_free = 0u32;
         let dof = fixed
             .iter()
@@ -121,7 +126,7 @@ impl DofMap {
                 })
             })
             .collect();
-        Ok(Self { dof, n_free: n_free as usize })
+        Self { dof, n_free: n_free as usize }
     }
 
     /// The free index of component `c` of `node`, if free.

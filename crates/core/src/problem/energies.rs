@@ -9,8 +9,13 @@ use crate::problem::tensor::Sym;
 use rayon::prelude::*;
 
 /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (theory §2); from a step's state
-/// Σ_T w_T ψ_n(ε_T) (theory §11.1).
+/// Σ_T w_T ψ_n(ε_T) (theory §11.1). Summed over the ranks.
 pub fn energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
+    l.comm().sum(local_energy_of_strain(l, eps))
+}
+
+/// [`energy_of_strain`] over this rank's points.
+fn local_energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
     let law = *l.data.elasticity;
     let w = l.weights();
     match (l.data.plasticity(), l.data.state) {
@@ -30,11 +35,12 @@ pub fn energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
     }
 }
 
-/// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V (theory §3 form 1).
+/// The primal energy J(u, V) = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V (theory §3 form 1); the sums
+/// over points and dofs are over every rank's, V is the same on all.
 pub fn energy(l: &Lagrangian<'_>, u: &[f64], extras: &[f64], ws: &mut Workspace) -> f64 {
     l.strain(u, &mut ws.eps);
     energy_of_strain(l, &ws.eps)
-        - l.data.nodal_load.iter().zip(u).map(|(f, x)| f * x).sum::<f64>()
+        - l.comm().sum(l.data.nodal_load.iter().zip(u).map(|(f, x)| f * x).sum::<f64>())
         - l.data.load.iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
 }
 
@@ -51,7 +57,7 @@ pub fn stress_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
     let p = l.data.plasticity();
     let w = l.weights();
     let state = l.data.state;
-    (0..stress.len())
+    let local = (0..stress.len())
         .into_par_iter()
         .map(|i| {
             let (s, q) = (&stress.sigma[i], stress.q(i));
@@ -59,7 +65,8 @@ pub fn stress_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
             let dq = &dq[..q.len()];
             0.5 * w[i] * energy_inner(p, &law, s, dq, s, dq)
         })
-        .sum()
+        .sum();
+    l.comm().sum(local)
 }
 
 /// The dual energy −(½[σ̂, σ̂] + λ·c) (theory §3 form 3); from a step's state
@@ -70,7 +77,8 @@ pub fn dual_energy(l: &Lagrangian<'_>, stress: &StressField, lambda: &[f64]) -> 
     let c = &l.data.rows.offset;
     let prestrain: f64 = l.data.state.map_or(0.0, |st| {
         let w = l.weights();
-        (0..stress.len()).into_par_iter().map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum()
+        l.comm().sum((0..stress.len()).into_par_iter().map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum())
     });
-    -(stress_energy(l, stress) + prestrain + lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>())
+    let work = l.comm().sum(lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>());
+    -(stress_energy(l, stress) + prestrain + work)
 }

@@ -1,6 +1,7 @@
 //! The KKT residuals of theory §3 (form 2) of any iterate, recomputed from scratch by the
 //! operators and data of L — independently of the solver that produced the iterate.
 
+use crate::problem::comm::Comm;
 use crate::problem::energies::hardening_increment;
 use crate::problem::lagrangian::{Iterate, Lagrangian, Workspace};
 use crate::problem::stresses::energy_inner;
@@ -53,21 +54,25 @@ pub fn kkt_with_stress(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &mut Workspace)
 /// ‖Bᵀσ − f_u − Gᵀλ‖ / max(‖Bᵀσ‖, ‖Gᵀλ + f_u‖, ‖BᵀCε_p‖); leaves Bᵀσ − f_u in `ws.force`,
 /// Gᵀλ in `ws.gu` and Hᵀλ in `ws.gv`.
 fn equilibrium(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &mut Workspace) -> f64 {
+    let comm = l.comm();
     l.divergence(&ws.stress.sigma, &mut ws.force);
-    let internal = norm(&ws.force);
+    let internal = global_norm(comm, &ws.force);
     ws.gu.iter_mut().for_each(|x| *x = 0.0);
     ws.gv.iter_mut().for_each(|x| *x = 0.0);
     l.data.rows.add_transpose(it.lambda, &mut ws.gu, &mut ws.gv);
+    // Hᵀλ over every rank's rows (the extras are the same on all)
+    comm.sum_in_place(&mut ws.gv);
     let fu = l.data.nodal_load;
     let external = if fu.is_empty() {
-        norm(&ws.gu)
+        global_norm(comm, &ws.gu)
     } else {
         for (f, l) in ws.force.iter_mut().zip(fu) {
             *f -= l;
         }
-        ws.gu.iter().zip(fu).map(|(a, b)| (a + b) * (a + b)).sum::<f64>().sqrt()
+        comm.sum(ws.gu.iter().zip(fu).map(|(a, b)| (a + b) * (a + b)).sum::<f64>()).sqrt()
     };
-    relative(norm_diff(&ws.force, &ws.gu), internal.max(external).max(l.data.locked_in))
+    let difference = comm.sum(ws.force.iter().zip(&ws.gu).map(|(a, b)| (a - b) * (a - b)).sum::<f64>()).sqrt();
+    relative(difference, internal.max(external).max(l.data.locked_in))
 }
 
 /// ‖f + Hᵀλ‖ / max(‖f‖, ‖Hᵀλ‖), with Hᵀλ in `ws.gv`.
@@ -79,10 +84,10 @@ fn load_balance(l: &Lagrangian<'_>, ws: &Workspace) -> f64 {
 
 /// max_i |min(λ_i/λ_s, g_i/g_s)|; leaves the gaps in `ws.gap`.
 fn complementarity(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &mut Workspace) -> f64 {
-    let rows = l.data.rows;
+    let (rows, comm) = (l.data.rows, l.comm());
     rows.gap(it.u, it.extras, &mut ws.gap);
-    let lambda_s = max_abs(it.lambda);
-    let g_s = max_abs(it.u).max(max_abs(it.extras)).max(max_abs(&rows.offset));
+    let lambda_s = comm.max(max_abs(it.lambda));
+    let g_s = comm.max(max_abs(it.u).max(max_abs(&rows.offset))).max(max_abs(it.extras));
     let mut worst: f64 = 0.0;
     for (l, g) in it.lambda.iter().zip(&ws.gap) {
         let a = if lambda_s > 0.0 { l / lambda_s } else { *l };
@@ -90,7 +95,7 @@ fn complementarity(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &mut Workspace) -> 
         let r = a.min(b).abs();
         worst = if r.is_nan() || worst.is_nan() { f64::NAN } else { worst.max(r) };
     }
-    worst
+    comm.max(worst)
 }
 
 /// [σ̂ − σ̂(u)]^{1/2} / [σ̂(u)]^{1/2} in the energy norm, σ̂(u) the local law's in `ws.stress`.
@@ -108,7 +113,7 @@ fn constitutive(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &Workspace) -> f64 {
             (w[i] * energy_inner(p, &law, &ds, dq, &ds, dq), w[i] * energy_inner(p, &law, s0, q0, s0, q0))
         })
         .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    relative(num.sqrt(), den.sqrt())
+    relative(l.comm().sum(num).sqrt(), l.comm().sum(den).sqrt())
 }
 
 /// num/den, with 0/0 = 0 and x/0 = 1 for x ≠ 0 (an entirely wrong answer); NaN stays NaN.
@@ -129,8 +134,10 @@ pub fn norm(x: &[f64]) -> f64 {
     x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
-fn norm_diff(x: &[f64], y: &[f64]) -> f64 {
-    x.iter().zip(y).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()
+/// Euclidean norm of a vector whose entries are split over the ranks of `comm` (each rank its
+/// owned dofs or rows).
+pub fn global_norm(comm: &dyn Comm, x: &[f64]) -> f64 {
+    comm.sum(x.iter().map(|v| v * v).sum::<f64>()).sqrt()
 }
 
 /// Largest absolute entry (NaN if any entry is NaN).

@@ -230,9 +230,10 @@ pub fn locked_in_forces(ops: &dyn ElementOperators, law: &Elasticity, state: &Pl
     ops.divergence(&s0, f);
 }
 
-/// ‖BᵀCε_p‖ ([`locked_in_forces`]): the scale of a step's equilibrium residual.
+/// ‖BᵀCε_p‖ ([`locked_in_forces`]): the scale of a step's equilibrium residual (over every
+/// rank's dofs).
 pub fn locked_in_force(ops: &dyn ElementOperators, law: &Elasticity, state: &PlasticState) -> f64 {
     let mut f = vec![0.0; ops.n_dofs()];
     locked_in_forces(ops, law, state, &mut f);
-    crate::problem::kkt::norm(&f)
+    crate::problem::kkt::global_norm(ops.comm(), &f)
 }

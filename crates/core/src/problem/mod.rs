@@ -5,6 +5,7 @@
 //!   obstacle, theory §1, §3, §8);
 //! * [`obstacles`] — several obstacles, K = K₁ ∩ K₂ ∩ … (theory §8): rows and extras
 //!   concatenated, each obstacle reporting on its own part;
+//! * [`comm`] — reductions over the ranks of a distributed problem (the identity on one process);
 //! * [`operators`] — the element's operators: stress points, ε = B u, Bᵀσ, assembly (theory §3);
 //! * [`lagrangian`] — **L**, the discrete saddle problem every solver consumes (theory §3): the
 //!   element's operators with the problem's data;
@@ -16,6 +17,7 @@
 //! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
 //! * [`pattern`] — the sparsity pattern of assembled matrices, as plain data.
 
+pub mod comm;
 pub mod displacements;
 pub mod elasticity;
 pub mod energies;

@@ -418,6 +418,30 @@ impl DiscreteObstacles {
         Ok(Self::concatenate(scaled, rows, OBSTACLE_PATH))
     }
 
+    /// The rows one rank holds of a distributed problem (theory §12): those of the nodes
+    /// `local_node` maps to `Some` local node (its owned nodes), their columns renumbered by
+    /// `column` (the rank's dof of a free dof of the whole problem). Each obstacle keeps its
+    /// extras, load and parameters; its row range is its rows on this rank.
+    pub fn restrict(&self, local_node: impl Fn(usize) -> Option<usize>, column: impl Fn(usize) -> usize) -> Self {
+        let rows = self
+            .parts
+            .iter()
+            .map(|part| {
+                let mut rows = ConstraintRows::new(part.rows.n_extras);
+                for i in 0..part.rows.n_rows() {
+                    let Some(node) = local_node(part.rows.node[i]) else { continue };
+                    let (cols, vals) = part.rows.row(i);
+                    let entries: Vec<(usize, f64)> =
+                        cols.iter().map(|&j| column(j)).zip(vals.iter().copied()).collect();
+                    rows.push(&entries, part.rows.extra_row(i), part.rows.offset[i], node);
+                }
+                rows.warnings = part.rows.warnings.clone();
+                rows
+            })
+            .collect();
+        Self::concatenate(self.obstacles.clone(), rows, OBSTACLE_PATH)
+    }
+
     /// The obstacles.
     pub fn obstacles(&self) -> &Obstacles {
         &self.obstacles

@@ -4,6 +4,8 @@
 //! pattern. Nothing here knows the material, the obstacles or the loads: those are the problem's
 //! data ([`crate::problem::lagrangian::Data`]).
 
+use crate::linalg::distributed::{DistributedError, DistributedSpd};
+use crate::problem::comm::{Comm, SERIAL};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::tensor::{Sym, SymOp};
 use std::fmt::Debug;
@@ -107,5 +109,20 @@ pub trait ElementOperators: Debug + Send + Sync {
         let mut v = vec![0.0; self.pattern().nnz()];
         self.assemble(material, &mut v);
         v
+    }
+
+    /// The reductions over the ranks that share the problem (theory §12): the identity on one
+    /// process. A distributed implementation holds a rank's points and owned dofs; its
+    /// [`ElementOperators::pattern`] and [`ElementOperators::assemble`] are then those of the
+    /// rank's elements over its owned and ghost dofs.
+    fn comm(&self) -> &dyn Comm {
+        &SERIAL
+    }
+
+    /// The distributed solver of matrices assembled on this pattern (theory §12), for a
+    /// distributed implementation; `None` on one process, where solvers factor or precondition
+    /// the assembled values themselves.
+    fn distributed_solver(&self) -> Option<Result<Box<dyn DistributedSpd>, DistributedError>> {
+        None
     }
 }
