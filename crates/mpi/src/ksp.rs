@@ -115,6 +115,13 @@ impl Ksp {
         check("KSPSetReusePreconditioner", unsafe { ffi::KSPSetReusePreconditioner(self.raw, flag) })
     }
 
+    /// Sets the relative tolerance of the next solves (the absolute one and the iteration budget
+    /// kept).
+    pub fn set_relative_tolerance(&mut self, rtol: f64) -> Result<()> {
+        // SAFETY: `self.raw` is live; PETSC_DEFAULT (−2) keeps the other tolerances.
+        check("KSPSetTolerances", unsafe { ffi::KSPSetTolerances(self.raw, rtol, -2.0, -2.0, -2) })
+    }
+
     /// Starts from the values in `x` (`true`) instead of zero (`false`, the default).
     pub fn initial_guess_nonzero(&mut self, nonzero: bool) -> Result<()> {
         let flag = if nonzero { ffi::PetscBool::PETSC_TRUE } else { ffi::PetscBool::PETSC_FALSE };

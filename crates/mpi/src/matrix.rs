@@ -80,6 +80,16 @@ impl Matrix {
         Ok(())
     }
 
+    /// Lets additions fall outside the preallocation (PETSc allocates the entries then, at the
+    /// cost of a copy in the first assembly; later assemblies on the same pattern are at full
+    /// speed): for rows whose couplings other ranks add and this one cannot count.
+    pub fn allow_new_nonzeros(&mut self) -> Result<()> {
+        // SAFETY: `self.raw` is live.
+        check("MatSetOption", unsafe {
+            ffi::MatSetOption(self.raw, ffi::MatOption::MAT_NEW_NONZERO_ALLOCATION_ERR, ffi::PetscBool::PETSC_FALSE)
+        })
+    }
+
     /// Adds the dense block `values` (row-major, `rows.len()` × `cols.len()`) at the global
     /// indices `rows` × `cols` (any rows: entries of other ranks' rows are sent at assembly;
     /// negative indices are skipped). Not collective.

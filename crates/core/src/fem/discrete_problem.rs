@@ -50,6 +50,18 @@ impl DiscreteProblem {
         Ok(Self { element, elasticity, stresses, obstacles, nodal_load })
     }
 
+    /// The problem on `element` with K already discretised on it and the nodal loads `nodal_load`
+    /// on its dofs (a rank's part of a distributed problem, theory §12).
+    pub fn from_discretised(
+        element: Box<dyn Discretisation>,
+        elasticity: Elasticity,
+        stresses: Option<Box<dyn AdmissibleStresses>>,
+        obstacles: DiscreteObstacles,
+        nodal_load: Vec<f64>,
+    ) -> Self {
+        Self { element, elasticity, stresses, obstacles, nodal_load }
+    }
+
     /// L: the element's operators with the problem's data (the stationary problem).
     pub fn lagrangian(&self) -> Lagrangian<'_> {
         let data = Data::stationary(

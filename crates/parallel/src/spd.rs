@@ -1,0 +1,151 @@
+//! Core's distributed SPD matrix as a PETSc matrix and Krylov solver (theory §12): AIJ with block
+//! size 3 (three rows per node, [`crate::Layout`]), assembled by adding every rank's lower-triangle
+//! values on its local pattern at global rows (and their transposes), the Dirichlet-fixed and the
+//! caller's fixed rows and columns replaced by the identity, the rigid-body modes of the owned
+//! nodes as GAMG's near-null space. The solver is CG with GAMG unless PETSc's options say
+//! otherwise (`-ksp_type`, `-pc_type hypre`, `-pc_type lu -pc_factor_mat_solver_type mumps`, …).
+
+use crate::funneled::Funneled;
+use crate::layout::Layout;
+use saddle_core::linalg::{DistributedError, DistributedSolve, DistributedSpd};
+use saddle_core::problem::pattern::SymmetricPattern;
+use saddle_mpi::{Error, GhostVector, Index, Ksp, Matrix, Method, Settings};
+use std::sync::Arc;
+
+/// The Krylov iteration budget of one solve (a safety net, as Newton's `cg_max_iter`).
+pub const MAX_ITERATIONS: usize = 2000;
+
+/// A distributed SPD matrix and its solver (module docs).
+pub struct PetscSpd {
+    layout: Arc<Layout>,
+    pattern: SymmetricPattern,
+    matrix: Funneled<Matrix>,
+    ksp: Funneled<Ksp>,
+    b: Funneled<GhostVector>,
+    x: Funneled<GhostVector>,
+    /// A ghosted vector for the diagonal's sums.
+    sums: Funneled<GhostVector>,
+}
+
+fn boxed(e: Error) -> DistributedError {
+    Box::new(e)
+}
+
+impl PetscSpd {
+    /// The matrix of `layout` on the local `pattern`, preallocated from it. Collective.
+    pub fn new(
+        session: &saddle_mpi::Petsc,
+        layout: Arc<Layout>,
+        pattern: &SymmetricPattern,
+    ) -> saddle_mpi::Result<Self> {
+        let owned_rows = 3 * layout.n_owned_nodes;
+        // per owned row: the diagonal, and the local pattern's couplings split into owned and
+        // other columns; the couplings other ranks add (at the partition's interface) are
+        // allocated as they come ([`Matrix::allow_new_nonzeros`])
+        let (mut d_nnz, mut o_nnz) = (vec![1 as Index; owned_rows], vec![0 as Index; owned_rows]);
+        let slot = |d: usize| layout.dof_slot[d];
+        let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+        for j in 0..pattern.n() {
+            for &i in ri[cp[j]..cp[j + 1]].iter().filter(|&&i| i != j) {
+                for (row, col) in [(i, j), (j, i)] {
+                    if slot(row) < owned_rows {
+                        let count = if slot(col) < owned_rows { &mut d_nnz } else { &mut o_nnz };
+                        count[slot(row)] += 1;
+                    }
+                }
+            }
+        }
+        let mut matrix = Matrix::new(session, owned_rows, 3, &d_nnz, &o_nnz)?;
+        matrix.allow_new_nonzeros()?;
+        matrix.set_symmetric()?;
+        matrix.set_rigid_body_near_null_space(session, &layout.owned_coordinates)?;
+        let settings = Settings { method: Method::CgGamg, max_iterations: MAX_ITERATIONS, ..Settings::default() };
+        let ksp = Ksp::new(session, &settings)?;
+        let b = saddle_mpi::GhostVector::new(session, owned_rows, &[])?;
+        let x = b.duplicate()?;
+        let sums = layout.vector(session)?;
+        Ok(Self {
+            layout,
+            pattern: pattern.clone(),
+            matrix: Funneled(matrix),
+            ksp: Funneled(ksp),
+            b: Funneled(b),
+            x: Funneled(x),
+            sums: Funneled(sums),
+        })
+    }
+
+    /// Adds this rank's lower-triangle `values` and their transposes at the global rows.
+    fn add(&mut self, values: &[f64]) -> saddle_mpi::Result<()> {
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let rows = &self.layout.dof_row;
+        let mut global = Vec::new();
+        for j in 0..self.pattern.n() {
+            let range = cp[j]..cp[j + 1];
+            global.clear();
+            global.extend(ri[range.clone()].iter().map(|&i| rows[i]));
+            // column j (rows ≥ j), then row j (columns > j): the symmetric matrix's entries
+            self.matrix.0.add_values(&global, &[rows[j]], &values[range.clone()])?;
+            if range.len() > 1 {
+                self.matrix.0.add_values(&[rows[j]], &global[1..], &values[range.start + 1..range.end])?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl DistributedSpd for PetscSpd {
+    fn assemble(&mut self, values: &[f64], fixed: &[usize]) -> Result<(), DistributedError> {
+        self.matrix.0.zero_entries().map_err(boxed)?;
+        self.add(values).map_err(boxed)?;
+        self.matrix.0.assemble().map_err(boxed)?;
+        let mut rows: Vec<Index> = self.layout.dirichlet_rows.clone();
+        rows.extend(fixed.iter().map(|&s| self.layout.dof_row[s]));
+        self.matrix.0.zero_rows_columns(&rows, 1.0).map_err(boxed)?;
+        self.ksp.0.set_operator(&self.matrix.0).map_err(boxed)
+    }
+
+    fn diagonal(&mut self, values: &[f64], out: &mut [f64]) -> Result<(), DistributedError> {
+        let cp = self.pattern.col_ptr();
+        let v = &mut self.sums.0;
+        {
+            let mut form = v.local_mut().map_err(boxed)?;
+            form.iter_mut().for_each(|x| *x = 0.0);
+            for (d, &s) in self.layout.dof_slot.iter().enumerate() {
+                form[s] += values[cp[d]];
+            }
+        }
+        v.accumulate_ghosts().map_err(boxed)?;
+        let form = v.local().map_err(boxed)?;
+        for (d, x) in out.iter_mut().enumerate() {
+            *x = form[self.layout.dof_slot[d]];
+        }
+        Ok(())
+    }
+
+    fn solve(&mut self, b: &[f64], x: &mut [f64], rtol: f64) -> Result<DistributedSolve, DistributedError> {
+        let slots = &self.layout.dof_slot;
+        for (vector, values) in [(&mut self.b.0, b), (&mut self.x.0, &*x)] {
+            let mut form = vector.local_mut().map_err(boxed)?;
+            form.iter_mut().for_each(|v| *v = 0.0);
+            for (d, &v) in values.iter().enumerate() {
+                form[slots[d]] = v;
+            }
+        }
+        self.ksp.0.initial_guess_nonzero(true).map_err(boxed)?;
+        self.ksp.0.set_relative_tolerance(rtol).map_err(boxed)?;
+        let result = match self.ksp.0.solve(&self.b.0, &mut self.x.0) {
+            Ok(report) => DistributedSolve { iterations: report.iterations, converged: true },
+            // the budget ran out: the last iterate is used and counted (inexact Newton)
+            Err(Error::Diverged { reason, iterations, .. }) if reason.contains("DIVERGED_ITS") => {
+                DistributedSolve { iterations, converged: false }
+            }
+            Err(e) => return Err(boxed(e)),
+        };
+        let form = self.x.0.local().map_err(boxed)?;
+        for (d, v) in x.iter_mut().enumerate() {
+            *v = form[slots[d]];
+        }
+        Ok(result)
+    }
+}
