@@ -4,7 +4,7 @@
 //! | module | study |
 //! |---|---|
 //! | [`report`] | `saddle report`: work–precision, mesh convergence, P1 against P2 |
-//! | [`bench`] | `saddle bench`: cost against problem size |
+//! | [`bench`](mod@bench) | `saddle bench`: cost against problem size |
 //! | `peer` | `saddle bench --meshes`: end to end on Gmsh meshes beside a peer code (feature `gmsh`) |
 //! | [`stability`] | stiff and extreme variants of the default scene, every solver |
 

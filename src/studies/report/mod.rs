@@ -1,7 +1,7 @@
 //! `saddle report`: accuracy and cost of the solvers on a scene (theory §4, §5) and the mesh
 //! convergence of the discretisation (theory §3 Theorem 2, §7).
 //!
-//! [`generate`] writes into a folder:
+//! [`generate()`] writes into a folder:
 //!
 //! * `work_precision.csv`, `work_precision.png`, `work_precision.svg` — every solver along a
 //!   ladder of settings ([`runs::ladder`]), each run's wall time and its errors against a tightly
