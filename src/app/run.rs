@@ -14,8 +14,9 @@ use std::path::{Path, PathBuf};
 /// folder is claimed before the solve ([`OutDir::claim`]: an unusable `--out` fails before any
 /// work) and, once written, holds only this run's files of saddle ([`OutDir::finish`]). The
 /// summary's `end_to_end` holds the wall time of every phase the user waits for: `read` and
-/// `setup` (from [`load`](super::setup::load)), `solve`, `summary` (the KKT residuals and energies recomputed from
-/// the solution) and `write` (solution.vtu; summary.json is written last, after the clock).
+/// `setup` (from [`load`](super::setup::load)), `solve`, `summary` (the KKT residuals and
+/// energies recomputed from the solution) and `write` (solution.vtu; summary.json is written
+/// last, after the clock).
 pub fn solve_and_write(loaded: &Loaded, out_dir: &Path, monitor: &mut dyn Monitor) -> Result<Outcome, RunError> {
     solve_and_write_with(loaded, out_dir, monitor, &mut |_| {})
 }
