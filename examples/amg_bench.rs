@@ -15,7 +15,7 @@ use saddle::core::Material;
 use saddle::core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
 use saddle::core::mesh::dofs::FIXED;
 use saddle::core::problem::operators::RIGID_BODY_MODES;
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use std::time::Instant;
 
 fn peak_memory_mb() -> f64 {

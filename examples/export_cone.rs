@@ -16,7 +16,7 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     };
     let run = || -> Result<(), Box<dyn std::error::Error>> {
-        let loaded = saddle::run::load(&PathBuf::from(scene), None)?;
+        let loaded = saddle::app::setup::load(&PathBuf::from(scene), None)?;
         let json = saddle::solvers::socp::cone_programme_json(&loaded.problem.lagrangian())?;
         std::fs::write(out, json).map_err(|e| format!("cannot write {out}: {e}"))?;
         Ok(())

@@ -10,8 +10,8 @@
 //! ```
 
 use saddle::core::{Evolution, Silent, step_factors};
-use saddle::output::Summary;
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
+use saddle::io::summary::Summary;
 use std::path::Path;
 use std::time::Instant;
 

@@ -9,7 +9,7 @@
 //! ```
 
 use saddle::core::{AdmissibleDisplacements, Obstacles, Region, Silent, Solver};
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use saddle_contact::RigidSphere;
 use std::path::Path;
 use std::time::Instant;

@@ -7,7 +7,7 @@
 //! cargo run --release --example stability -- --print # print only, leave docs/stability.md alone
 //! ```
 
-use saddle::stability::{
+use saddle::studies::stability::{
     Outcome, all_solvers, cases, locking, locking_markdown, markdown, study, units_check, units_markdown,
 };
 use std::time::Instant;

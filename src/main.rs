@@ -4,9 +4,14 @@
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use saddle::output::Summary;
-use saddle::report::{self, Progress, ReportOptions};
-use saddle::run::{self, RunError};
+use saddle::app::run::solve_and_write_with;
+use saddle::app::setup::{RunError, load_with};
+use saddle::app::sweep;
+use saddle::io::outdir;
+use saddle::io::scene::element_by_type;
+use saddle::io::summary::Summary;
+use saddle::studies::bench;
+use saddle::studies::report::{self, Progress, ReportOptions};
 use saddle_core::Monitor;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -250,8 +255,8 @@ fn run(
     quiet: bool,
 ) -> Result<ExitCode, RunError> {
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(scene.file_stem().unwrap_or_default()));
-    let element = element.as_deref().map(saddle::scene::element_by_type).transpose()?;
-    let loaded = run::load_with(&scene, solver.as_deref(), |s| {
+    let element = element.as_deref().map(element_by_type).transpose()?;
+    let loaded = load_with(&scene, solver.as_deref(), |s| {
         if let Some(e) = element {
             s.discretisation = Some(e);
         }
@@ -268,7 +273,7 @@ fn run(
     }
     let mut bar = Bar::new(quiet);
     let lines = bar.bar.clone();
-    let result = run::solve_and_write_with(&loaded, &out, &mut bar, &mut |line| {
+    let result = solve_and_write_with(&loaded, &out, &mut bar, &mut |line| {
         if quiet {
         } else if lines.is_hidden() {
             eprintln!("  {line}");
@@ -283,7 +288,7 @@ fn run(
         let stopped = if p.completed { "" } else { ", stopped" };
         println!("  load path: {} of {} steps{stopped}", p.steps_done, p.step_factors.len());
     }
-    println!("  wrote {}: {}", outcome.out_dir.display(), saddle::outdir::describe(&outcome.written));
+    println!("  wrote {}: {}", outcome.out_dir.display(), outdir::describe(&outcome.written));
     Ok(if outcome.summary.converged { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
 
@@ -323,16 +328,16 @@ fn bench(
     direct_max_dofs: usize,
 ) -> Result<ExitCode, String> {
     for s in &solvers {
-        saddle::bench::solver_spec(s)?;
+        bench::solver_spec(s)?;
     }
     eprintln!("{}: bench at {sizes:?} DOFs with {solvers:?} into {}", scene.display(), out.display());
-    let opts = saddle::bench::BenchOptions { sizes, solvers, direct_max_dofs };
+    let opts = bench::BenchOptions { sizes, solvers, direct_max_dofs };
     let started = Instant::now();
-    let b = saddle::bench::generate(&scene, &out, &opts, &mut |line| {
+    let b = bench::generate(&scene, &out, &opts, &mut |line| {
         eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
     })
     .map_err(|e| e.to_string())?;
-    println!("{}", saddle::bench::markdown(&b));
+    println!("{}", bench::markdown(&b));
     println!("  wrote {}/bench.csv, bench.md, bench.png, bench.svg", out.display());
     Ok(ExitCode::SUCCESS)
 }
@@ -346,13 +351,13 @@ fn sweep(
 ) -> Result<ExitCode, String> {
     eprintln!("{}: sweep over load factors {factors:?} into {}", scene.display(), out.display());
     let started = Instant::now();
-    let opts = saddle::sweep::SweepOptions { factors, solver, element, axes };
-    let s = saddle::sweep::generate(&scene, &opts, &out, &mut |line| {
+    let opts = sweep::SweepOptions { factors, solver, element, axes };
+    let s = sweep::generate(&scene, &opts, &out, &mut |line| {
         eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
     })
     .map_err(|e| e.to_string())?;
-    println!("{}", saddle::sweep::markdown(&s));
-    println!("  wrote {}: {}", out.display(), saddle::outdir::describe(&s.written));
+    println!("{}", sweep::markdown(&s));
+    println!("  wrote {}: {}", out.display(), outdir::describe(&s.written));
     // as `run`: 2 when a point stopped without converging
     Ok(if s.points.iter().all(|p| p.converged) { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
@@ -361,7 +366,7 @@ fn sweep(
 fn bench_meshes(scene: PathBuf, out: PathBuf, meshes: Vec<PathBuf>, peers: Vec<PathBuf>) -> Result<ExitCode, String> {
     eprintln!("{}: end to end on {} meshes into {}", scene.display(), meshes.len(), out.display());
     let started = Instant::now();
-    let table = saddle::peer::generate(&scene, &meshes, &peers, &out, &mut |line| {
+    let table = saddle::studies::peer::generate(&scene, &meshes, &peers, &out, &mut |line| {
         eprintln!("  [{:>6.1} s] {line}", started.elapsed().as_secs_f64())
     })
     .map_err(|e| e.to_string())?;

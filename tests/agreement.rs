@@ -14,7 +14,7 @@
 //! * Uzawa and the penalty against Newton at 1e-12;
 //! * SOCP, whose polish is Newton's active-set step, against Uzawa at 1e-12.
 
-use saddle::conformance::{SceneResult, Tolerances, check_solver};
+use saddle::solvers::conformance::{SceneResult, Tolerances, check_solver};
 use saddle::solvers::{Newton, Uzawa};
 
 /// Newton to 1e-12: the reference of the solvers that are not Newton.

@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use saddle::core::Solver;
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use std::path::Path;
 
 /// Base scenes that together use every plugin and every numeric field: the examples plus

@@ -2,10 +2,10 @@
 //! baselines and ratios are finite; the AMG and direct backends of Newton, which the bench
 //! times side by side, give the same answer on the problem it measured.
 
-use saddle::bench::{cells_for, solver_spec};
 use saddle::core::{Silent, contact_set};
-use saddle::report::SceneSource;
-use saddle::report::runs::errors;
+use saddle::studies::bench::{cells_for, solver_spec};
+use saddle::studies::report::SceneSource;
+use saddle::studies::report::runs::errors;
 use std::process::Command;
 
 #[test]

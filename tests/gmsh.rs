@@ -10,7 +10,7 @@ use common::*;
 use saddle::core::mesh::gmsh::{GmshImport, GmshMesh, read_msh};
 use saddle::core::mesh::{TET_EDGES, TRI_EDGES};
 use saddle::core::{MeshSource, Region, Silent, Solver, TetMesh};
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use saddle::solvers::Newton;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;

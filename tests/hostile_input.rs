@@ -389,7 +389,7 @@ fn a_long_path_writes_a_bounded_number_of_step_files() {
     assert_eq!(code, 0, "{err}");
     let out = dir.path().join("out");
     let vtus: Vec<String> = files(&out).into_iter().filter(|f| f.starts_with("solution_")).collect();
-    let bound = saddle::path::MAX_STEP_FILES;
+    let bound = saddle::app::path::MAX_STEP_FILES;
     assert!(vtus.len() <= bound + 1 && vtus.len() >= bound / 2, "{} step files", vtus.len());
     assert!(vtus.contains(&"solution_0300.vtu".to_string()), "the last step has its file");
     let pvd = std::fs::read_to_string(out.join("solution.pvd")).unwrap();

@@ -154,7 +154,7 @@ fn homogeneous_compression_loaded_and_unloaded_matches_the_closed_form_for_every
 
 /// The unit cube in homogeneous uniaxial stress σ₃₃ = T·factor: rollers on x₁ = 0, x₂ = 0,
 /// x₃ = 0 and the traction (0, 0, T) on x₃ = 1; E = 100, ν = 0.3.
-fn uniaxial(yield_table: &str, factors: &[f64]) -> saddle::scene::Scene {
+fn uniaxial(yield_table: &str, factors: &[f64]) -> saddle::io::scene::Scene {
     let text = format!(
         "[mesh]\ntype = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 1.0]\ncells = [1, 1, 1]\n\
          [material]\nE = 100.0\nnu = 0.3\n[yield]\n{yield_table}\n\
@@ -164,12 +164,12 @@ fn uniaxial(yield_table: &str, factors: &[f64]) -> saddle::scene::Scene {
          [[load]]\ntype = \"traction\"\non = {{ group = \"zmax\" }}\nt = [0.0, 0.0, 1.0]\n\
          [load_path]\nfactors = {factors:?}\n"
     );
-    saddle::scene::Scene::from_toml(&text, std::path::Path::new("uniaxial.toml")).unwrap()
+    saddle::io::scene::Scene::from_toml(&text, std::path::Path::new("uniaxial.toml")).unwrap()
 }
 
 /// The path's steps solved with `solver`: per step (σ₃₃, ε_p,33, plastic points) at the first
 /// stress point (the field is homogeneous; every point is checked to carry the same).
-fn uniaxial_path(scene: saddle::scene::Scene, solver_text: &str) -> Vec<(f64, f64, usize)> {
+fn uniaxial_path(scene: saddle::io::scene::Scene, solver_text: &str) -> Vec<(f64, f64, usize)> {
     let factors = scene.load_path.as_ref().unwrap().step_factors();
     let (l, _) = scene.into_problem().unwrap();
     let solver = solver(solver_text);
@@ -281,7 +281,7 @@ fn punch_scene(yield_table: Option<&str>, obstacle_tables: &str) -> DiscreteProb
         text.push_str(&format!("\n[yield]\n{y}\n"));
     }
     text.push_str(obstacle_tables);
-    let scene = saddle::scene::Scene::from_toml(&text, std::path::Path::new("t.toml")).unwrap();
+    let scene = saddle::io::scene::Scene::from_toml(&text, std::path::Path::new("t.toml")).unwrap();
     scene.into_problem().unwrap().0
 }
 

@@ -4,7 +4,7 @@
 
 use saddle::core::{DiscreteProblem, energy};
 use saddle::core::{Silent, Solver};
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use std::path::Path;
 
 /// Rollers on the three coordinate planes through the origin: a body free to stretch and

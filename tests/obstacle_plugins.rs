@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use saddle::core::{DiscreteProblem, kkt};
 use saddle::core::{Silent, Solution, Solver, Workspace, contact_set};
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use std::path::Path;
 
 /// The small default scene (12×12×6 cells graded 3) without its obstacle and solver.

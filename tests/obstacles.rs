@@ -6,8 +6,8 @@
 mod common;
 use common::*;
 use saddle::core::Silent;
-use saddle::output::Summary;
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
+use saddle::io::summary::Summary;
 use std::path::Path;
 
 /// Forces of the two punches: different, so that swapped or shared columns of H show.

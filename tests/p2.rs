@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use saddle::core::{Silent, Solver};
-use saddle::output::Summary;
+use saddle::io::summary::Summary;
 
 /// Prandtl's limit force on the strip of `examples/strip_punch.toml`: (2 + π) k B t with
 /// k = k₀/√2 = 1/√2, B = 1, thickness t = 0.25 (theory §10).
@@ -105,7 +105,7 @@ fn p2_keeps_its_displacement_as_nu_tends_to_one_half() {
 #[test]
 fn both_newton_backends_solve_p2_alike() {
     // the default scene with P2 on 6×6×3 cells (the kit's), direct against multigrid
-    let l = saddle::conformance::johnson_p2().problem();
+    let l = saddle::solvers::conformance::johnson_p2().problem();
     let solve = |linear| {
         let newton = saddle::solvers::Newton { linear, tol: 1e-11, ..Default::default() };
         let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();

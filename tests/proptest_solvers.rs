@@ -31,7 +31,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
 use saddle::core::{DiscreteProblem, kkt};
 use saddle::core::{Silent, Solution, SolveError, Solver, StopReason, Workspace};
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;
 

@@ -6,15 +6,16 @@ mod common;
 use common::*;
 use saddle::core::P1P0Element;
 use saddle::core::{BoxMesh, DiscreteProblem, Elasticity, Silent, Solver, Sym};
-use saddle::report::convergence::{fitted_rate, observed_rate, refinement_levels, richardson};
-use saddle::report::runs::{Errors, RunRecord, errors, strain_distance};
-use saddle::report::tables::{
-    CONVERGENCE_HEADER, WORK_PRECISION_HEADER, convergence_csv, csv_field, work_precision_csv,
-};
-use saddle::report::transfer::{Locator, Metric, Quadrature, SampleMap, field_distance, red_children, strains};
-use saddle::report::{ReportOptions, SceneSource, convergence_study, generate};
-use saddle::scene::Scene;
+use saddle::io::csv::csv_field;
+use saddle::io::scene::Scene;
 use saddle::solvers::Newton;
+use saddle::studies::report::convergence::{fitted_rate, observed_rate, refinement_levels, richardson};
+use saddle::studies::report::runs::{Errors, RunRecord, errors, strain_distance};
+use saddle::studies::report::tables::{CONVERGENCE_HEADER, WORK_PRECISION_HEADER, convergence_csv, work_precision_csv};
+use saddle::studies::report::transfer::{
+    Locator, Metric, Quadrature, SampleMap, field_distance, red_children, strains,
+};
+use saddle::studies::report::{ReportOptions, SceneSource, convergence_study, generate};
 use std::path::Path;
 use std::process::Command;
 
@@ -353,7 +354,7 @@ fn report_quick_on_a_small_johnson_scene() {
             assert!(err <= bound, "{} {}: {what} error {err:e} > 2 · KKT = {bound:e}", run.solver, run.setting);
         }
     }
-    let tight = saddle::report::tables::tightest(&r.runs);
+    let tight = saddle::studies::report::tables::tightest(&r.runs);
     assert!(tight.iter().all(|t| t.errors.unwrap().stress_rel < 1e-6), "{tight:?}");
     let study = r.convergence.as_ref().unwrap();
     assert_eq!(study.levels.iter().map(|l| l.cells).collect::<Vec<_>>(), vec![[6, 6, 3], [9, 9, 5], [12, 12, 6]]);

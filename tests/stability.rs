@@ -5,13 +5,12 @@
 //! The scenes and solvers are typed values ([`Johnson`] with one parameter changed); a case
 //! that must fail is checked for its kind of error, so that a failure for another reason fails.
 
-use saddle::conformance::{Johnson, johnson_p2};
 use saddle::core::P1P0Element;
 use saddle::core::linalg::error::LinalgError;
-use saddle::core::{DiscreteProblem, SceneError, Silent, SolveError, Solver, StopReason};
-use saddle::output::Summary;
-use saddle::scene::Scene;
-use saddle::stability::{
+use saddle::core::{DiscreteProblem, MeshSource, SceneError, Silent, SolveError, Solver, StopReason};
+use saddle::io::summary::Summary;
+use saddle::solvers::conformance::{Johnson, Setup, johnson_p2};
+use saddle::studies::stability::{
     Outcome, all_solvers, default_solver, first_yield_force, newton_u, run, scene, sliver_scene, strongly_plastic,
     tiny_penalty, unclamped_scene, units_check, unstable_uzawa,
 };
@@ -19,7 +18,7 @@ use std::path::Path;
 
 /// Runs `solver` on `scene`; asserts it converged with the recomputed KKT residual within its
 /// tolerance and returns the summary.
-fn converged(scene: &Scene, solver: &dyn Solver) -> Box<Summary> {
+fn converged(scene: &Setup, solver: &dyn Solver) -> Box<Summary> {
     let name = solver.name();
     match run(scene, solver).0 {
         Outcome::Returned { summary, recomputed_kkt, .. } => {
@@ -42,7 +41,7 @@ fn converged(scene: &Scene, solver: &dyn Solver) -> Box<Summary> {
 }
 
 /// Every solver converges on `scene` and agrees with Newton's U to `rel`; returns Newton's summary.
-fn all_agree(scene: &Scene, solvers: &[Box<dyn Solver>], rel: f64) -> Box<Summary> {
+fn all_agree(scene: &Setup, solvers: &[Box<dyn Solver>], rel: f64) -> Box<Summary> {
     let reference = converged(scene, default_solver("newton").as_ref());
     for s in solvers.iter().filter(|s| s.name() != "newton") {
         let u = converged(scene, s.as_ref()).U.unwrap();
@@ -61,11 +60,11 @@ fn fast_solvers() -> Vec<Box<dyn Solver>> {
 #[test]
 fn near_perfect_plasticity() {
     for h_rel in [1e-2, 1e-8] {
-        let s = all_agree(&Johnson { h: 100.0 * h_rel, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
+        let s = all_agree(&Johnson { h: 100.0 * h_rel, ..Johnson::default() }.setup(), &fast_solvers(), 1e-6);
         assert!(s.plastic_elements > 0, "h/E = {h_rel}: the case must be plastic");
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     }
-    let s = all_agree(&Johnson { h: 0.0, ..Johnson::default() }.scene(), &all_solvers(), 1e-6);
+    let s = all_agree(&Johnson { h: 0.0, ..Johnson::default() }.setup(), &all_solvers(), 1e-6);
     assert!(s.warnings.iter().any(|w| w.contains("yield.h = 0") && w.contains("unique")), "{:?}", s.warnings);
 }
 
@@ -73,15 +72,15 @@ fn near_perfect_plasticity() {
 /// further below the fine mesh's as ν → ½.
 #[test]
 fn near_incompressibility_and_locking() {
-    all_agree(&Johnson { nu: 0.49, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
-    all_agree(&Johnson { nu: 0.4999, ..Johnson::default() }.scene(), &all_solvers(), 1e-6);
+    all_agree(&Johnson { nu: 0.49, ..Johnson::default() }.setup(), &fast_solvers(), 1e-6);
+    all_agree(&Johnson { nu: 0.4999, ..Johnson::default() }.setup(), &all_solvers(), 1e-6);
     let ratio = |nu: f64| newton_u(nu, [12, 12, 6], None) / newton_u(nu, [24, 24, 12], None);
     let (r3, r4999) = (ratio(0.3), ratio(0.4999));
     assert!(r3 > 0.9 && r3 < 1.0, "ν = 0.3: coarse/fine = {r3}");
     assert!(r4999 < r3 - 0.2, "ν = 0.4999 locks: coarse/fine = {r4999} vs {r3}");
     // P2 (B̄) on the nodes of the P1 mesh: every solver agrees at ν = 0.4999 (its locking
     // study is tests/p2.rs)
-    all_agree(&Johnson { nu: 0.4999, ..johnson_p2() }.scene(), &all_solvers(), 1e-6);
+    all_agree(&Johnson { nu: 0.4999, ..johnson_p2() }.setup(), &all_solvers(), 1e-6);
 }
 
 /// Case 8: most of the body plastic (k₀ = 0.05): every solver converges and agrees with both
@@ -111,9 +110,9 @@ fn units_scale_exactly() {
 /// Case 4: a tiny force touches at a node or two; a huge force reaches the rim of Γ₀ and warns.
 #[test]
 fn tiny_and_huge_loads() {
-    let tiny = all_agree(&Johnson { force: 0.3e-8, ..Johnson::default() }.scene(), &fast_solvers(), 1e-6);
+    let tiny = all_agree(&Johnson { force: 0.3e-8, ..Johnson::default() }.setup(), &fast_solvers(), 1e-6);
     assert!((1..=2).contains(&tiny.contact_nodes), "{} contact nodes", tiny.contact_nodes);
-    let huge = Johnson { force: 100.0 * first_yield_force(100.0, 0.3, 1.0, 5.0), ..Johnson::default() }.scene();
+    let huge = Johnson { force: 100.0 * first_yield_force(100.0, 0.3, 1.0, 5.0), ..Johnson::default() }.setup();
     let s = all_agree(&huge, &fast_solvers(), 1e-6);
     assert!(
         s.warnings.iter().any(|w| w.contains("rim of obstacle.zone") && w.contains("too small")),
@@ -126,7 +125,7 @@ fn tiny_and_huge_loads() {
 /// (rim pressure over mean > 1), and no "zone too small" warning (the zone is the punch face).
 #[test]
 fn flat_punch() {
-    let flat = Johnson { gap: Box::new(saddle::contact::Flat::default()), ..Johnson::default() }.scene();
+    let flat = Johnson { gap: Box::new(saddle::contact::Flat::default()), ..Johnson::default() }.setup();
     let s = all_agree(&flat, &all_solvers(), 1e-6);
     let ratio = s.contact["rim_pressure_ratio"];
     assert!(ratio > 1.1, "rim/mean pressure {ratio}");
@@ -187,9 +186,9 @@ fn slivers_and_unclamped_body() {
     let mesh = scene.mesh.build(Path::new(".")).unwrap();
     let l = DiscreteProblem::new(
         Box::new(P1P0Element::new(mesh, &[]).unwrap()),
-        scene.material,
-        scene.yield_surface,
-        scene.obstacle,
+        scene.elasticity,
+        scene.stresses,
+        scene.obstacles,
         &[],
     )
     .unwrap();

@@ -12,10 +12,10 @@
 
 mod common;
 use common::*;
-use saddle::conformance::agreement;
 use saddle::core::DiscreteProblem;
 use saddle::core::problem::tensor::{deviator, trace};
 use saddle::core::{Silent, Solution, Solver, Sym};
+use saddle::solvers::conformance::agreement;
 use saddle::solvers::{Newton, Penalty, Uzawa};
 use std::path::Path;
 
@@ -108,7 +108,8 @@ fn alpha_zero_is_von_mises_on_the_small_default_scene() {
     assert!(
         dp_text.contains("drucker_prager") && text.contains("cells = [12, 12, 6]") && text.contains("ratio = 3.0 ")
     );
-    let problem = |s: &str| saddle::scene::Scene::from_toml(s, Path::new("x.toml")).unwrap().into_problem().unwrap().0;
+    let problem =
+        |s: &str| saddle::io::scene::Scene::from_toml(s, Path::new("x.toml")).unwrap().into_problem().unwrap().0;
     let (lv, ld) = (problem(&text), problem(&dp_text));
     assert_eq!(ld.lagrangian().data.plasticity().unwrap().name(), "drucker_prager");
     let newton = Newton { tol: 1e-12, ..Newton::default() };
@@ -180,7 +181,7 @@ gap = {{ type = "flat" }}
 "#,
         minus_p = -p
     );
-    saddle::scene::Scene::from_toml(&text, Path::new("x.toml")).unwrap().into_problem().unwrap().0
+    saddle::io::scene::Scene::from_toml(&text, Path::new("x.toml")).unwrap().into_problem().unwrap().0
 }
 
 /// Homogeneous uniaxial-strain tension at the apex (theory §9.1). With the punch on the whole

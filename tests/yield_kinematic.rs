@@ -10,8 +10,8 @@
 
 mod common;
 use common::*;
-use saddle::conformance::agreement;
 use saddle::core::{DiscreteProblem, Silent, Solution, Solver, Sym};
+use saddle::solvers::conformance::agreement;
 use saddle::solvers::{Newton, Penalty, Uzawa};
 
 /// The `[yield]` table of kinematic hardening.
@@ -231,7 +231,7 @@ fn the_vtu_names_the_hardening_fields_of_the_plugin() {
     let sol = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("solution.vtu");
-    saddle::output::write_vtu(&path, l.view(), &sol).unwrap();
+    saddle::io::vtu::write_vtu(&path, l.view(), &sol).unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let start = bytes.windows(2).position(|w| w == b"\n_").unwrap() + 2; // the appended block
     let head = String::from_utf8_lossy(&bytes[..start]).to_string();

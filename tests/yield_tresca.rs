@@ -9,8 +9,8 @@
 
 mod common;
 use common::*;
-use saddle::conformance::agreement;
 use saddle::core::{DiscreteProblem, Silent, Solution, Solver, Sym};
+use saddle::solvers::conformance::agreement;
 use saddle::solvers::{Newton, Penalty, Uzawa};
 use saddle::yield_surfaces::{Tresca, TrescaReturn};
 

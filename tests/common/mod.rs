@@ -3,7 +3,7 @@
 
 use saddle::core::DiscreteProblem;
 use saddle::core::Solver;
-use saddle::scene::Scene;
+use saddle::io::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// Path of a file in the repository.

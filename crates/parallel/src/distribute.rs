@@ -65,6 +65,19 @@ pub struct RankProblem {
     pub whole: Option<Whole>,
 }
 
+impl RankProblem {
+    /// The whole problem's row vector of the values `local` this rank holds at its rows (the
+    /// multipliers λ), on every rank: each rank's rows summed into place. Collective.
+    pub fn whole_rows(&self, local: &[f64]) -> Vec<f64> {
+        let mut whole = vec![0.0; self.totals.rows];
+        for (&g, &x) in self.global_rows.iter().zip(local) {
+            whole[g] = x;
+        }
+        self.comm.sum_in_place(&mut whole);
+        whole
+    }
+}
+
 /// Distributes a problem (module docs): `mesh` is rank 0's (`None` on the others), the rest the
 /// scene's, the same on every rank. Collective.
 #[allow(clippy::too_many_arguments)]

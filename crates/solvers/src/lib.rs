@@ -10,6 +10,7 @@
 //!   Clarabel, polished by active-set Newton.
 
 pub mod active_set;
+pub mod conformance;
 pub mod distributed_system;
 pub mod kh_projection;
 pub mod linear;

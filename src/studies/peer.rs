@@ -14,8 +14,9 @@
 //! saddle bench examples/peers/punch.toml --out docs/peer --meshes box24.msh --peer peer24.json
 //! ```
 
-use crate::bench::{load_average, peak_memory_mib, reset_peak_memory};
-use crate::run::{self, RunError};
+use super::bench::{load_average, peak_memory_mib, reset_peak_memory};
+use crate::app::run::solve_and_write;
+use crate::app::setup::{RunError, load_with};
 use saddle_core::Silent;
 use saddle_core::mesh::gmsh::GmshMesh;
 use serde_json::Value;
@@ -182,8 +183,8 @@ pub fn measure(
         let load_before = load_average();
         reset_peak_memory();
         let started = Instant::now();
-        let loaded = run::load_with(scene, None, |s| s.mesh = Box::new(GmshMesh::new(file))).map_err(fail)?;
-        let outcome = run::solve_and_write(&loaded, &out.join(&stem), &mut Silent).map_err(fail)?;
+        let loaded = load_with(scene, None, |s| s.mesh = Box::new(GmshMesh::new(file))).map_err(fail)?;
+        let outcome = solve_and_write(&loaded, &out.join(&stem), &mut Silent).map_err(fail)?;
         let wall_s = started.elapsed().as_secs_f64();
         let s = outcome.summary;
         let r = MeshRun {

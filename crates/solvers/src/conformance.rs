@@ -11,32 +11,32 @@
 //! * the solution agrees with a reference solver's: U, σ̂ in the energy norm, the contact set,
 //!   and the plastic set except elements within 1e-8 of the yield surface.
 //!
-//! The scenes are typed [`Scene`] values built in code ([`Johnson`], [`homogeneous`], [`hertz`]),
-//! with the values of the example files; a variant is another value of the parameters
-//! (`Johnson { h: 0.5, ..Johnson::default() }`), never edited TOML text.
+//! The scenes are typed values built in code from saddle-core's types and the yield and contact
+//! plugins ([`Setup`]: [`Johnson`], [`homogeneous`], [`hertz`]), with the values of the example
+//! files (the facade's `tests/conformance_scenes.rs` checks them against the files); a variant is
+//! another value of the parameters (`Johnson { h: 0.5, ..Johnson::default() }`), never edited
+//! TOML text.
 //!
 //! ```no_run
-//! use saddle::conformance::{Tolerances, check_solver};
-//! use saddle::solvers::{Newton, Uzawa};
+//! use saddle_solvers::conformance::{Tolerances, check_solver};
+//! use saddle_solvers::{Newton, Uzawa};
 //! let reference = Newton { tol: 1e-12, ..Newton::default() };
 //! let report = check_solver(&Uzawa { tol: 1e-10, ..Uzawa::default() }, &reference, &Tolerances::default())?;
 //! for r in &report {
 //!     println!("{}: U error {:.1e}, σ̂ error {:.1e}", r.scene, r.agreement.u_rel, r.agreement.stress_rel);
 //! }
-//! # Ok::<(), saddle::conformance::KitFailure>(())
+//! # Ok::<(), saddle_solvers::conformance::KitFailure>(())
 //! ```
 
-use crate::output::single_quantity;
-use crate::scene::Scene;
 use saddle_contact::{EllipticParaboloid, Flat, GapShape, Paraboloid, RigidPunch, RigidSphere};
 use saddle_core::problem::stresses::energy_inner;
 use saddle_core::{
     AdmissibleStresses, BoxMesh, Component, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Lagrangian,
-    NamedObstacle, Obstacles, P2, Region, SceneError, Silent, Solution, Solver, StressField, Sym, Workspace,
-    contact_set, kkt,
+    MeshSource, NamedObstacle, Obstacles, P1, P2, ProblemView, Region, SceneError, Silent, Solution, Solver,
+    StressField, Sym, Workspace, contact_set, kkt,
 };
 use saddle_yield::VonMises;
-use std::path::PathBuf;
+use std::path::Path;
 use thiserror::Error;
 
 /// A failed check: which scene, which check, with the numbers.
@@ -94,6 +94,53 @@ pub struct SceneResult {
     pub agreement: Agreement,
 }
 
+/// A problem of the kit before assembly: what a scene file holds (without title, loads on u,
+/// solver or load path), as saddle-core values and plugins.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// The box mesh.
+    pub mesh: BoxMesh,
+    /// The finite element (`None`: P1, a scene's default).
+    pub element: Option<Box<dyn FiniteElement>>,
+    /// Elasticity.
+    pub elasticity: Elasticity,
+    /// P (`None`: elastic).
+    pub stresses: Option<Box<dyn AdmissibleStresses>>,
+    /// Dirichlet conditions.
+    pub dirichlet: Vec<Dirichlet>,
+    /// K.
+    pub obstacles: Obstacles,
+}
+
+impl Setup {
+    /// Checks every parameter as reading a scene file does; errors name the scene's field
+    /// (`material.nu`, `obstacle.F`).
+    pub fn validate(&self) -> Result<(), SceneError> {
+        self.mesh.validate("mesh")?;
+        if let Some(e) = &self.element {
+            e.validate("discretisation")?;
+        }
+        self.elasticity.validate("material")?;
+        if let Some(p) = &self.stresses {
+            p.validate("yield")?;
+        }
+        for (i, d) in self.dirichlet.iter().enumerate() {
+            d.validate(&format!("dirichlet[{i}]"))?;
+        }
+        Ok(self.obstacles.validate("obstacle")?)
+    }
+
+    /// Validates and assembles the discrete problem (theory §3), or the scene error — among
+    /// them the rigid-body motion the Dirichlet conditions leave free.
+    pub fn problem(&self) -> Result<DiscreteProblem, SceneError> {
+        self.validate()?;
+        let element = self.element.clone().unwrap_or_else(|| Box::new(P1::default()));
+        let element = element.build(self.mesh.build(Path::new(""))?, &self.dirichlet)?;
+        element.dofs().check_rigid_motions(element.mesh())?;
+        DiscreteProblem::new(element, self.elasticity, self.stresses.clone(), self.obstacles.clone(), &[])
+    }
+}
+
 /// A named small problem of the kit.
 pub struct KitScene {
     /// Name.
@@ -110,12 +157,12 @@ pub struct KitScene {
 /// candidate contact disc Γ₀ = zmin ∩ {r ≤ 0.5·length}. [`Default`] is the kit's small mesh
 /// (12×12×6 cells graded 3, 5 184 tetrahedra) of the example's problem;
 /// `Johnson { cells: [32, 32, 16], ratio: 4.0, ..Johnson::default() }` is the example file's
-/// scene (without its title and solver). A variant is a struct update:
+/// problem (without its title and solver). A variant is a struct update:
 ///
 /// ```
-/// use saddle::conformance::Johnson;
-/// let weak = Johnson { h: 0.5, ..Johnson::default() }.scene();
-/// assert_eq!(weak.mesh.cells(), Some([12, 12, 6]));
+/// use saddle_solvers::conformance::Johnson;
+/// let weak = Johnson { h: 0.5, ..Johnson::default() }.setup();
+/// assert_eq!(weak.mesh.cells, [12, 12, 6]);
 /// ```
 #[derive(Clone, Debug)]
 pub struct Johnson {
@@ -138,7 +185,7 @@ pub struct Johnson {
     /// Height of the block in units of `length` (1; 0.03 is a layer of slivers).
     pub height: f64,
     /// Clamped off Γ₁; `false` leaves the body without Dirichlet conditions, so rigid-body
-    /// motion is free (a scene error of [`Scene::into_problem`]).
+    /// motion is free (a scene error of [`Setup::problem`]).
     pub clamped: bool,
     /// The unit of length: the block, Γ₁, the contact disc and the aligned grid lines scale
     /// with it (1; stresses and forces are given as they are).
@@ -168,8 +215,8 @@ impl Default for Johnson {
 }
 
 impl Johnson {
-    /// The scene (no title, no solver).
-    pub fn scene(&self) -> Scene {
+    /// The problem's set-up.
+    pub fn setup(&self) -> Setup {
         let s = self.length;
         let mesh = BoxMesh::new([-s, -s, 0.0], [s, s, self.height * s], self.cells)
             .graded([0.0; 3], self.ratio)
@@ -180,10 +227,10 @@ impl Johnson {
             Region::Box { min: [-0.75 * s, -0.75 * s, -s], max: [0.75 * s, 0.75 * s, s] },
         ]);
         let zone = Region::All(vec![group("zmin"), Region::Disc { center: [0.0, 0.0], radius: 0.5 * s }]);
-        Scene {
-            discretisation: self.element.clone(),
+        Setup {
+            element: self.element.clone(),
             dirichlet: if self.clamped { vec![Dirichlet::clamped(Region::Not(Box::new(gamma1)))] } else { vec![] },
-            ..base_scene(
+            ..base_setup(
                 mesh,
                 Elasticity { young: self.young, poisson: self.nu },
                 Some(Box::new(VonMises::new(self.k0, self.h).unwrap())),
@@ -194,7 +241,7 @@ impl Johnson {
 
     /// The assembled problem.
     pub fn problem(&self) -> DiscreteProblem {
-        assemble(self.scene()).expect("kit scenes are valid")
+        kit_problem(&self.setup())
     }
 }
 
@@ -203,39 +250,34 @@ fn group(name: &str) -> Region {
     Region::Group(name.into())
 }
 
-/// A scene of the kit: no title, no Dirichlet condition, load or solver yet.
-fn base_scene(
+/// A set-up of the kit with the default element and no Dirichlet condition yet.
+fn base_setup(
     mesh: BoxMesh,
-    material: Elasticity,
-    yield_surface: Option<Box<dyn AdmissibleStresses>>,
+    elasticity: Elasticity,
+    stresses: Option<Box<dyn AdmissibleStresses>>,
     obstacle: RigidPunch,
-) -> Scene {
-    Scene {
-        title: None,
-        mesh: Box::new(mesh),
-        discretisation: None,
-        material,
-        yield_surface,
+) -> Setup {
+    Setup {
+        mesh,
+        element: None,
+        elasticity,
+        stresses,
         dirichlet: vec![],
-        load: vec![],
-        obstacle: Obstacles::one(Box::new(obstacle)),
-        solver: None,
-        load_path: None,
-        base_dir: PathBuf::new(),
+        obstacles: Obstacles::one(Box::new(obstacle)),
     }
 }
 
 /// Homogeneous compression of theory §7 (`examples/homogeneous.toml` with force `f`): the unit
 /// cube (3×3×3 cells) on rollers (u₁ = 0 on x₁ = 0, u₂ = 0 on x₂ = 0, u₃ = 0 on x₃ = 1), a flat
 /// punch on the whole bottom face; E = 100, ν = 0.3, k₀ = 1, h = 5.
-pub fn homogeneous(f: f64) -> Scene {
-    Scene {
+pub fn homogeneous(f: f64) -> Setup {
+    Setup {
         dirichlet: vec![
             Dirichlet::roller(group("xmin"), Component::X),
             Dirichlet::roller(group("ymin"), Component::Y),
             Dirichlet::roller(group("zmax"), Component::Z),
         ],
-        ..base_scene(
+        ..base_setup(
             BoxMesh::new([0.0; 3], [1.0; 3], [3, 3, 3]),
             Elasticity { young: 100.0, poisson: 0.3 },
             Some(Box::new(VonMises::new(1.0, 5.0).unwrap())),
@@ -248,15 +290,15 @@ pub fn homogeneous(f: f64) -> Scene {
 /// toward the contact centre: a quarter of the block (0,6)³ on symmetry rollers, the far faces
 /// clamped, E = 100, ν = 0.3, the quarter's force F = 0.075 on a paraboloid punch R = 5 over
 /// the disc of radius 0.45.
-pub fn hertz(cells: [usize; 3], ratio: f64) -> Scene {
+pub fn hertz(cells: [usize; 3], ratio: f64) -> Setup {
     let zone = Region::All(vec![group("zmin"), Region::Disc { center: [0.0, 0.0], radius: 0.45 }]);
-    Scene {
+    Setup {
         dirichlet: vec![
             Dirichlet::roller(group("xmin"), Component::X),
             Dirichlet::roller(group("ymin"), Component::Y),
             Dirichlet::clamped(Region::Any(vec![group("xmax"), group("ymax"), group("zmax")])),
         ],
-        ..base_scene(
+        ..base_setup(
             BoxMesh::new([0.0; 3], [6.0; 3], cells).graded([0.0; 3], ratio),
             Elasticity { young: 100.0, poisson: 0.3 },
             None,
@@ -269,18 +311,18 @@ pub fn hertz(cells: [usize; 3], ratio: f64) -> Scene {
 /// radius R = 5, touching the face at the origin (centre (0, 0, −5)) and pushed by F = 0.3 along
 /// a direction `tilt` degrees off the x₃-axis (in the x₁x₃-plane): rows on three dofs each
 /// (theory §8).
-pub fn rigid_sphere(tilt: f64) -> Scene {
+pub fn rigid_sphere(tilt: f64) -> Setup {
     let t = tilt.to_radians();
     let d = [t.sin(), 0.0, t.cos()];
     let zone = Region::All(vec![group("zmin"), Region::Disc { center: [0.0, 0.0], radius: 0.5 }]);
     let sphere = RigidSphere::pushed([0.0, 0.0, -5.0], 5.0, d, 0.3, zone);
-    Scene { obstacle: Obstacles::one(Box::new(sphere)), ..Johnson::default().scene() }
+    Setup { obstacles: Obstacles::one(Box::new(sphere)), ..Johnson::default().setup() }
 }
 
 /// The small default scene (theory §6) with two punches named `left` and `right`, forces 0.1
 /// and 0.25, each a paraboloid R = 5 on its own disc of radius 0.3 about (∓0.35, 0): K = K₁ ∩ K₂
 /// (theory §8).
-pub fn two_punches() -> Scene {
+pub fn two_punches() -> Setup {
     let punch = |name: &str, f: f64, x: f64| {
         let zone = Region::All(vec![group("zmin"), Region::Disc { center: [x, 0.0], radius: 0.3 }]);
         let gap = Paraboloid { R: 5.0, center: [x, 0.0] };
@@ -288,18 +330,11 @@ pub fn two_punches() -> Scene {
     };
     let obstacles =
         Obstacles::new(vec![punch("left", 0.1, -0.35), punch("right", 0.25, 0.35)]).expect("two named obstacles");
-    Scene { obstacle: obstacles, ..Johnson::default().scene() }
+    Setup { obstacles, ..Johnson::default().setup() }
 }
 
-/// Validates `scene` (as reading a file does) and assembles L, or the scene error — among them
-/// the rigid-body motion a scene's Dirichlet conditions leave free ([`Scene::into_problem`]).
-pub fn assemble(scene: Scene) -> Result<DiscreteProblem, SceneError> {
-    scene.validate()?;
-    Ok(scene.into_problem()?.0)
-}
-
-fn kit_problem(scene: Scene) -> DiscreteProblem {
-    assemble(scene).expect("kit scenes are valid")
+fn kit_problem(setup: &Setup) -> DiscreteProblem {
+    setup.problem().expect("kit scenes are valid")
 }
 
 /// U of homogeneous compression (theory §7) for E = 100, ν = 0.3, k₀ = 1, h = 5.
@@ -315,23 +350,23 @@ pub fn scenes() -> Vec<KitScene> {
     vec![
         KitScene {
             name: "homogeneous, elastic (F = 1)",
-            problem: kit_problem(homogeneous(1.0)),
+            problem: kit_problem(&homogeneous(1.0)),
             exact_u: Some(homogeneous_u(1.0)),
         },
         KitScene {
             name: "homogeneous, plastic (F = 2)",
-            problem: kit_problem(homogeneous(2.0)),
+            problem: kit_problem(&homogeneous(2.0)),
             exact_u: Some(homogeneous_u(2.0)),
         },
-        KitScene { name: "Hertz, elastic", problem: kit_problem(hertz([8, 8, 8], 20.0)), exact_u: None },
+        KitScene { name: "Hertz, elastic", problem: kit_problem(&hertz([8, 8, 8], 20.0)), exact_u: None },
         KitScene { name: "Johnson (theory §6)", problem: Johnson::default().problem(), exact_u: None },
         KitScene {
             name: "Johnson, weak hardening h = 0.5",
             problem: Johnson { h: 0.5, ..Johnson::default() }.problem(),
             exact_u: None,
         },
-        KitScene { name: "rigid sphere, 15° off the axis", problem: kit_problem(rigid_sphere(15.0)), exact_u: None },
-        KitScene { name: "two punches (F = 0.1, 0.25)", problem: kit_problem(two_punches()), exact_u: None },
+        KitScene { name: "rigid sphere, 15° off the axis", problem: kit_problem(&rigid_sphere(15.0)), exact_u: None },
+        KitScene { name: "two punches (F = 0.1, 0.25)", problem: kit_problem(&two_punches()), exact_u: None },
         KitScene {
             name: "Johnson, off-centre elliptic punch",
             problem: Johnson { gap: Box::new(elliptic), ..Johnson::default() }.problem(),
@@ -339,7 +374,7 @@ pub fn scenes() -> Vec<KitScene> {
         },
         KitScene {
             name: "homogeneous, plastic (F = 2), p2",
-            problem: kit_problem(homogeneous(2.0).with_element(Box::new(P2::default()))),
+            problem: kit_problem(&Setup { element: Some(Box::new(P2::default())), ..homogeneous(2.0) }),
             exact_u: Some(homogeneous_u(2.0)),
         },
         KitScene { name: "Johnson (theory §6), p2 on 6×6×3", problem: johnson_p2().problem(), exact_u: None },
@@ -400,6 +435,14 @@ pub fn energy_distance(l: &Lagrangian<'_>, a: &StressField, b: &StressField) -> 
     if den > 0.0 { (num / den).sqrt() } else { num.sqrt() }
 }
 
+/// U as the scene's single obstacle reports it (None without one, with several, or without U).
+fn reported_u(p: ProblemView<'_>, sol: &Solution) -> Option<f64> {
+    match p.contact_reports(&sol.extras, &sol.lambda).as_slice() {
+        [r] => r.report.get("U"),
+        _ => None,
+    }
+}
+
 /// x ≤ bound, false for NaN.
 fn within(x: f64, bound: f64) -> bool {
     x <= bound
@@ -439,7 +482,7 @@ pub fn check_solver(
         }
         if let Some(exact) = s.exact_u {
             // U as the obstacle reports it, by name (not the position of an extra)
-            let u = single_quantity(s.problem.view(), &sol, "U")
+            let u = reported_u(s.problem.view(), &sol)
                 .ok_or_else(|| fail("closed form", "the scene's single obstacle reports no quantity U".into()))?;
             let err = (u - exact).abs() / exact;
             if !within(err, tol.u_rel) {
@@ -471,54 +514,13 @@ pub fn check_solver(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::Path;
-
-    /// The example file's scene without its title and solver, as data.
-    fn example(name: &str) -> Scene {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(name);
-        Scene { title: None, solver: None, base_dir: PathBuf::new(), ..Scene::from_file(&path).unwrap() }
-    }
-
-    /// The scenes as plain data: every field and plugin parameter.
-    fn data(scene: &Scene) -> serde_json::Value {
-        serde_json::to_value(scene).unwrap()
-    }
-
-    /// Dofs, elements, contact rows and extras of the assembled problem.
-    fn sizes(scene: Scene) -> [usize; 4] {
-        let problem = assemble(scene).unwrap();
-        let l = problem.lagrangian();
-        [l.n_dofs(), l.n_points(), l.n_rows(), l.n_extras()]
-    }
-
-    /// The scenes built in code are the example files' problems: the same data, field for field,
-    /// and the same assembled sizes.
-    #[test]
-    fn builders_match_the_example_files() {
-        let cases = [
-            ("johnson.toml", Johnson { cells: [32, 32, 16], ratio: 4.0, ..Johnson::default() }.scene()),
-            ("homogeneous.toml", homogeneous(2.0)),
-            ("hertz.toml", hertz([25, 25, 25], 79.5)),
-        ];
-        for (file, built) in cases {
-            let file_scene = example(file);
-            assert_eq!(data(&built), data(&file_scene), "{file}");
-            assert_eq!(sizes(built), sizes(file_scene), "{file}");
-        }
-        // the small default differs from the example by its mesh only
-        let (mut small, file) =
-            (data(&Johnson::default().scene()), data(&example("johnson.toml").with_cells([12, 12, 6]).unwrap()));
-        assert_eq!(small["mesh"]["grading"]["ratio"], 3.0);
-        small["mesh"]["grading"]["ratio"] = file["mesh"]["grading"]["ratio"].clone();
-        assert_eq!(small, file);
-    }
 
     #[test]
     fn variants_are_struct_updates_and_assemble() {
         let l = Johnson::default().problem();
         assert_eq!(l.element.n_points(), 12 * 12 * 6 * 6);
         // no clamped node: the typed scene error naming the free motion
-        match assemble(Johnson { clamped: false, ..Johnson::default() }.scene()) {
+        match (Johnson { clamped: false, ..Johnson::default() }).setup().problem() {
             Err(SceneError::Region { field, message }) => {
                 assert_eq!(field, "dirichlet");
                 assert!(message.contains("rigid-body motion free ("), "{message}");
@@ -526,9 +528,9 @@ mod tests {
             other => panic!("an unclamped body must be a scene error: {:?}", other.map(|l| l.element.n_dofs())),
         }
         // a bad parameter is caught as when reading a file
-        let e = assemble(Johnson { nu: 0.5, ..Johnson::default() }.scene()).unwrap_err().to_string();
+        let e = Johnson { nu: 0.5, ..Johnson::default() }.setup().problem().unwrap_err().to_string();
         assert!(e.contains("material.nu = 0.5"), "{e}");
-        let thin = Johnson { height: 0.03, ..Johnson::default() }.scene();
+        let thin = Johnson { height: 0.03, ..Johnson::default() }.setup();
         assert!(thin.mesh.build(Path::new(".")).unwrap().quality().max_aspect_ratio > 90.0);
     }
 }

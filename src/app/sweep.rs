@@ -11,10 +11,10 @@
 //! saddle sweep examples/strip_punch.toml --factors 0.25,0.5,1,2,4 --out out/strip
 //! ```
 
-use crate::outdir::{OutDir, OutError};
-use crate::output::{Summary, check_quantity, reported_quantities};
-use crate::run::{self, RunError};
-use crate::scene::Scene;
+use super::setup::{RunError, default_solver, solver_by_type};
+use crate::io::outdir::{OutDir, OutError};
+use crate::io::scene::{Scene, element_by_type};
+use crate::io::summary::{Summary, check_quantity, reported_quantities};
 use saddle_core::error::{check, number};
 use saddle_core::{DiscreteProblem, Evolution, SceneError, Silent, Solver};
 use std::collections::BTreeMap;
@@ -145,10 +145,10 @@ pub fn generate(
     }
     let mut scene = Scene::from_file(scene_path)?;
     if let Some(name) = &opts.element {
-        scene.discretisation = Some(crate::scene::element_by_type(name)?);
+        scene.discretisation = Some(element_by_type(name)?);
     }
     let solver = match &opts.solver {
-        Some(name) => Some(run::solver_by_type(name)?),
+        Some(name) => Some(solver_by_type(name)?),
         None => None,
     };
     let title = scene.title.clone().unwrap_or_else(|| scene_path.display().to_string());
@@ -158,7 +158,7 @@ pub fn generate(
     }
     let mesh = scene.build_mesh()?;
     let (problem, own) = scene.assemble(mesh)?;
-    let solver = solver.or(own).unwrap_or_else(run::default_solver);
+    let solver = solver.or(own).unwrap_or_else(default_solver);
     // the folder is claimed before the first solve; left as it was if no point can be solved
     let mut out_dir: Option<OutDir> = None;
     let points = match solve_points(&problem, solver.as_ref(), opts, out, &mut out_dir, progress) {
@@ -254,7 +254,7 @@ fn write(sweep: &Sweep, out: &mut OutDir) -> Result<(), SweepError> {
             sweep.points.iter().filter_map(|p| Some((p.get(x)?, p.get(y)?, p.converged))).collect();
         if points.len() >= 2 {
             let title = format!("saddle sweep: {}", sweep.title);
-            crate::report::plot::curve(&title, (x, y), &points, &out.path("sweep.png"), &out.path("sweep.svg"))
+            crate::io::plot::curve(&title, (x, y), &points, &out.path("sweep.png"), &out.path("sweep.svg"))
                 .map_err(|e| SweepError::Io { path: out.path("sweep.png"), message: e.to_string() })?;
             out.wrote("sweep.png")?;
             out.wrote("sweep.svg")?;

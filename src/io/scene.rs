@@ -55,7 +55,7 @@
 //! gap = { type = "paraboloid", R = 5.0, center = [0.5, 0.0] }
 //! ```
 
-use crate::scene_de::TypeFirst;
+use super::scene_de::TypeFirst;
 use saddle_core::error::ParameterError;
 use saddle_core::{
     AdmissibleStresses, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P1,
@@ -242,7 +242,7 @@ impl Scene {
 
 /// The most steps a load path may have: 100 000. A step costs a solve and about 1.4 KB of
 /// `summary.json` and `load_path.csv` (measured: 4 001 steps on a 4×4×2 mesh wrote 4.6 MB and
-/// 0.9 MB in 5 s; the VTU files are bounded by [`crate::path::MAX_STEP_FILES`]), so the longest
+/// 0.9 MB in 5 s; the VTU files are bounded by [`crate::app::path::MAX_STEP_FILES`]), so the longest
 /// path writes about 140 MB besides its VTU files.
 pub const MAX_STEPS: usize = 100_000;
 

@@ -8,18 +8,18 @@
 //! cargo run --release --example stability            # prints the table and rewrites README.md's
 //! ```
 //!
-//! The scenes are typed values: the small default scene of the conformance kit
-//! ([`Johnson::default`]: 12×12×6 cells graded 3, 5 184 tetrahedra) with one parameter changed,
-//! so that the whole table takes about a minute; the solvers are typed values too.
+//! The scenes are typed values: the small default scene of the solvers' conformance kit
+//! ([`Johnson::default`]: 12×12×6 cells graded 3, 5 184 tetrahedra; a [`Setup`]) with one
+//! parameter changed, so that the whole table takes about a minute; the solvers are typed values
+//! too.
 
-use crate::conformance::{Johnson, assemble, johnson_p2};
-use crate::output::Summary;
-use crate::run::solver_by_type;
-use crate::scene::Scene;
+use crate::app::setup::solver_by_type;
+use crate::io::summary::Summary;
 use saddle_contact::{Flat, Paraboloid};
 use saddle_core::{
     DiscreteProblem, FiniteElement, P2, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace, kkt,
 };
+use saddle_solvers::conformance::{Johnson, Setup, johnson_p2};
 use saddle_solvers::{Penalty, Uzawa};
 use std::sync::Arc;
 use std::time::Instant;
@@ -55,14 +55,14 @@ pub struct Case {
     /// What is varied, e.g. `h/E = 1e-8`.
     pub label: String,
     /// The scene.
-    pub scene: Scene,
+    pub setup: Setup,
     /// The solvers to run: the four defaults, or one special setting.
     pub solvers: Vec<Setting>,
 }
 
 impl Case {
-    fn new(group: u8, label: impl Into<String>, scene: Scene) -> Self {
-        Self { group, label: label.into(), scene, solvers: all_solvers().into_iter().map(Setting::from).collect() }
+    fn new(group: u8, label: impl Into<String>, setup: Setup) -> Self {
+        Self { group, label: label.into(), setup, solvers: all_solvers().into_iter().map(Setting::from).collect() }
     }
 
     /// The case run by one solver setting only.
@@ -87,8 +87,8 @@ pub fn default_solver(name: &str) -> Box<dyn Solver> {
 }
 
 /// The default scene.
-pub fn scene() -> Scene {
-    Johnson::default().scene()
+pub fn scene() -> Setup {
+    Johnson::default().setup()
 }
 
 /// The default scene in other units: stresses (E, k₀, h) times `stress`, lengths (the block,
@@ -123,31 +123,31 @@ pub fn cases() -> Vec<Case> {
     // 1. near-perfect plasticity (E = 100)
     for h_rel in [1e-1, 1e-2, 1e-4, 1e-6, 1e-8, 0.0] {
         let label = if h_rel == 0.0 { "h = 0 (perfect plasticity)".to_string() } else { format!("h/E = {h_rel:e}") };
-        c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..d() }.scene()));
+        c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..d() }.setup()));
     }
     // 2. near-incompressibility
     for nu in [0.49, 0.499, 0.4999] {
-        c.push(Case::new(2, format!("ν = {nu}"), Johnson { nu, ..d() }.scene()));
+        c.push(Case::new(2, format!("ν = {nu}"), Johnson { nu, ..d() }.setup()));
     }
     // the same rows with P2 (B̄) on 6×6×3 cells: the nodes of the P1 mesh, theory §10
     for h_rel in [1e-2, 1e-4, 1e-8, 0.0] {
         let label = if h_rel == 0.0 { "p2: h = 0".to_string() } else { format!("p2: h/E = {h_rel:e}") };
-        c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..johnson_p2() }.scene()));
+        c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..johnson_p2() }.setup()));
     }
     for nu in [0.49, 0.499, 0.4999] {
-        c.push(Case::new(2, format!("p2: ν = {nu}"), Johnson { nu, ..johnson_p2() }.scene()));
+        c.push(Case::new(2, format!("p2: ν = {nu}"), Johnson { nu, ..johnson_p2() }.setup()));
     }
     // 8. strongly plastic: k₀ = 0.05, most of the body plastic, with both elements
     c.push(Case::new(8, "strongly plastic: k₀ = 0.05", strongly_plastic(d())));
     c.push(Case::new(8, "p2: strongly plastic: k₀ = 0.05", strongly_plastic(johnson_p2())));
     // 3. units: SI-like stresses ×1e9, lengths ×1e-3
-    c.push(Case::new(3, "stresses ×1e9, lengths ×1e-3", scaled_units(1e9, 1e-3).scene()));
+    c.push(Case::new(3, "stresses ×1e9, lengths ×1e-3", scaled_units(1e9, 1e-3).setup()));
     // 4. loads
-    c.push(Case::new(4, "F = 1e-8 × default", Johnson { force: 0.3e-8, ..d() }.scene()));
+    c.push(Case::new(4, "F = 1e-8 × default", Johnson { force: 0.3e-8, ..d() }.setup()));
     let f_y = first_yield_force(100.0, 0.3, 1.0, 5.0);
-    c.push(Case::new(4, "F = 100 × first yield", Johnson { force: 100.0 * f_y, ..d() }.scene()));
+    c.push(Case::new(4, "F = 100 × first yield", Johnson { force: 100.0 * f_y, ..d() }.setup()));
     // 5. flat punch
-    c.push(Case::new(5, "flat punch (φ ≡ 0)", Johnson { gap: Box::new(Flat::default()), ..d() }.scene()));
+    c.push(Case::new(5, "flat punch (φ ≡ 0)", Johnson { gap: Box::new(Flat::default()), ..d() }.setup()));
     // 6. the penalty's smallest μ, Uzawa's step above its bound
     c.push(Case::new(6, "μ = 1e-14", scene()).only(tiny_penalty()));
     c.push(Case::new(6, "ρ = 2.5 > 2", scene()).only(unstable_uzawa()));
@@ -159,8 +159,8 @@ pub fn cases() -> Vec<Case> {
 
 /// Case 8: the default scene with the yield radius k₀ = 0.05 (20 times smaller): most elements
 /// plastic (92 % with P1 on the small mesh), the contact set up to the rim of the zone.
-pub fn strongly_plastic(base: Johnson) -> Scene {
-    Johnson { k0: 0.05, ..base }.scene()
+pub fn strongly_plastic(base: Johnson) -> Setup {
+    Johnson { k0: 0.05, ..base }.setup()
 }
 
 /// Case 6: the penalty at μ = 1e-14.
@@ -174,13 +174,13 @@ pub fn unstable_uzawa() -> Setting {
 }
 
 /// The default scene on a layer of thickness 0.03: cells 2/12 wide, 0.005 high near Γ₀.
-pub fn sliver_scene() -> Scene {
-    Johnson { height: 0.03, ..Johnson::default() }.scene()
+pub fn sliver_scene() -> Setup {
+    Johnson { height: 0.03, ..Johnson::default() }.setup()
 }
 
 /// The default scene without its Dirichlet condition: rigid-body motion is free.
-pub fn unclamped_scene() -> Scene {
-    Johnson { clamped: false, ..Johnson::default() }.scene()
+pub fn unclamped_scene() -> Setup {
+    Johnson { clamped: false, ..Johnson::default() }.setup()
 }
 
 /// What one run gave.
@@ -189,8 +189,7 @@ pub enum Outcome {
     /// The solver returned (converged or flagged): its summary, the recomputed KKT residual
     /// and the wall time.
     Returned { summary: Box<Summary>, recomputed_kkt: f64, wall_s: f64 },
-    /// The scene was rejected before solving: the typed error of validation or
-    /// [`Scene::into_problem`].
+    /// The scene was rejected before solving: the typed error of [`Setup::problem`].
     SceneError(Arc<SceneError>),
     /// The solver returned a typed error.
     SolveError(Arc<SolveError>),
@@ -218,13 +217,13 @@ impl Row {
 }
 
 /// Validates and assembles the scene; its typed error if it is rejected.
-pub fn problem(scene: &Scene) -> Result<DiscreteProblem, SceneError> {
-    assemble(scene.clone())
+pub fn problem(setup: &Setup) -> Result<DiscreteProblem, SceneError> {
+    setup.problem()
 }
 
-/// Runs `solver` on `scene`.
-pub fn run(scene: &Scene, solver: &dyn Solver) -> (Outcome, Option<Solution>) {
-    let p = match problem(scene) {
+/// Runs `solver` on `setup`.
+pub fn run(setup: &Setup, solver: &dyn Solver) -> (Outcome, Option<Solution>) {
+    let p = match problem(setup) {
         Ok(p) => p,
         Err(e) => return (Outcome::SceneError(Arc::new(e)), None),
     };
@@ -246,7 +245,7 @@ pub fn study(cases: &[Case], mut progress: impl FnMut(&Row)) -> Vec<Row> {
     let mut rows = vec![];
     for case in cases {
         for setting in &case.solvers {
-            let (outcome, _) = run(&case.scene, setting.solver.as_ref());
+            let (outcome, _) = run(&case.setup, setting.solver.as_ref());
             let row = Row { case: case.clone(), solver: setting.label.clone(), outcome };
             progress(&row);
             rows.push(row);
@@ -334,9 +333,9 @@ pub fn markdown(rows: &[Row]) -> String {
 /// `None`; the locking study). The linear backend is direct: the multigrid is built on the
 /// rigid-body modes and slows down as ν → ½ (`incompressibility_factor`).
 pub fn newton_u(nu: f64, cells: [usize; 3], element: Option<Box<dyn FiniteElement>>) -> f64 {
-    let scene = Johnson { nu, cells, element, ..Johnson::default() }.scene();
+    let setup = Johnson { nu, cells, element, ..Johnson::default() }.setup();
     let newton = saddle_solvers::Newton { linear: saddle_solvers::LinearSolver::Direct, ..Default::default() };
-    match run(&scene, &newton).0 {
+    match run(&setup, &newton).0 {
         Outcome::Returned { summary, .. } if summary.converged => summary.U.expect("the punch reports U"),
         other => panic!("newton failed at nu = {nu}: {other:?}"),
     }
@@ -397,7 +396,7 @@ pub struct UnitsCheck {
 /// Runs case 3 (stresses × `stress`, lengths × `length`) for `solver`.
 pub fn units_check(solver: &dyn Solver, stress: f64, length: f64) -> Result<UnitsCheck, String> {
     let (_, a) = run(&scene(), solver);
-    let (outcome, b) = run(&scaled_units(stress, length).scene(), solver);
+    let (outcome, b) = run(&scaled_units(stress, length).setup(), solver);
     let (a, b) = match (a, b) {
         (Some(a), Some(b)) => (a, b),
         _ => return Err(format!("{} did not return: {outcome:?}", solver.name())),

@@ -5,9 +5,10 @@
 //! `_us` microseconds, `_rel` a dimensionless relative quantity; U and h are in the scene's
 //! length unit.
 
-use super::Report;
 use super::convergence::ConvergenceStudy;
+use super::measure::Report;
 use super::runs::RunRecord;
+use crate::io::csv::{csv_field, csv_num};
 use std::fmt::Write;
 
 /// The header of `work_precision.csv`.
@@ -18,16 +19,6 @@ solver_time_s,U,err_U_rel,err_stress_energy_rel,err_strain_L2_rel,kkt_rel,contac
 pub const CONVERGENCE_HEADER: &str = "level,cells,dofs,elements,h,h_contact,wall_time_s,time_per_dof_us,\
 status,converged,iterations,kkt_rel,U,err_U_rel,err_U_richardson_rel,err_stress_energy_rel,err_strain_L2_rel,\
 diff_stress_energy_next_rel,rate_U,rate_stress,rate_strain,rate_stress_consecutive";
-
-/// A CSV field: quoted when it holds a comma, a quote or a line break.
-pub fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
-}
-
-/// A number for CSV: 7 significant digits, empty when not finite.
-pub fn csv_num(x: f64) -> String {
-    if x.is_finite() { format!("{x:.6e}") } else { String::new() }
-}
 
 /// `work_precision.csv`: one row per run.
 pub fn work_precision_csv(runs: &[RunRecord]) -> String {

@@ -1,47 +1,18 @@
-//! `saddle report`: accuracy and cost of the solvers on a scene (theory §4, §5) and the mesh
-//! convergence of the discretisation (theory §3 Theorem 2, §7).
-//!
-//! [`generate`] writes into a folder:
-//!
-//! * `work_precision.csv`, `work_precision.png`, `work_precision.svg` — every solver along a
-//!   ladder of settings ([`runs::ladder`]), each run's wall time and its errors against a tightly
-//!   converged reference of the same discrete problem (Newton to 1e-13, [`runs::reference_solver`]);
-//! * `convergence.csv`, `convergence.png`, `convergence.svg` — the scene on a sequence of refined
-//!   box meshes ([`convergence`], [`LEVELS`]), each solved by the reference solver; errors against
-//!   the finest level through the transfer of P0 fields ([`transfer`]), observed rates next to
-//!   Theorem 2's guaranteed 1/2, a Richardson extrapolation of U. A scene whose mesh is not a
-//!   `box` gets no study: `convergence.csv` holds its header only and `report.md` says why;
-//! * `elements.csv`, `elements.png`, `elements.svg` — P1 against P2 ([`elements`], theory §10):
-//!   the convergence study repeated with the other element on meshes with the same nodes, U of
-//!   every level against one reference, wall times, and which element reaches an accuracy of U
-//!   sooner;
-//! * `report.md` — the tables, the observed σ̂ rate against 1/2, each solver at its tightest
-//!   setting, links to the images.
-//!
-//! The plots need the cargo feature `report` (on by default; [`plot`]); without it the CSV files
-//! and `report.md` are written and `report.md` says that the images were not drawn.
-//!
-//! The parts are public so that tests can check them: the error measures ([`runs::errors`],
-//! [`transfer::field_distance`]), point location ([`transfer::Locator`]), rates and Richardson
-//! ([`convergence`]), the writers ([`tables`]).
+//! The measurements of `saddle report`: the work–precision runs of every solver against a tight
+//! reference ([`work_precision`]) and the mesh convergence study ([`convergence_study`]), with
+//! the scene they are made on ([`SceneSource`]) and everything measured ([`Report`]).
 
-pub mod convergence;
-pub mod elements;
+use super::convergence::{ConvergenceStudy, LevelResult, mesh_size};
+use super::elements::ElementComparison;
+use super::runs::{self, RunRecord, Rung, RungKind, Timed, record, reference_solver, timed_polish, timed_solve};
+use super::transfer::{self, OutsideMesh, Quadrature, SampleMap};
 #[cfg(feature = "report")]
-pub mod plot;
-pub mod runs;
-pub mod tables;
-pub mod transfer;
-
-use crate::scene::Scene;
-use convergence::{ConvergenceStudy, LevelResult, mesh_size, refinement_levels};
-use runs::{RunRecord, Rung, RungKind, Timed, ladder, record, reference_solver, timed_polish, timed_solve};
+use crate::io::plot::PlotError;
+use crate::io::scene::Scene;
+use crate::io::summary::single_quantity;
 use saddle_core::{DiscreteProblem, Monitor, SceneError, Silent, Solution, SolveError, Workspace, kkt};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 use thiserror::Error;
-pub use transfer::OutsideMesh;
-use transfer::{Quadrature, SampleMap};
 
 /// Why a report could not be made.
 #[derive(Debug, Error)]
@@ -64,13 +35,9 @@ pub enum ReportError {
         source: std::io::Error,
     },
     /// A plot could not be drawn.
-    #[error("cannot draw {path}: {message}")]
-    Plot {
-        /// The image.
-        path: PathBuf,
-        /// Why.
-        message: String,
-    },
+    #[cfg(feature = "report")]
+    #[error(transparent)]
+    Plot(#[from] PlotError),
 }
 
 /// Progress over the runs of a report (a progress bar); it also follows each solve as its
@@ -172,8 +139,8 @@ pub struct Report {
     pub scene_cells: Option<[usize; 3]>,
     /// The convergence study, or why there is none.
     pub convergence: Result<ConvergenceStudy, String>,
-    /// P1 against P2 on meshes with the same nodes ([`elements`]), or why there is none.
-    pub element_comparison: Result<elements::ElementComparison, String>,
+    /// P1 against P2 on meshes with the same nodes ([`super::elements`]), or why there is none.
+    pub element_comparison: Result<ElementComparison, String>,
     /// Wall time of the whole report, seconds.
     pub total_s: f64,
     /// Whether the images were drawn (feature `report`).
@@ -318,7 +285,7 @@ pub fn convergence_study(
         Ok((l, timed))
     };
     // U as the single obstacle reports it, by name
-    let u_of = |p: &DiscreteProblem, s: &Solution| crate::output::single_quantity(p.view(), s, "U").unwrap_or(f64::NAN);
+    let u_of = |p: &DiscreteProblem, s: &Solution| single_quantity(p.view(), s, "U").unwrap_or(f64::NAN);
     let level_result = |p: &DiscreteProblem, cells: [usize; 3], timed: &Timed| {
         let l = &p.lagrangian();
         let (status, converged, iterations, kkt, u) = match &timed.result {
@@ -388,114 +355,4 @@ pub fn convergence_study(
     }
     results.reverse();
     Ok(ConvergenceStudy::from_levels(results))
-}
-
-/// Makes the report of the scene file `scene` in `out` (module docs).
-pub fn generate(
-    scene: &Path,
-    out: &Path,
-    options: &ReportOptions,
-    progress: &mut dyn Progress,
-) -> Result<Report, ReportError> {
-    let t0 = Instant::now();
-    let source = SceneSource::read(scene)?;
-    let l = source.problem(None)?;
-    let rungs = ladder(options.quick);
-    let base = source.box_cells();
-    let levels: Result<Vec<[usize; 3]>, String> = base.clone().map(|base| {
-        let factors: &[f64] = if options.quick { &QUICK_LEVELS } else { &LEVELS };
-        let mut levels = refinement_levels(base, factors);
-        if !levels.contains(&base) {
-            levels.push(base);
-            levels.sort_by_key(|c| c[0] * c[1] * c[2]);
-        }
-        levels
-    });
-    // the scene's own level is the work–precision reference: not solved again
-    let other_levels = levels.as_ref().map_or(0, |v| v.len().saturating_sub(1));
-    // the other element's levels, on meshes with the same nodes (theory §10)
-    let own = source.scene.element_name();
-    let other = if own == "p2" { "p1" } else { "p2" };
-    let other_levels_cells = levels
-        .as_ref()
-        .ok()
-        .filter(|v| v.len() >= 2)
-        .map(|v| if other == "p2" { elements::p2_levels(v) } else { elements::p1_levels(v) });
-    let solves = 1
-        + rungs.iter().filter(|r| !matches!(r.kind, RungKind::Reference)).count()
-        + other_levels
-        + other_levels_cells.as_ref().map_or(0, |v| v.len());
-    progress.plan(solves);
-    let mut counter = 0;
-    std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
-    let (runs, reference, reference_wall) = work_precision(&l, &rungs, progress, &mut counter)?;
-    let (dofs, elements, contact_rows) = (l.element.n_dofs(), l.element.n_points(), l.obstacles.rows().n_rows());
-    let convergence = match levels {
-        Ok(levels) if levels.len() >= 2 => {
-            let cells = *base.as_ref().expect("levels come from the base cells");
-            let known = KnownLevel { cells, problem: l, solution: reference, wall_s: reference_wall };
-            Ok(convergence_study(&source, &levels, Some(known), progress, &mut counter)?)
-        }
-        Ok(_) => Err("the scene's mesh is too coarse to coarsen (fewer than two distinct levels)".to_string()),
-        Err(why) => Err(why),
-    };
-    let comparison = match (&convergence, other_levels_cells) {
-        (Ok(own_study), Some(cells)) => {
-            let element: Box<dyn saddle_core::FiniteElement> =
-                if other == "p2" { Box::new(saddle_core::P2::default()) } else { Box::new(saddle_core::P1::default()) };
-            let other_source = SceneSource { scene: source.scene.with_element(element), ..source.clone() };
-            let other_study = convergence_study(&other_source, &cells, None, progress, &mut counter)?;
-            Ok(if other == "p2" {
-                elements::ElementComparison::new(own_study.clone(), other_study)
-            } else {
-                elements::ElementComparison::new(other_study, own_study.clone())
-            })
-        }
-        (Err(why), _) => Err(why.clone()),
-        (Ok(_), None) => Err("no levels to compare".to_string()),
-    };
-    let mut report = Report {
-        scene: scene.to_path_buf(),
-        title: source.title(),
-        dofs,
-        elements,
-        contact_rows,
-        quick: options.quick,
-        cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
-        runs,
-        scene_cells: base.ok(),
-        convergence,
-        element_comparison: comparison,
-        total_s: 0.0,
-        plots: cfg!(feature = "report"),
-    };
-    write_outputs(&mut report, out, t0)?;
-    Ok(report)
-}
-
-/// Writes the CSV files, the images (feature `report`) and `report.md`; the total time is taken
-/// just before `report.md`.
-fn write_outputs(report: &mut Report, out: &Path, t0: Instant) -> Result<(), ReportError> {
-    let write = |name: &str, text: &str| {
-        let path = out.join(name);
-        std::fs::write(&path, text).map_err(|source| ReportError::Io { path, source })
-    };
-    write("work_precision.csv", &tables::work_precision_csv(&report.runs))?;
-    write("convergence.csv", &tables::convergence_csv(report.convergence.as_ref().ok()))?;
-    if let Ok(c) = &report.element_comparison {
-        write("elements.csv", &c.csv())?;
-    }
-    #[cfg(feature = "report")]
-    {
-        plot::work_precision(report, &out.join("work_precision.png"), &out.join("work_precision.svg"))?;
-        if let Ok(study) = &report.convergence {
-            plot::convergence(report, study, &out.join("convergence.png"), &out.join("convergence.svg"))?;
-        }
-        if let Ok(c) = &report.element_comparison {
-            plot::elements(&c.series(), &out.join("elements.png"), &out.join("elements.svg"))?;
-        }
-    }
-    report.total_s = t0.elapsed().as_secs_f64();
-    write("report.md", &tables::markdown(report))?;
-    Ok(())
 }

@@ -6,7 +6,7 @@
 //! study; P2's stresses enter by their element means).
 
 use super::convergence::ConvergenceStudy;
-use super::tables::csv_num;
+use crate::io::csv::csv_num;
 use std::fmt::Write;
 
 /// The accuracies of U the comparison asks each element to reach (relative).

@@ -14,7 +14,9 @@
 //! cargo run --release -- bench examples/johnson.toml --sizes 10000,50000,100000 --solvers newton,uzawa
 //! ```
 
-use crate::report::{ReportError, SceneSource};
+use super::report::convergence::fitted_rate;
+use super::report::measure::{ReportError, SceneSource};
+use crate::app::setup::solver_by_type;
 use saddle_core::linalg::{AmgParams, Csr, LowerCsc, NearNullSpace, Pcg, SmoothedAggregation, SparseCholesky};
 use saddle_core::problem::operators::RIGID_BODY_MODES;
 use saddle_core::{DiscreteProblem, Load, Material, Obstacles, P1P0Element, Silent, Solver, Workspace, kkt};
@@ -53,7 +55,7 @@ pub fn solver_spec(name: &str) -> Result<(Box<dyn Solver>, bool), String> {
         None => (name, None),
     };
     let solver: Box<dyn Solver> = match linear {
-        None => crate::run::solver_by_type(kind).map_err(|e| format!("bench solver {name:?}: {e}"))?,
+        None => solver_by_type(kind).map_err(|e| format!("bench solver {name:?}: {e}"))?,
         Some(lin) => {
             let linear = match lin {
                 "direct" => LinearSolver::Direct,
@@ -403,7 +405,15 @@ pub fn generate(
     let md = out.join("bench.md");
     std::fs::write(&md, markdown(&bench)).map_err(|e| io_error(&md, e))?;
     #[cfg(feature = "report")]
-    crate::report::plot::scaling(&scaling_series(&bench), &out.join("bench.png"), &out.join("bench.svg"))?;
+    {
+        let labels = [
+            "saddle bench: the default scene family (2 cores)",
+            "wall time against problem size",
+            "degrees of freedom",
+            "wall time (s)",
+        ];
+        crate::io::plot::lines(&scaling_series(&bench), labels, true, &out.join("bench.png"), &out.join("bench.svg"))?;
+    }
     Ok(bench)
 }
 
@@ -414,7 +424,7 @@ fn io_error(path: &Path, source: std::io::Error) -> ReportError {
 /// Least-squares slope of ln t against ln N.
 pub fn fitted_slope(points: &[(f64, f64)]) -> Option<f64> {
     let (n, t): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
-    crate::report::convergence::fitted_rate(&n, &t)
+    fitted_rate(&n, &t)
 }
 
 impl SizeResult {

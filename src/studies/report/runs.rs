@@ -3,19 +3,19 @@
 //!
 //! Errors (theory §5), all relative to the reference:
 //! * U: |U − U_ref| / |U_ref| (the largest over the extra unknowns; without extras the max-norm
-//!   of u, as in [`crate::conformance::agreement`]);
+//!   of u, as in [`saddle_solvers::conformance::agreement`]);
 //! * σ̂: [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} in the energy norm of theory §1
-//!   ([`crate::conformance::energy_distance`]) — the σ̂ the solver returns;
+//!   ([`saddle_solvers::conformance::energy_distance`]) — the σ̂ the solver returns;
 //! * ε(u): ‖ε(u − u_ref)‖_{L²} / ‖ε(u_ref)‖_{L²}, element volumes as weights.
 //!
 //! The KKT residual is recomputed from the returned solution by L, independently of the solver.
 
 use super::transfer::{l2_distance, strains};
-use crate::conformance::agreement;
-use crate::output::single_quantity;
+use crate::io::summary::single_quantity;
 use saddle_core::{
     DiscreteProblem, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace, kkt,
 };
+use saddle_solvers::conformance::agreement;
 use saddle_solvers::{Newton, Penalty, Start, Uzawa};
 use std::time::Instant;
 

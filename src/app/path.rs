@@ -9,7 +9,7 @@
 //!
 //! ```no_run
 //! use saddle::core::{Evolution, Silent, step_factors};
-//! use saddle::scene::Scene;
+//! use saddle::io::scene::Scene;
 //!
 //! let scene = Scene::from_file("examples/indentation.toml".as_ref()).unwrap();
 //! let (l, solver) = scene.into_problem().unwrap();
@@ -22,55 +22,17 @@
 //! }
 //! ```
 
-use crate::outdir::OutDir;
-use crate::output::{StepSummary, Summary, check_quantity, reported_quantities, write_vtu};
-use crate::run::{Loaded, Outcome, RunError};
-use crate::scene::LoadPath;
+use super::setup::{Loaded, Outcome, RunError};
+use crate::io::outdir::OutDir;
+use crate::io::scene::LoadPath;
+use crate::io::summary::{PathSummary, ResidualState, StepSummary, Summary, check_quantity, reported_quantities};
+use crate::io::vtu::write_vtu;
 use saddle_core::{Evolution, Monitor, PathError, SceneError, StepSolution};
-use serde::Serialize;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write as _};
 use std::path::Path;
 use std::time::Instant;
-
-/// The load path as a whole, in `summary.json` under `load_path`.
-#[derive(Clone, Debug, Serialize)]
-pub struct PathSummary {
-    /// The scene's factors.
-    pub factors: Vec<f64>,
-    /// Sub-steps between factors.
-    pub substeps: usize,
-    /// The factor of every planned step.
-    pub step_factors: Vec<f64>,
-    /// Steps solved (the failed one included).
-    pub steps_done: usize,
-    /// True when every step converged.
-    pub completed: bool,
-    /// The step that stopped the path (failed or not converged).
-    pub failed_step: Option<usize>,
-    /// Why it stopped.
-    pub error: Option<String>,
-    /// Outer iterations of all steps.
-    pub total_iterations: usize,
-    /// Wall time of all steps (set-up, solve, summary, output).
-    pub total_wall_s: f64,
-    /// The residual state, when the path ends converged at load factor 0 (theory §11.4).
-    pub residual: Option<ResidualState>,
-}
-
-/// What unloading leaves (theory §11.4), summarised.
-#[derive(Clone, Debug, Serialize)]
-pub struct ResidualState {
-    /// Each obstacle's imprint: the largest displacement of its candidate nodes away from it
-    /// (`imprint`, or `name.imprint`).
-    pub imprint: BTreeMap<String, f64>,
-    /// The largest von Mises stress of the residual stresses.
-    pub max_von_mises: f64,
-    /// The largest equivalent plastic strain.
-    pub max_equivalent_plastic_strain: f64,
-}
 
 /// The most `solution_NNNN.vtu` files a load path writes: with more planned steps, every k-th
 /// step's (k = ⌈steps / 100⌉), the last planned step's and the step that stops the path; a step
@@ -374,7 +336,7 @@ fn plot(summary: &Summary, path: &LoadPath, out_dir: &Path) -> Result<bool, RunE
     }
     let title = format!("load path: {}", summary.title.clone().unwrap_or_default());
     let (png, svg) = (out_dir.join("load_path.png"), out_dir.join("load_path.svg"));
-    crate::report::plot::curve(&title, (x, y), &points, &png, &svg)
+    crate::io::plot::curve(&title, (x, y), &points, &png, &svg)
         .map_err(|e| RunError::Io { path: png, source: std::io::Error::other(e.to_string()) })?;
     Ok(true)
 }

@@ -1,24 +1,26 @@
-//! The report's images (cargo feature `report`): log–log plots drawn by plotters into PNG and
-//! SVG, in pure Rust — the PNG's text is rasterised from an embedded DejaVu Sans (no fontconfig
-//! or freetype), the SVG names the font family.
-//!
-//! * `work_precision.{png,svg}`: error against wall time (theory §5), σ̂ in the energy norm and U in
-//!   two panels, one line with markers per solver through its converged runs; runs that stopped
-//!   short are open markers off the line; errors of exactly 0 (the reference) are not drawn.
-//! * `convergence.{png,svg}`: errors against the mesh size h (theory §3 Theorem 2) with a reference
-//!   line of slope 1/2.
-//!
-//! The legend is drawn in a strip below the panels, so it never covers data.
+//! Plots (cargo feature `report`): a [`Figure`] of log–log panels with a legend strip, lines of
+//! series on log–log axes ([`lines`]) and a curve on linear axes ([`curve`]), drawn by plotters
+//! into PNG and SVG in pure Rust — the PNG's text is rasterised from an embedded DejaVu Sans (no
+//! fontconfig or freetype), the SVG names the font family. The legend is drawn in a strip below
+//! the panels, so it never covers data.
 
-use super::Report;
-use super::convergence::ConvergenceStudy;
-use super::runs::RunRecord;
 use plotters::coord::Shift;
 use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Once;
+use thiserror::Error;
+
+/// A plot that could not be drawn.
+#[derive(Debug, Error)]
+#[error("cannot draw {path}: {message}")]
+pub struct PlotError {
+    /// The image.
+    pub path: PathBuf,
+    /// Why.
+    pub message: String,
+}
 
 /// The font family every text uses; registered once from the embedded DejaVu Sans.
 const FONT: &str = "sans-serif";
@@ -33,51 +35,66 @@ fn register_font() {
 
 /// Marker shapes, one per series.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Marker {
+pub enum Marker {
+    /// ●
     Circle,
+    /// ▲
     Triangle,
+    /// ■
     Square,
+    /// ✕
     Cross,
 }
 
 /// One line of a panel.
 #[derive(Clone, Debug)]
-struct Series {
-    name: String,
-    color: RGBColor,
-    marker: Marker,
+pub struct Series {
+    /// Its name in the legend.
+    pub name: String,
+    /// Its colour.
+    pub color: RGBColor,
+    /// Its markers.
+    pub marker: Marker,
     /// Points joined by the line (filled markers).
-    line: Vec<(f64, f64)>,
+    pub line: Vec<(f64, f64)>,
     /// Points drawn alone with open markers (runs that stopped short).
-    open: Vec<(f64, f64)>,
+    pub open: Vec<(f64, f64)>,
     /// A dashed reference line without markers.
-    dashed: bool,
+    pub dashed: bool,
 }
 
 /// One panel: a log–log chart.
 #[derive(Clone, Debug)]
-struct Panel {
-    caption: String,
-    x_desc: String,
-    y_desc: String,
-    series: Vec<Series>,
+pub struct Panel {
+    /// The caption above it.
+    pub caption: String,
+    /// The x axis' label.
+    pub x_desc: String,
+    /// The y axis' label.
+    pub y_desc: String,
+    /// Its lines.
+    pub series: Vec<Series>,
 }
 
 /// A figure: a title, panels side by side, a legend strip.
 #[derive(Clone, Debug)]
-struct Figure {
-    title: String,
-    panels: Vec<Panel>,
+pub struct Figure {
+    /// The title.
+    pub title: String,
+    /// The panels, left to right.
+    pub panels: Vec<Panel>,
     /// Series shown in the legend (by name, first occurrence).
-    legend: Vec<Series>,
+    pub legend: Vec<Series>,
     /// An extra legend line (what open markers mean).
-    legend_note: Option<String>,
+    pub legend_note: Option<String>,
     /// Draw an open marker before the note.
-    note_marker: bool,
-    size: (u32, u32),
+    pub note_marker: bool,
+    /// Width and height in pixels.
+    pub size: (u32, u32),
 }
 
-const COLORS: [RGBColor; 6] = [
+/// The colours of series, in turn.
+pub const COLORS: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -85,18 +102,17 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(255, 127, 14),
     RGBColor(23, 190, 207),
 ];
-const MARKERS: [Marker; 4] = [Marker::Circle, Marker::Triangle, Marker::Square, Marker::Cross];
-const GREY: RGBColor = RGBColor(110, 110, 110);
+/// The markers of series, in turn.
+pub const MARKERS: [Marker; 4] = [Marker::Circle, Marker::Triangle, Marker::Square, Marker::Cross];
+/// The colour of reference lines.
+pub const GREY: RGBColor = RGBColor(110, 110, 110);
 
-/// Errors below this are not drawn (exactly 0 is the reference itself).
-const ERROR_FLOOR: f64 = 1e-300;
-
-fn plot_error(path: &Path, e: impl std::fmt::Display) -> super::ReportError {
-    super::ReportError::Plot { path: path.to_path_buf(), message: e.to_string() }
+fn plot_error(path: &Path, e: impl std::fmt::Display) -> PlotError {
+    PlotError { path: path.to_path_buf(), message: e.to_string() }
 }
 
 /// Draws `fig` into a PNG and an SVG file.
-fn render(fig: &Figure, png: &Path, svg: &Path) -> Result<(), super::ReportError> {
+pub fn render(fig: &Figure, png: &Path, svg: &Path) -> Result<(), PlotError> {
     register_font();
     {
         let root = BitMapBackend::new(png, fig.size).into_drawing_area();
@@ -308,228 +324,16 @@ fn draw_legend<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The solvers in ladder order.
-fn solvers(runs: &[RunRecord]) -> Vec<&str> {
-    let mut out: Vec<&str> = Vec::new();
-    for r in runs {
-        if !out.contains(&r.solver.as_str()) {
-            out.push(&r.solver);
-        }
-    }
-    out
-}
-
-/// `work_precision.png` and `.svg` (module docs).
-pub fn work_precision(report: &Report, png: &Path, svg: &Path) -> Result<(), super::ReportError> {
-    let names = solvers(&report.runs);
-    let panel = |caption: &str, err: fn(&super::runs::Errors) -> f64| Panel {
-        caption: caption.into(),
-        x_desc: "wall time (s)".into(),
-        y_desc: "relative error".into(),
-        series: names
-            .iter()
-            .enumerate()
-            .map(|(i, name)| {
-                let pts = |converged: bool| {
-                    let v: Vec<(f64, f64)> = report
-                        .runs
-                        .iter()
-                        .filter(|r| r.solver == *name && r.converged == converged)
-                        .filter_map(|r| r.errors.map(|e| (r.wall_s, err(&e))))
-                        .filter(|p| p.0 > 0.0 && p.1 > ERROR_FLOOR && p.1.is_finite())
-                        .collect();
-                    // in ladder order: loose to tight settings
-                    v
-                };
-                Series {
-                    name: name.to_string(),
-                    color: COLORS[i % COLORS.len()],
-                    marker: MARKERS[i % MARKERS.len()],
-                    line: pts(true),
-                    open: pts(false),
-                    dashed: false,
-                }
-            })
-            .collect(),
-    };
-    let panels = vec![
-        panel("stress (σ, ξ) in the energy norm, relative to the reference", |e| e.stress_rel),
-        panel("punch displacement U, relative to the reference", |e| e.u_rel),
-    ];
-    let legend = panels[0].series.clone();
-    let reference = report.reference().map(|r| {
-        let setting = r.setting.trim_end_matches(" (reference)");
-        format!("; the reference ({} {setting}, {:.1} s) has error 0 and is not drawn", r.solver, r.wall_s)
-    });
-    let any_open = panels[0].series.iter().any(|s| !s.open.is_empty());
-    let note = format!(
-        "{}{}",
-        if any_open {
-            "open markers: runs that stopped short of their tolerance"
-        } else {
-            "filled markers: converged runs"
-        },
-        reference.unwrap_or_default()
-    );
-    let fig = Figure {
-        title: format!("Work–precision: {} ({} dofs, {} cores)", report.title, report.dofs, report.cores),
-        panels,
-        legend,
-        legend_note: Some(note),
-        note_marker: any_open,
-        size: (1500, 680),
-    };
-    render(&fig, png, svg)
-}
-
-/// `convergence.png` and `.svg` (module docs).
-pub fn convergence(
-    report: &Report,
-    study: &ConvergenceStudy,
-    png: &Path,
-    svg: &Path,
-) -> Result<(), super::ReportError> {
-    let below = study.levels.len().saturating_sub(1);
-    let levels = &study.levels[..below];
-    let pts = |f: fn(&super::convergence::LevelResult) -> f64| -> Vec<(f64, f64)> {
-        levels.iter().map(|l| (l.size.h(), f(l))).filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite()).collect()
-    };
-    let mut series = vec![
-        Series {
-            name: "stress (σ, ξ), energy norm, vs finest".into(),
-            color: COLORS[0],
-            marker: Marker::Circle,
-            line: pts(|l| l.err_stress),
-            open: vec![],
-            dashed: false,
-        },
-        Series {
-            name: "stress (σ, ξ), difference to the next level".into(),
-            color: COLORS[3],
-            marker: Marker::Cross,
-            line: pts(|l| l.diff_stress_next),
-            open: vec![],
-            dashed: false,
-        },
-        Series {
-            name: "strain ε(u), L², vs finest".into(),
-            color: COLORS[2],
-            marker: Marker::Square,
-            line: pts(|l| l.err_strain),
-            open: vec![],
-            dashed: false,
-        },
-    ];
-    if study.richardson.is_some() {
-        series.push(Series {
-            name: "U vs Richardson extrapolation".into(),
-            color: COLORS[1],
-            marker: Marker::Triangle,
-            line: study
-                .levels
-                .iter()
-                .map(|l| (l.size.h(), l.err_u_richardson))
-                .filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite())
-                .collect(),
-            open: vec![],
-            dashed: false,
-        });
-    } else {
-        series.push(Series {
-            name: "U vs finest".into(),
-            color: COLORS[1],
-            marker: Marker::Triangle,
-            line: pts(|l| l.err_u),
-            open: vec![],
-            dashed: false,
-        });
-    }
-    // the other element of the P1–P2 comparison: its σ̂ errors against its own finest level
-    if let Ok(c) = &report.element_comparison {
-        // (the scene's own element is `study` itself: the same levels)
-        let dofs = |s: &ConvergenceStudy| s.levels.iter().map(|l| l.dofs).collect::<Vec<_>>();
-        for (i, (name, other)) in c.studies.iter().enumerate().filter(|(_, (_, s))| dofs(s) != dofs(study)) {
-            let below = other.levels.len().saturating_sub(1);
-            series.push(Series {
-                name: format!("{name}: stress (σ, ξ), energy norm, vs its finest (element means)"),
-                color: COLORS[(4 + i) % COLORS.len()],
-                marker: Marker::Circle,
-                line: other.levels[..below]
-                    .iter()
-                    .map(|l| (l.size.h(), l.err_stress))
-                    .filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite())
-                    .collect(),
-                open: vec![],
-                dashed: true,
-            });
-        }
-    }
-    // slope 1/2 through the coarsest σ̂ error (Theorem 2's guarantee)
-    if let (Some(first), Some(h_min)) =
-        (series[0].line.first().copied(), study.levels.iter().map(|l| l.size.h()).reduce(f64::min))
-    {
-        let (h0, e0) = first;
-        series.push(Series {
-            name: "slope 1/2 (Theorem 2)".into(),
-            color: GREY,
-            marker: Marker::Circle,
-            line: vec![(h0, e0), (h_min, e0 * (h_min / h0).sqrt())],
-            open: vec![],
-            dashed: true,
-        });
-    }
-    let x_desc = "h: mean element size (|Ω|/elements)^(1/3), length units";
-    let panel = Panel {
-        caption: "relative errors against the finest level".into(),
-        x_desc: x_desc.into(),
-        y_desc: "relative error".into(),
-        series,
-    };
-    let legend = panel.series.clone();
-    let fig = Figure {
-        title: format!("Mesh convergence: {}", report.title),
-        panels: vec![panel],
-        legend,
-        legend_note: None,
-        note_marker: false,
-        size: (1000, 760),
-    };
-    render(&fig, png, svg)
-}
-
-/// `bench.png` and `.svg`: wall time against DOFs on log–log axes, one line per entry of
-/// `series` (name with its fitted slope, points (DOFs, seconds)), and a dashed N¹ reference.
-pub fn scaling(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> Result<(), super::ReportError> {
-    let labels = [
-        "saddle bench: the default scene family (2 cores)",
-        "wall time against problem size",
-        "degrees of freedom",
-        "wall time (s)",
-    ];
-    lines_figure(series, labels, true, png, svg)
-}
-
-/// `elements.png` and `.svg` (`saddle report`): the error of U against the wall time of each
-/// level, one line per element (theory §10).
-pub fn elements(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> Result<(), super::ReportError> {
-    let labels = [
-        "saddle report: p1 against p2",
-        "error of U against wall time",
-        "wall time of the solve (s)",
-        "relative error of U",
-    ];
-    lines_figure(series, labels, false, png, svg)
-}
-
-/// One log–log panel with a line per series; `labels` are the title, the caption and the
-/// axes; with `slope_one` a dashed line of slope 1 through the first series' ends.
-fn lines_figure(
+/// One log–log panel with a line per series (name, points (x, y)); `labels` are the title, the
+/// caption and the axes; with `slope_one` a dashed line of slope 1 through the first series'
+/// ends.
+pub fn lines(
     series: &[(String, Vec<(f64, f64)>)],
     labels: [&str; 4],
     slope_one: bool,
     png: &Path,
     svg: &Path,
-) -> Result<(), super::ReportError> {
+) -> Result<(), PlotError> {
     let mut lines: Vec<Series> = series
         .iter()
         .enumerate()
@@ -568,15 +372,15 @@ fn lines_figure(
     render(&fig, png, svg)
 }
 
-/// A curve y(x) on linear axes (`saddle sweep`: a force–displacement curve): filled markers for
-/// converged points, open ones for the others, written as PNG and SVG.
+/// A curve y(x) on linear axes (a force–displacement curve): filled markers for converged
+/// points, open ones for the others, written as PNG and SVG.
 pub fn curve(
     title: &str,
     descs: (&str, &str),
     points: &[(f64, f64, bool)],
     png: &Path,
     svg: &Path,
-) -> Result<(), super::ReportError> {
+) -> Result<(), PlotError> {
     register_font();
     let size = (1000, 700);
     draw_curve(&BitMapBackend::new(png, size).into_drawing_area(), title, descs, points)

@@ -1,0 +1,13 @@
+//! The commands a user runs on a scene file, on top of [`crate::io`]:
+//!
+//! | module | command |
+//! |---|---|
+//! | [`setup`] | a scene read and assembled with its solver ([`setup::Loaded`]); a run's errors and outcome |
+//! | [`path`] | the steps of a `[load_path]` solved and written (theory §11) |
+//! | [`run`] | `saddle run`: one step, or the load path |
+//! | [`sweep`] | `saddle sweep`: the scene at each load factor |
+
+pub mod path;
+pub mod run;
+pub mod setup;
+pub mod sweep;

@@ -1,0 +1,119 @@
+//! `solution.vtu`: the fields of a solve for ParaView — u, σ, von Mises stress, the hardening
+//! variables, the plastic flag and strain, the contact force — as a VTK XML unstructured grid.
+
+use super::summary::plastic_strains;
+use saddle_core::problem::tensor::{to_vtk, von_mises};
+use saddle_core::{ProblemView, Solution};
+use std::io::Write;
+use std::path::Path;
+
+/// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data, with
+/// linear tetrahedra (VTK type 10) for `p1` and quadratic ones (type 24, the edge nodes in
+/// VTK's order) on a second-order mesh. Point data: `displacement`, `contact_force` (Gᵀλ at the
+/// nodes). Cell data, the mean over the element's stress points when it has several: `stress`
+/// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises` (of the mean stress), the
+/// hardening variables under the names the yield surface gives them (`xi` for von Mises),
+/// `plastic` (0/1: one of the element's points is plastic), and with plasticity
+/// `plastic_strain` (tensor, ε(u) − Aσ) and `equivalent_plastic_strain` (√(2/3)|ε_p|).
+pub fn write_vtu(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Result<()> {
+    let (l, element) = (&p.l, p.element);
+    let mesh = element.mesh();
+    let k = element.points_per_element();
+    let mean_stress: Vec<saddle_core::Sym> =
+        sol.stress.sigma.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
+    let plastic: Vec<u8> = sol.stress.plastic.chunks(k).map(|p| p.iter().any(|x| *x) as u8).collect();
+    let disp = element.nodal_vectors(&sol.u);
+    let mut gu = vec![0.0; l.n_dofs()];
+    let mut gv = vec![0.0; l.n_extras()];
+    l.data.rows.add_transpose(&sol.lambda, &mut gu, &mut gv);
+    let force = element.nodal_vectors(&gu);
+    let mut arrays: Vec<(&str, &str, usize, Vec<u8>)> = Vec::new(); // (section, name, components, bytes)
+    let f64s = |it: &mut dyn Iterator<Item = f64>| it.flat_map(f64::to_le_bytes).collect::<Vec<u8>>();
+    arrays.push(("point", "displacement", 3, f64s(&mut disp.iter().flatten().copied())));
+    arrays.push(("point", "contact_force", 3, f64s(&mut force.iter().flatten().copied())));
+    arrays.push(("cell", "stress", 6, f64s(&mut mean_stress.iter().flat_map(to_vtk))));
+    arrays.push(("cell", "von_mises", 1, f64s(&mut mean_stress.iter().map(von_mises))));
+    // the hardening variables, one cell field per name the yield surface gives them
+    if let Some(yield_surface) = l.data.plasticity() {
+        let mut first = 0;
+        for (name, comps) in yield_surface.hardening_fields() {
+            let field = (0..mesh.n_elements()).flat_map(|e| {
+                (first..first + comps).map(move |c| (0..k).map(|q| sol.stress.q(e * k + q)[c]).sum::<f64>() / k as f64)
+            });
+            arrays.push(("cell", name, comps, f64s(&mut field.into_iter())));
+            first += comps;
+        }
+    }
+    arrays.push(("cell", "plastic", 1, plastic));
+    // the plastic strain ε_p = ε(u) − Aσ (theory §11.1), element means: after unloading the
+    // residual plastic strain
+    if l.data.plasticity().is_some() {
+        let mut eps = vec![saddle_core::Sym::zeros(); l.n_points()];
+        l.strain(&sol.u, &mut eps);
+        let ep = plastic_strains(l.data.elasticity, &eps, sol);
+        let mean: Vec<saddle_core::Sym> = ep.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
+        arrays.push(("cell", "plastic_strain", 6, f64s(&mut mean.iter().flat_map(to_vtk))));
+        let eq = ep.chunks(k).map(|s| s.iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).sum::<f64>() / k as f64);
+        arrays.push(("cell", "equivalent_plastic_strain", 1, f64s(&mut eq.into_iter())));
+    }
+    arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));
+    // the element's VTK cell, its nodes as the mesh lists them
+    let cell = element.vtk_cell();
+    let (per_cell, cell_type) = (cell.nodes, cell.type_id);
+    let conn: Vec<u8> =
+        (0..mesh.n_elements()).flat_map(|e| mesh.element_nodes(e)).flat_map(|n| (n as i64).to_le_bytes()).collect();
+    let offs: Vec<u8> = (1..=mesh.n_elements()).flat_map(|e| ((per_cell * e) as i64).to_le_bytes()).collect();
+    arrays.push(("cells", "connectivity", 1, conn));
+    arrays.push(("cells", "offsets", 1, offs));
+    arrays.push(("cells", "types", 1, vec![cell_type; mesh.n_elements()]));
+
+    let vtk_type = |name: &str| match name {
+        "plastic" | "types" => "UInt8",
+        "connectivity" | "offsets" => "Int64",
+        _ => "Float64",
+    };
+    let mut xml = String::new();
+    let mut offset = 0usize;
+    let mut section = |xml: &mut String, which: &str| {
+        for (_, name, comps, bytes) in arrays.iter().filter(|a| a.0 == which) {
+            xml.push_str(&format!(
+                "        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{}\"/>\n",
+                vtk_type(name),
+                name,
+                comps,
+                offset
+            ));
+            offset += 8 + bytes.len();
+        }
+    };
+    xml.push_str("<?xml version=\"1.0\"?>\n");
+    xml.push_str(
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+    );
+    xml.push_str("  <UnstructuredGrid>\n");
+    xml.push_str(&format!(
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+        mesh.n_nodes(),
+        mesh.n_elements()
+    ));
+    xml.push_str("      <PointData Vectors=\"displacement\">\n");
+    section(&mut xml, "point");
+    xml.push_str("      </PointData>\n      <CellData Scalars=\"von_mises\" Tensors=\"stress\">\n");
+    section(&mut xml, "cell");
+    xml.push_str("      </CellData>\n      <Points>\n");
+    section(&mut xml, "points");
+    xml.push_str("      </Points>\n      <Cells>\n");
+    section(&mut xml, "cells");
+    xml.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n_");
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    file.write_all(xml.as_bytes())?;
+    // appended blocks in the order the XML declares them
+    for which in ["point", "cell", "points", "cells"] {
+        for (_, _, _, bytes) in arrays.iter().filter(|a| a.0 == which) {
+            file.write_all(&(bytes.len() as u64).to_le_bytes())?;
+            file.write_all(bytes)?;
+        }
+    }
+    file.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
+    file.flush()
+}

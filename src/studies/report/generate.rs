@@ -1,0 +1,126 @@
+//! `saddle report` end to end: the measurements ([`super::measure`]) on the scene and its
+//! refined meshes, written as CSV files, images and `report.md` (the files of the module docs of
+//! [`super`]).
+
+use super::convergence::refinement_levels;
+use super::elements::{self, ElementComparison};
+#[cfg(feature = "report")]
+use super::figures;
+use super::measure::{
+    KnownLevel, LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study,
+    work_precision,
+};
+use super::runs::{RungKind, ladder};
+use super::tables;
+use std::path::Path;
+use std::time::Instant;
+
+/// Makes the report of the scene file `scene` in `out` (module docs).
+pub fn generate(
+    scene: &Path,
+    out: &Path,
+    options: &ReportOptions,
+    progress: &mut dyn Progress,
+) -> Result<Report, ReportError> {
+    let t0 = Instant::now();
+    let source = SceneSource::read(scene)?;
+    let l = source.problem(None)?;
+    let rungs = ladder(options.quick);
+    let base = source.box_cells();
+    let levels: Result<Vec<[usize; 3]>, String> = base.clone().map(|base| {
+        let factors: &[f64] = if options.quick { &QUICK_LEVELS } else { &LEVELS };
+        let mut levels = refinement_levels(base, factors);
+        if !levels.contains(&base) {
+            levels.push(base);
+            levels.sort_by_key(|c| c[0] * c[1] * c[2]);
+        }
+        levels
+    });
+    // the scene's own level is the work–precision reference: not solved again
+    let other_levels = levels.as_ref().map_or(0, |v| v.len().saturating_sub(1));
+    // the other element's levels, on meshes with the same nodes (theory §10)
+    let own = source.scene.element_name();
+    let other = if own == "p2" { "p1" } else { "p2" };
+    let other_levels_cells = levels
+        .as_ref()
+        .ok()
+        .filter(|v| v.len() >= 2)
+        .map(|v| if other == "p2" { elements::p2_levels(v) } else { elements::p1_levels(v) });
+    let solves = 1
+        + rungs.iter().filter(|r| !matches!(r.kind, RungKind::Reference)).count()
+        + other_levels
+        + other_levels_cells.as_ref().map_or(0, |v| v.len());
+    progress.plan(solves);
+    let mut counter = 0;
+    std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
+    let (runs, reference, reference_wall) = work_precision(&l, &rungs, progress, &mut counter)?;
+    let (dofs, elements, contact_rows) = (l.element.n_dofs(), l.element.n_points(), l.obstacles.rows().n_rows());
+    let convergence = match levels {
+        Ok(levels) if levels.len() >= 2 => {
+            let cells = *base.as_ref().expect("levels come from the base cells");
+            let known = KnownLevel { cells, problem: l, solution: reference, wall_s: reference_wall };
+            Ok(convergence_study(&source, &levels, Some(known), progress, &mut counter)?)
+        }
+        Ok(_) => Err("the scene's mesh is too coarse to coarsen (fewer than two distinct levels)".to_string()),
+        Err(why) => Err(why),
+    };
+    let comparison = match (&convergence, other_levels_cells) {
+        (Ok(own_study), Some(cells)) => {
+            let element: Box<dyn saddle_core::FiniteElement> =
+                if other == "p2" { Box::new(saddle_core::P2::default()) } else { Box::new(saddle_core::P1::default()) };
+            let other_source = SceneSource { scene: source.scene.with_element(element), ..source.clone() };
+            let other_study = convergence_study(&other_source, &cells, None, progress, &mut counter)?;
+            Ok(if other == "p2" {
+                ElementComparison::new(own_study.clone(), other_study)
+            } else {
+                ElementComparison::new(other_study, own_study.clone())
+            })
+        }
+        (Err(why), _) => Err(why.clone()),
+        (Ok(_), None) => Err("no levels to compare".to_string()),
+    };
+    let mut report = Report {
+        scene: scene.to_path_buf(),
+        title: source.title(),
+        dofs,
+        elements,
+        contact_rows,
+        quick: options.quick,
+        cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        runs,
+        scene_cells: base.ok(),
+        convergence,
+        element_comparison: comparison,
+        total_s: 0.0,
+        plots: cfg!(feature = "report"),
+    };
+    write_outputs(&mut report, out, t0)?;
+    Ok(report)
+}
+
+/// Writes the CSV files, the images (feature `report`) and `report.md`; the total time is taken
+/// just before `report.md`.
+fn write_outputs(report: &mut Report, out: &Path, t0: Instant) -> Result<(), ReportError> {
+    let write = |name: &str, text: &str| {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(|source| ReportError::Io { path, source })
+    };
+    write("work_precision.csv", &tables::work_precision_csv(&report.runs))?;
+    write("convergence.csv", &tables::convergence_csv(report.convergence.as_ref().ok()))?;
+    if let Ok(c) = &report.element_comparison {
+        write("elements.csv", &c.csv())?;
+    }
+    #[cfg(feature = "report")]
+    {
+        figures::work_precision(report, &out.join("work_precision.png"), &out.join("work_precision.svg"))?;
+        if let Ok(study) = &report.convergence {
+            figures::convergence(report, study, &out.join("convergence.png"), &out.join("convergence.svg"))?;
+        }
+        if let Ok(c) = &report.element_comparison {
+            figures::elements(&c.series(), &out.join("elements.png"), &out.join("elements.svg"))?;
+        }
+    }
+    report.total_s = t0.elapsed().as_secs_f64();
+    write("report.md", &tables::markdown(report))?;
+    Ok(())
+}
