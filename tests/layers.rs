@@ -22,28 +22,6 @@ type Graph = BTreeMap<Module, BTreeSet<Module>>;
 /// The facade's layers, lowest first: files, then commands, then measurements, then the binary.
 const FACADE_LAYERS: [&str; 4] = ["io", "app", "studies", "main"];
 
-/// Arrows that close a circle in crates this branch does not change (issue 23), each to be
-/// removed by moving one item: (crate, from, to). The check takes them out of the graph before it
-/// looks for circles, and fails when one of them is no longer there (so that its line here goes):
-/// * saddle-core: `problem::lagrangian` uses `problem::kkt::norm` (in `locked_in_force`) while
-///   `kkt` uses `lagrangian` (and `energies`, which uses `lagrangian`);
-/// * saddle-solvers: `active_set` uses `newton::CG_TOL_MIN` while `newton` uses `active_set`.
-const KNOWN_BACK_ARROWS: [(&str, &str, &str); 2] =
-    [("crates/core/src", "problem::lagrangian", "problem::kkt"), ("crates/solvers/src", "active_set", "newton")];
-
-/// The graph without the crate's known back arrows ([`KNOWN_BACK_ARROWS`]), and those of them
-/// that are not in it.
-fn without_known_back_arrows(mut g: Graph, dir: &str) -> (Graph, Vec<String>) {
-    let mut gone = vec![];
-    for &(_, from, to) in KNOWN_BACK_ARROWS.iter().filter(|k| k.0 == dir) {
-        let module = |m: &str| -> Module { m.split("::").map(String::from).collect() };
-        if !g.get_mut(&module(from)).is_some_and(|e| e.remove(&module(to))) {
-            gone.push(format!("{from} → {to}"));
-        }
-    }
-    (g, gone)
-}
-
 /// saddle-core's layers, lowest first: the modules in the order of the table in the crate's doc
 /// (`crates/core/src/lib.rs`, "each layer using only those above it in this list").
 fn core_layers(lib_rs: &str) -> Vec<String> {
@@ -687,7 +665,7 @@ fn the_facade_is_in_layers_without_circles() {
 }
 
 /// saddle-core: the layers of its doc table (error < linalg < mesh < problem < fem < evolution
-/// when this was written), no circle (inside `problem` neither) but through the known arrow.
+/// when this was written), no circle (inside `problem` neither).
 #[test]
 fn the_core_is_in_layers_without_circles() {
     let src = workspace().join("crates/core/src");
@@ -695,8 +673,6 @@ fn the_core_is_in_layers_without_circles() {
     assert!(layers.len() >= 6 && layers[0] == "error", "the layer table of saddle-core's doc: {layers:?}");
     let g = graph(&read_crate(&src, "saddle_core"));
     print_graph(&format!("saddle-core (layers {}):", layers.join(" < ")), &g);
-    let (g, gone) = without_known_back_arrows(g, "crates/core/src");
-    assert!(gone.is_empty(), "known back arrows no longer there (remove them from KNOWN_BACK_ARROWS): {gone:?}");
     let layers: Vec<&str> = layers.iter().map(String::as_str).collect();
     let up = upward_arrows(&g, &layers);
     assert!(up.is_empty(), "upward arrows in saddle-core: {up:#?}");
@@ -704,7 +680,7 @@ fn the_core_is_in_layers_without_circles() {
     assert!(circles.is_empty(), "circles in saddle-core: {circles:#?}");
 }
 
-/// The other crates: no circle but through the known arrow.
+/// The other crates: no circle.
 #[test]
 fn the_other_crates_have_no_circle() {
     for (dir, library) in [
@@ -712,11 +688,10 @@ fn the_other_crates_have_no_circle() {
         ("crates/contact/src", "saddle_contact"),
         ("crates/solvers/src", "saddle_solvers"),
         ("crates/mpi/src", "saddle_mpi"),
+        ("crates/parallel/src", "saddle_parallel"),
     ] {
         let g = graph(&read_crate(&workspace().join(dir), library));
         print_graph(&format!("{dir}:"), &g);
-        let (g, gone) = without_known_back_arrows(g, dir);
-        assert!(gone.is_empty(), "known back arrows no longer there (remove them from KNOWN_BACK_ARROWS): {gone:?}");
         let circles = all_circles(&g);
         assert!(circles.is_empty(), "circles in {dir}: {circles:#?}");
     }

@@ -46,6 +46,9 @@ pub enum LinearSolver {
     Auto,
 }
 
+/// The smallest relative residual asked of CG: its round-off limit in double precision.
+pub const CG_TOL_MIN: f64 = 1e-14;
+
 /// The default of Newton's `auto_amg_dofs`: above this many free dofs `auto` picks AMG without
 /// a symbolic analysis. Measured on the default scene family (2 cores), the multigrid Newton
 /// is already 1.9× faster than the direct one at 18.5k dofs and 3× at 45k, and the fill of a
@@ -410,7 +413,7 @@ impl ActiveSetSystem {
                     (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
                 let pre = FixedDofs { amg, basis, fixed: &fixed, scratch };
                 // the reactions come through T⁻ᵀ, which amplifies CG's residual by up to cond(T)
-                let cg_tol = (cg_tol / basis.condition()).max(crate::newton::CG_TOL_MIN.min(cg_tol));
+                let cg_tol = (cg_tol / basis.condition()).max(CG_TOL_MIN.min(cg_tol));
                 previous.resize(n * (nc - 1), 0.0);
                 for c in 0..nc {
                     let b = &x[c * n..(c + 1) * n];

@@ -44,8 +44,8 @@ use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::fields::StressField;
-use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress, max_abs};
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace, locked_in_forces};
+use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress, locked_in_forces, max_abs};
+use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
 pub use saddle_core::problem::solver::Start;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
@@ -219,8 +219,8 @@ pub const CG_TOL_FLOOR: f64 = 1e-13;
 /// of `tol`, so that its recomputed KKT residual meets `tol` with a margin …
 pub const LINEAR_CG_MARGIN: f64 = 0.1;
 
-/// … but never below this relative residual, the round-off limit of CG in double precision.
-pub const CG_TOL_MIN: f64 = 1e-14;
+/// … but never below [`CG_TOL_MIN`], the round-off limit of CG in double precision.
+pub use crate::active_set::CG_TOL_MIN;
 
 #[typetag::serde(name = "newton")]
 impl Solver for Newton {

@@ -6,7 +6,8 @@
 use crate::error::SceneError;
 use crate::fem::{DiscreteProblem, ProblemView};
 use crate::problem::fields::PlasticState;
-use crate::problem::lagrangian::{Data, Lagrangian, locked_in_force};
+use crate::problem::kkt::locked_in_force;
+use crate::problem::lagrangian::{Data, Lagrangian};
 use crate::problem::obstacles::DiscreteObstacles;
 
 /// L at load factor `factor` from a state (theory §11.1): the base problem's element and

@@ -3,7 +3,11 @@
 
 use crate::problem::comm::Comm;
 use crate::problem::energies::hardening_increment;
+use crate::problem::elasticity::Elasticity;
+use crate::problem::fields::PlasticState;
 use crate::problem::lagrangian::{Iterate, Lagrangian, Workspace};
+use crate::problem::operators::ElementOperators;
+use crate::problem::tensor::Sym;
 use crate::problem::stresses::energy_inner;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -114,6 +118,22 @@ fn constitutive(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &Workspace) -> f64 {
         })
         .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
     relative(l.comm().sum(num).sqrt(), l.comm().sum(den).sqrt())
+}
+
+/// f = BᵀCε_p of the operators and the plastic strain of `state` (theory §11.2): the internal
+/// forces that ε_p alone locks in (the load of an elastic start from the state).
+pub fn locked_in_forces(ops: &dyn ElementOperators, law: &Elasticity, state: &PlasticState, f: &mut [f64]) {
+    let c = law.stiffness_matrix();
+    let s0: Vec<Sym> = state.plastic_strain.iter().map(|p| c * p).collect();
+    ops.divergence(&s0, f);
+}
+
+/// ‖BᵀCε_p‖ ([`locked_in_forces`]): the scale of a step's equilibrium residual (over every
+/// rank's dofs).
+pub fn locked_in_force(ops: &dyn ElementOperators, law: &Elasticity, state: &PlasticState) -> f64 {
+    let mut f = vec![0.0; ops.n_dofs()];
+    locked_in_forces(ops, law, state, &mut f);
+    global_norm(ops.comm(), &f)
 }
 
 /// num/den, with 0/0 = 0 and x/0 = 1 for x ≠ 0 (an entirely wrong answer); NaN stays NaN.

@@ -34,7 +34,7 @@ pub struct Data<'a> {
     /// the stationary problem, whose state is zero.
     pub state: Option<&'a PlasticState>,
     /// ‖BᵀCε_p‖: the size of the internal forces the state's plastic strain holds locked in (0
-    /// without a state; [`locked_in_force`]). The equilibrium residual is measured against it
+    /// without a state; [`locked_in_force`](crate::problem::kkt::locked_in_force)). The equilibrium residual is measured against it
     /// too, so that a step whose answer is zero stress has a scale (theory §11.2).
     pub locked_in: f64,
 }
@@ -220,20 +220,4 @@ impl Workspace {
             gap: vec![0.0; l.n_rows()],
         }
     }
-}
-
-/// f = BᵀCε_p of the operators and the plastic strain of `state` (theory §11.2): the internal
-/// forces that ε_p alone locks in (the load of an elastic start from the state).
-pub fn locked_in_forces(ops: &dyn ElementOperators, law: &Elasticity, state: &PlasticState, f: &mut [f64]) {
-    let c = law.stiffness_matrix();
-    let s0: Vec<Sym> = state.plastic_strain.iter().map(|p| c * p).collect();
-    ops.divergence(&s0, f);
-}
-
-/// ‖BᵀCε_p‖ ([`locked_in_forces`]): the scale of a step's equilibrium residual (over every
-/// rank's dofs).
-pub fn locked_in_force(ops: &dyn ElementOperators, law: &Elasticity, state: &PlasticState) -> f64 {
-    let mut f = vec![0.0; ops.n_dofs()];
-    locked_in_forces(ops, law, state, &mut f);
-    crate::problem::kkt::global_norm(ops.comm(), &f)
 }
