@@ -14,6 +14,7 @@ pub mod conformance;
 pub mod distributed_system;
 pub mod kh_projection;
 pub mod linear;
+mod local_law;
 pub mod newton;
 pub mod penalty;
 mod residual;

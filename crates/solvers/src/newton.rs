@@ -38,14 +38,15 @@ use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, dire
 use crate::distributed_system::DistributedSystem;
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
+use crate::local_law::{IterateMut, local_law_and_residual};
 use crate::residual;
 use crate::row_basis::RowBasis;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::fields::StressField;
-use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress, max_abs};
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace, locked_in_forces};
+use saddle_core::problem::kkt::{KktResiduals, max_abs};
+use saddle_core::problem::lagrangian::{Lagrangian, Workspace, locked_in_forces};
 pub use saddle_core::problem::solver::Start;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
@@ -607,17 +608,11 @@ impl<'a> Run<'a> {
     /// (theory §2.5), then the KKT residuals of the iterate (theory §3.4); `ws.force` holds
     /// ∇J(u) without the contact forces afterwards.
     fn local_law(&mut self, timer: &mut PhaseTimer) -> KktResiduals {
-        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
-        let law = timer.time("local law", || {
-            l.strain(&s.u, &mut w.ws.eps);
-            let law = l.data.local_law(&w.ws.eps, &mut s.stress, Some(&mut w.tangents));
-            w.ws.stress.clone_from(&s.stress);
-            law
-        });
-        self.count.return_mappings += law.projected;
-        timer.time("residual", || {
-            kkt_with_stress(l, &Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.lambda }, &mut w.ws)
-        })
+        let (s, w) = (&mut self.state, &mut self.work);
+        let it = IterateMut { u: &s.u, extras: &s.v, lambda: &s.lambda, stress: &mut s.stress };
+        let (projected, kkt) = local_law_and_residual(self.l, it, Some(&mut w.tangents), &mut w.ws, timer);
+        self.count.return_mappings += projected;
+        kkt
     }
 
     /// Stage 3 (theory §4.2 step 2): the active set A = {i : λ_i − c_i g_i > 0} (every row at a
