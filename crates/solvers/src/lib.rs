@@ -22,6 +22,8 @@ pub mod row_basis;
 #[cfg(feature = "socp")]
 pub mod socp;
 pub mod uzawa;
+mod vector;
+mod warm_start;
 
 pub use active_set::LinearSolver;
 pub use newton::{Newton, Start};

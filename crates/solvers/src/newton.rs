@@ -39,8 +39,10 @@ use crate::distributed_system::DistributedSystem;
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
-use crate::residual;
+use crate::residual::History;
 use crate::row_basis::RowBasis;
+use crate::vector::{axpy, axpy_into};
+use crate::warm_start::warm_solve;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
@@ -48,7 +50,7 @@ use saddle_core::problem::fields::StressField;
 use saddle_core::problem::kkt::{KktResiduals, max_abs};
 use saddle_core::problem::lagrangian::{Lagrangian, Workspace, locked_in_forces};
 pub use saddle_core::problem::solver::Start;
-use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -246,10 +248,9 @@ impl Solver for Newton {
     /// Newton from the previous step's (u, V, λ): its active set and plastic set are the
     /// first guesses (theory §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        start.check(l, "newton")?;
-        let mut sol = self.iterate(l, Some(start.clone()), true, monitor, &mut PhaseTimer::default(), "newton")?;
-        sol.report.counters.insert("warm_start".into(), 1.0);
-        Ok(sol)
+        warm_solve(l, start, "newton", || {
+            self.iterate(l, Some(start.clone()), true, monitor, &mut PhaseTimer::default(), "newton")
+        })
     }
 }
 
@@ -283,7 +284,7 @@ impl Newton {
         let (stop, kkt) = loop {
             let kkt = run.local_law(timer);
             let r = kkt.max();
-            residual::record(name, run.state.it, r, self.tol, &mut run.history, monitor)?;
+            run.history.record(run.state.it, r, monitor)?;
             if let Some(stop) = self.stop(r, run.state.it) {
                 break (stop, kkt);
             }
@@ -397,7 +398,7 @@ struct Run<'a> {
     count: Counts,
     work: Scratch,
     /// The KKT residual of every iterate.
-    history: Vec<f64>,
+    history: History,
 }
 
 /// Newton's linear systems: on one process the direct or multigrid backend, on a distributed
@@ -499,7 +500,7 @@ impl<'a> Run<'a> {
             state,
             count,
             work,
-            history: Vec::new(),
+            history: History::new(name, settings.tol),
         })
     }
 
@@ -532,7 +533,7 @@ impl<'a> Run<'a> {
             state,
             count,
             work,
-            history: Vec::new(),
+            history: History::new(name, settings.tol),
         })
     }
 
@@ -813,18 +814,7 @@ impl<'a> Run<'a> {
             });
         }
         let State { u, v, lambda, stress, it, .. } = self.state;
-        let report = SolveReport {
-            solver: self.name.into(),
-            converged: stop == StopReason::Converged,
-            stop_reason: stop,
-            iterations: it,
-            tolerance: self.settings.tol,
-            kkt,
-            residual_history: self.history,
-            phases: std::mem::take(timer).into_phases(),
-            counters,
-            warnings: Vec::new(),
-        };
+        let report = self.history.report(stop, it, kkt, std::mem::take(timer).into_phases(), counters);
         Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }
     }
 }
@@ -865,18 +855,4 @@ fn elastic_contact_start(
     let (mut u, mut extras, mut lambda) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
     let solves = projection.setup_solves + projection.project(rows, chol, &z, &mut extras, &mut u, &mut lambda)?;
     Ok((Start { u, extras, lambda }, solves))
-}
-
-/// out = x + α d.
-fn axpy_into(out: &mut [f64], x: &[f64], alpha: f64, d: &[f64]) {
-    for ((o, a), b) in out.iter_mut().zip(x).zip(d) {
-        *o = a + alpha * b;
-    }
-}
-
-/// x += α d.
-fn axpy(x: &mut [f64], alpha: f64, d: &[f64]) {
-    for (a, b) in x.iter_mut().zip(d) {
-        *a += alpha * b;
-    }
 }

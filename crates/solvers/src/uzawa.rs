@@ -33,14 +33,15 @@
 use crate::kh_projection::MetricProjection;
 use crate::linear::{self, InSolver};
 use crate::local_law::{IterateMut, local_law_and_residual};
-use crate::residual;
+use crate::residual::History;
+use crate::warm_start::warm_solve;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::linalg::SparseCholesky;
 use saddle_core::problem::fields::StressField;
 use saddle_core::problem::kkt::KktResiduals;
 use saddle_core::problem::lagrangian::{Lagrangian, Workspace};
 use saddle_core::problem::operators::Material;
-use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, Start, StopReason};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, Solver, Start, StopReason};
 use saddle_core::{Elasticity, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -122,10 +123,7 @@ impl Solver for Uzawa {
 
     /// The iteration from the previous step's (u, V, λ) (theory §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        start.check(l, "uzawa")?;
-        let mut sol = self.iterate(l, Some(start), monitor)?;
-        sol.report.counters.insert("warm_start".into(), 1.0);
-        Ok(sol)
+        warm_solve(l, start, "uzawa", || self.iterate(l, Some(start), monitor))
     }
 }
 
@@ -143,7 +141,7 @@ impl Uzawa {
         let (stop, kkt) = loop {
             let kkt = run.local_law();
             let r = kkt.max();
-            residual::record("uzawa", run.state.it, r, self.tol, &mut run.history, monitor)?;
+            run.history.record(run.state.it, r, monitor)?;
             if let Some(stop) = run.stop(r)? {
                 break (stop, kkt);
             }
@@ -238,7 +236,7 @@ struct Run<'a> {
     work: Scratch,
     timer: PhaseTimer,
     /// The KKT residual of every iterate.
-    history: Vec<f64>,
+    history: History,
 }
 
 impl<'a> Run<'a> {
@@ -274,7 +272,19 @@ impl<'a> Run<'a> {
         };
         let watch = Watch { best: (f64::INFINITY, 0), smallest_step: f64::INFINITY, first_step: 0.0, last_step: 0.0 };
         let state = Self::start(l, start, rho);
-        Ok(Self { settings, l, rho, chol, proj, state, watch, count, work, timer, history: Vec::new() })
+        Ok(Self {
+            settings,
+            l,
+            rho,
+            chol,
+            proj,
+            state,
+            watch,
+            count,
+            work,
+            timer,
+            history: History::new("uzawa", settings.tol),
+        })
     }
 
     /// M = (metric ε(·), ε(·)) assembled on L's pattern, analysed and factorised once (theory
@@ -447,18 +457,7 @@ impl<'a> Run<'a> {
         put("contact_structures", proj.is_some() as u8 as f64);
         put("delassus_columns_kept", proj.is_some_and(|p| p.keeps_delassus_columns()) as u8 as f64);
         let State { u, v, lambda, stress, it, .. } = self.state;
-        let report = SolveReport {
-            solver: "uzawa".into(),
-            converged: stop == StopReason::Converged,
-            stop_reason: stop,
-            iterations: it,
-            tolerance: self.settings.tol,
-            kkt,
-            residual_history: self.history,
-            phases: self.timer.into_phases(),
-            counters,
-            warnings: Vec::new(),
-        };
+        let report = self.history.report(stop, it, kkt, self.timer.into_phases(), counters);
         Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }
     }
 }
