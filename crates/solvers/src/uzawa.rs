@@ -218,6 +218,20 @@ struct Scratch {
     ht_mu: Vec<f64>,
 }
 
+impl Scratch {
+    /// The scratch of the stages for `l`.
+    fn new(l: &Lagrangian<'_>) -> Self {
+        let (n, ne) = (l.n_dofs(), l.n_extras());
+        Self {
+            ws: Workspace::new(l),
+            z: vec![0.0; n],
+            u_prev: vec![0.0; n],
+            v_prev: vec![0.0; ne],
+            ht_mu: vec![0.0; ne],
+        }
+    }
+}
+
 /// One Uzawa solve: what it reads, the factorised metric, the projection onto K_h, state,
 /// counters and scratch.
 struct Run<'a> {
@@ -262,26 +276,16 @@ impl<'a> Run<'a> {
         } else {
             None
         };
-        let (n, ne) = (l.n_dofs(), l.n_extras());
-        let work = Scratch {
-            ws: Workspace::new(l),
-            z: vec![0.0; n],
-            u_prev: vec![0.0; n],
-            v_prev: vec![0.0; ne],
-            ht_mu: vec![0.0; ne],
-        };
-        let watch = Watch { best: (f64::INFINITY, 0), smallest_step: f64::INFINITY, first_step: 0.0, last_step: 0.0 };
-        let state = Self::start(l, start, rho);
         Ok(Self {
             settings,
             l,
             rho,
             chol,
             proj,
-            state,
-            watch,
+            state: Self::start(l, start, rho),
+            watch: Watch { best: (f64::INFINITY, 0), smallest_step: f64::INFINITY, first_step: 0.0, last_step: 0.0 },
             count,
-            work,
+            work: Scratch::new(l),
             timer,
             history: History::new("uzawa", settings.tol),
         })
