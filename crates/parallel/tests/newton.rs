@@ -152,12 +152,12 @@ fn numbers(l: &Lagrangian<'_>, s: &Solution, global_point: &dyn Fn(usize) -> usi
     let mut eps = vec![saddle_core::Sym::zeros(); l.n_points()];
     l.strain(&s.u, &mut eps);
     let (mut plastic, mut near) = (vec![0.0; n], vec![0.0; n]);
-    for i in 0..l.n_points() {
+    for (i, e) in eps.iter().enumerate() {
         let (ep, qn) = match l.data.state {
             Some(st) => (st.plastic_strain[i], st.q(i).to_vec()),
             None => (saddle_core::Sym::zeros(), vec![0.0; p.hardening_dim()]),
         };
-        let trial = l.data.elasticity.stress(&(eps[i] - ep));
+        let trial = l.data.elasticity.stress(&(e - ep));
         let g = global_point(i);
         plastic[g] = s.stress.plastic[i] as u8 as f64;
         near[g] = (p.contains(&trial, &qn, 1e-6) != p.contains(&trial, &qn, -1e-6)) as u8 as f64;

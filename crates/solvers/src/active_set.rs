@@ -214,6 +214,50 @@ pub struct Step {
     pub lambda: Vec<f64>,
 }
 
+/// The Newton step from the solves `x` = [du⁰, W_1, …] (n × (1 + n_extras)) and the reactions
+/// λ = λ⁰ + Λ dV of the `active` rows (theory §4.2 step 3): dV from −H_Aᵀ(λ⁰ + Λ dV) = f, with
+/// H_AᵀΛ and H_Aᵀλ⁰ summed over every rank's rows (theory §12), then du = du⁰ + W dV (in the
+/// coordinates of the solves) and λ. An error naming `solver` when dV is undetermined.
+pub(crate) fn step_from_reactions(
+    l: &Lagrangian<'_>,
+    active: &[bool],
+    x: &[f64],
+    lam0: &[f64],
+    lam_v: &DMatrix<f64>,
+    solver: &str,
+) -> Result<Step, SolveError> {
+    let (rows, comm) = (l.data.rows, l.comm());
+    let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
+    let mut dv = vec![0.0; ne];
+    if ne > 0 {
+        let h = DMatrix::from_fn(nr, ne, |i, kx| if active[i] { rows.extra_row(i)[kx] } else { 0.0 });
+        let mut s = h.transpose() * lam_v;
+        let mut hl = h.transpose() * DVector::from_column_slice(lam0);
+        comm.sum_in_place(s.as_mut_slice());
+        comm.sum_in_place(hl.as_mut_slice());
+        let rhs = -DVector::from_column_slice(l.data.load) - hl;
+        let sol =
+            s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| SolveError::Unsupported {
+                solver: solver.into(),
+                message: "an extra unknown with a load has no active contact row that determines it (the obstacle \
+                          does not touch, or touches where it cannot hold that extra)"
+                    .into(),
+            })?;
+        dv.copy_from_slice(sol.as_slice());
+    }
+    let mut du = x[..n].to_vec();
+    for (kx, d) in dv.iter().enumerate() {
+        for (u, w) in du.iter_mut().zip(&x[(1 + kx) * n..(2 + kx) * n]) {
+            *u += d * w;
+        }
+    }
+    let mut lambda = vec![0.0; nr];
+    for i in (0..nr).filter(|&i| active[i]) {
+        lambda[i] = lam0[i] + (0..ne).map(|kx| lam_v[(i, kx)] * dv[kx]).sum::<f64>();
+    }
+    Ok(Step { du, dv, lambda })
+}
+
 /// The linearised problem for one active set, and the solver of its systems.
 pub struct ActiveSetSystem {
     basis: RowBasis,
@@ -452,33 +496,8 @@ impl ActiveSetSystem {
                 }
             }
         }
-        // the extras: −H_Aᵀ(λ⁰ + Λ dV) = f
-        let mut dv = vec![0.0; ne];
-        if ne > 0 {
-            let h = DMatrix::from_fn(nr, ne, |i, kx| if active[i] { rows.extra_row(i)[kx] } else { 0.0 });
-            let s = h.transpose() * &lam_v;
-            let rhs = -DVector::from_column_slice(l.data.load) - h.transpose() * DVector::from_column_slice(&lam0);
-            let sol = s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| {
-                SolveError::Unsupported {
-                    solver: self.solver.clone(),
-                    message: "an extra unknown with a load has no active contact row that determines it (the \
-                              obstacle does not touch, or touches where it cannot hold that extra)"
-                        .into(),
-                }
-            })?;
-            dv.copy_from_slice(sol.as_slice());
-        }
-        let mut du = x[..n].to_vec();
-        for (kx, d) in dv.iter().enumerate() {
-            for (u, w) in du.iter_mut().zip(&x[(1 + kx) * n..(2 + kx) * n]) {
-                *u += d * w;
-            }
-        }
-        basis.displacement_from_coordinates(&mut du);
-        let mut lambda = vec![0.0; nr];
-        for i in (0..nr).filter(|&i| active[i]) {
-            lambda[i] = lam0[i] + (0..ne).map(|kx| lam_v[(i, kx)] * dv[kx]).sum::<f64>();
-        }
-        Ok(Step { du, dv, lambda })
+        let mut step = step_from_reactions(l, active, &x, &lam0, &lam_v, &self.solver)?;
+        basis.displacement_from_coordinates(&mut step.du);
+        Ok(step)
     }
 }

@@ -11,9 +11,9 @@
 //! each (T = I in the notation of theory §8.1: the punches, the tilting punch); general rows
 //! (a sphere's normals) are refused with a clear error.
 
-use crate::active_set::Step;
+use crate::active_set::{Step, step_from_reactions};
 use crate::row_basis::RowBasis;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use saddle_core::linalg::DistributedSpd;
 use saddle_core::{Lagrangian, Material, SolveError, Sym};
 
@@ -104,7 +104,7 @@ impl DistributedSystem {
         gap: &[f64],
         rtol: f64,
     ) -> Result<Step, SolveError> {
-        let (rows, comm) = (l.data.rows, l.comm());
+        let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let fixed: Vec<usize> = (0..nr).filter(|&i| active[i]).map(|i| self.basis.dof[i]).collect();
         self.spd.assemble(k, &fixed).map_err(|e| self.error(e))?;
@@ -155,35 +155,6 @@ impl DistributedSystem {
                 }
             }
         }
-        // the extras: −H_Aᵀ(λ⁰ + Λ dV) = f, H_AᵀΛ and H_Aᵀλ⁰ summed over every rank's rows
-        let mut dv = vec![0.0; ne];
-        if ne > 0 {
-            let h = DMatrix::from_fn(nr, ne, |i, kx| if active[i] { rows.extra_row(i)[kx] } else { 0.0 });
-            let mut s = h.transpose() * &lam_v;
-            let mut hl = h.transpose() * DVector::from_column_slice(&lam0);
-            comm.sum_in_place(s.as_mut_slice());
-            comm.sum_in_place(hl.as_mut_slice());
-            let rhs = -DVector::from_column_slice(l.data.load) - hl;
-            let sol = s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| {
-                SolveError::Unsupported {
-                    solver: self.solver.clone(),
-                    message: "an extra unknown with a load has no active contact row that determines it (the \
-                              obstacle does not touch, or touches where it cannot hold that extra)"
-                        .into(),
-                }
-            })?;
-            dv.copy_from_slice(sol.as_slice());
-        }
-        let mut du = x[..n].to_vec();
-        for (kx, d) in dv.iter().enumerate() {
-            for (u, w) in du.iter_mut().zip(&x[(1 + kx) * n..(2 + kx) * n]) {
-                *u += d * w;
-            }
-        }
-        let mut lambda = vec![0.0; nr];
-        for i in (0..nr).filter(|&i| active[i]) {
-            lambda[i] = lam0[i] + (0..ne).map(|kx| lam_v[(i, kx)] * dv[kx]).sum::<f64>();
-        }
-        Ok(Step { du, dv, lambda })
+        step_from_reactions(l, active, &x, &lam0, &lam_v, &self.solver)
     }
 }

@@ -14,6 +14,7 @@ pub mod conformance;
 pub mod distributed_system;
 pub mod kh_projection;
 pub mod linear;
+mod local_law;
 pub mod newton;
 pub mod penalty;
 mod residual;
@@ -21,6 +22,8 @@ pub mod row_basis;
 #[cfg(feature = "socp")]
 pub mod socp;
 pub mod uzawa;
+mod vector;
+mod warm_start;
 
 pub use active_set::LinearSolver;
 pub use newton::{Newton, Start};

@@ -38,16 +38,19 @@ use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, dire
 use crate::distributed_system::DistributedSystem;
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
-use crate::residual;
+use crate::local_law::{IterateMut, local_law_and_residual};
+use crate::residual::History;
 use crate::row_basis::RowBasis;
+use crate::vector::{axpy, axpy_into};
+use crate::warm_start::warm_solve;
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::fields::StressField;
-use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress, locked_in_forces, max_abs};
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
+use saddle_core::problem::kkt::{KktResiduals, locked_in_forces, max_abs};
+use saddle_core::problem::lagrangian::{Lagrangian, Workspace};
 pub use saddle_core::problem::solver::Start;
-use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason};
 use saddle_core::{Material, Sym, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -245,10 +248,9 @@ impl Solver for Newton {
     /// Newton from the previous step's (u, V, λ): its active set and plastic set are the
     /// first guesses (theory §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        start.check(l, "newton")?;
-        let mut sol = self.iterate(l, Some(start.clone()), true, monitor, &mut PhaseTimer::default(), "newton")?;
-        sol.report.counters.insert("warm_start".into(), 1.0);
-        Ok(sol)
+        warm_solve(l, start, "newton", || {
+            self.iterate(l, Some(start.clone()), true, monitor, &mut PhaseTimer::default(), "newton")
+        })
     }
 }
 
@@ -282,7 +284,7 @@ impl Newton {
         let (stop, kkt) = loop {
             let kkt = run.local_law(timer);
             let r = kkt.max();
-            residual::record(name, run.state.it, r, self.tol, &mut run.history, monitor)?;
+            run.history.record(run.state.it, r, monitor)?;
             if let Some(stop) = self.stop(r, run.state.it) {
                 break (stop, kkt);
             }
@@ -396,7 +398,7 @@ struct Run<'a> {
     count: Counts,
     work: Scratch,
     /// The KKT residual of every iterate.
-    history: Vec<f64>,
+    history: History,
 }
 
 /// Newton's linear systems: on one process the direct or multigrid backend, on a distributed
@@ -498,7 +500,7 @@ impl<'a> Run<'a> {
             state,
             count,
             work,
-            history: Vec::new(),
+            history: History::new(name, settings.tol),
         })
     }
 
@@ -531,7 +533,7 @@ impl<'a> Run<'a> {
             state,
             count,
             work,
-            history: Vec::new(),
+            history: History::new(name, settings.tol),
         })
     }
 
@@ -607,17 +609,11 @@ impl<'a> Run<'a> {
     /// (theory §2.5), then the KKT residuals of the iterate (theory §3.4); `ws.force` holds
     /// ∇J(u) without the contact forces afterwards.
     fn local_law(&mut self, timer: &mut PhaseTimer) -> KktResiduals {
-        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
-        let law = timer.time("local law", || {
-            l.strain(&s.u, &mut w.ws.eps);
-            let law = l.data.local_law(&w.ws.eps, &mut s.stress, Some(&mut w.tangents));
-            w.ws.stress.clone_from(&s.stress);
-            law
-        });
-        self.count.return_mappings += law.projected;
-        timer.time("residual", || {
-            kkt_with_stress(l, &Iterate { u: &s.u, extras: &s.v, stress: &s.stress, lambda: &s.lambda }, &mut w.ws)
-        })
+        let (s, w) = (&mut self.state, &mut self.work);
+        let it = IterateMut { u: &s.u, extras: &s.v, lambda: &s.lambda, stress: &mut s.stress };
+        let (projected, kkt) = local_law_and_residual(self.l, it, Some(&mut w.tangents), &mut w.ws, timer);
+        self.count.return_mappings += projected;
+        kkt
     }
 
     /// Stage 3 (theory §4.2 step 2): the active set A = {i : λ_i − c_i g_i > 0} (every row at a
@@ -818,18 +814,7 @@ impl<'a> Run<'a> {
             });
         }
         let State { u, v, lambda, stress, it, .. } = self.state;
-        let report = SolveReport {
-            solver: self.name.into(),
-            converged: stop == StopReason::Converged,
-            stop_reason: stop,
-            iterations: it,
-            tolerance: self.settings.tol,
-            kkt,
-            residual_history: self.history,
-            phases: std::mem::take(timer).into_phases(),
-            counters,
-            warnings: Vec::new(),
-        };
+        let report = self.history.report(stop, it, kkt, std::mem::take(timer).into_phases(), counters);
         Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }
     }
 }
@@ -870,18 +855,4 @@ fn elastic_contact_start(
     let (mut u, mut extras, mut lambda) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
     let solves = projection.setup_solves + projection.project(rows, chol, &z, &mut extras, &mut u, &mut lambda)?;
     Ok((Start { u, extras, lambda }, solves))
-}
-
-/// out = x + α d.
-fn axpy_into(out: &mut [f64], x: &[f64], alpha: f64, d: &[f64]) {
-    for ((o, a), b) in out.iter_mut().zip(x).zip(d) {
-        *o = a + alpha * b;
-    }
-}
-
-/// x += α d.
-fn axpy(x: &mut [f64], alpha: f64, d: &[f64]) {
-    for (a, b) in x.iter_mut().zip(d) {
-        *a += alpha * b;
-    }
 }

@@ -16,6 +16,13 @@
 //!
 //!   An elastic problem has no blocks 4: a QP.
 //!
+//! It is built in stages (`ConeProgramme::build`): P's cone blocks (`yield_cones`) and
+//! hardening metric (`hardening_metric`), the layout of x (`Layout::new`), the units
+//! (`Scales::new`), the objective's quadratic and linear terms (`quadratic_term`,
+//! `linear_term`), the cone maps of one point (`ConeMap::new`), the columns of A by block
+//! (`equilibrium_rows`, `contact_columns`, `cone_rows`), b (`right_hand_side`) and the cones
+//! (`cones`).
+//!
 //! **The primal from the dual.** Clarabel's stationarity is `P x + q + Aᵀz = 0`. In the σ_T
 //! rows of an elastic point it reads `w_T(Aσ_T + B_T z_eq) = 0`, i.e. `Aσ_T = ε_T(−z_eq)`; in
 //! the λ_i rows `c_i − (G z_eq)_i − (H z_load)_i − z_λ,i = 0`, i.e. the multiplier of `λ_i ≥ 0`
@@ -46,7 +53,7 @@ use clarabel::solver::{
 };
 use saddle_core::error::{ParameterError, check, join};
 use saddle_core::problem::fields::StressField;
-use saddle_core::problem::kkt::kkt_with_stress;
+use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress};
 use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::problem::stresses::{MAX_HARDENING_DIM, SocBlock};
@@ -153,9 +160,39 @@ impl Solver for Socp {
         self.tol
     }
 
-    /// Builds the cone programme, runs Clarabel, recovers (u, V, σ̂, λ) and polishes them.
+    /// Builds the cone programme, runs Clarabel, recovers (u, V, σ̂, λ) and polishes them, in
+    /// stages.
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         let mut timer = PhaseTimer::default();
+        let (prog, ipm) = self.interior_point(l, monitor, &mut timer)?;
+        let found = Found::recover(l, &prog, &ipm, &mut timer);
+        let r_ipm = found.kkt.max();
+        monitor.iteration(ipm.iterations, r_ipm, self.tol);
+        if !r_ipm.is_finite() {
+            return Err(SolveError::NonFinite {
+                solver: NAME.into(),
+                what: "the KKT residual of the interior point solution".into(),
+                iteration: ipm.iterations,
+            });
+        }
+        let report = IpmReport::new(&prog, &ipm, r_ipm, found.return_mappings);
+        if self.polish {
+            self.polished(l, found, report, monitor, timer)
+        } else {
+            Ok(self.unpolished(found, report, timer))
+        }
+    }
+}
+
+impl Socp {
+    /// Stage 1 (theory §4.4): the cone programme of `l` built and solved by Clarabel; an error
+    /// if its solution is not finite.
+    fn interior_point(
+        &self,
+        l: &Lagrangian<'_>,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+    ) -> Result<(ConeProgramme, IpmResult), SolveError> {
         monitor.phase("cone programme");
         let prog = timer.time("cone programme", || ConeProgramme::build(l))?;
         monitor.phase("interior point");
@@ -167,62 +204,49 @@ impl Solver for Socp {
                 iteration: ipm.iterations,
             });
         }
-        let (u, extras, mut stress, lambda) = prog.recover(l, &ipm);
-        // the residual of the interior point solution, its σ(u) by the local law (theory §3.4)
-        let mut ws = Workspace::new(l);
-        let (law, kkt) = timer.time("residual", || {
-            l.strain(&u, &mut ws.eps);
-            let law = l.data.local_law(&ws.eps, &mut ws.stress, None);
-            (law, kkt_with_stress(l, &Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws))
-        });
-        stress.plastic.clone_from(&ws.stress.plastic);
-        let r_ipm = kkt.max();
-        monitor.iteration(ipm.iterations, r_ipm, self.tol);
-        if !r_ipm.is_finite() {
-            return Err(SolveError::NonFinite {
-                solver: NAME.into(),
-                what: "the KKT residual of the interior point solution".into(),
-                iteration: ipm.iterations,
-            });
-        }
-        let mut counters = prog.counters();
-        counters.insert("ipm_iterations".into(), ipm.iterations as f64);
-        counters.insert("ipm_duality_gap".into(), ipm.gap_abs * prog.scales.energy());
-        counters.insert("ipm_relative_gap".into(), ipm.gap_rel);
-        counters.insert("ipm_objective".into(), ipm.objective * prog.scales.energy());
-        counters.insert("ipm_primal_residual".into(), ipm.r_prim);
-        counters.insert("ipm_dual_residual".into(), ipm.r_dual);
-        counters.insert("ipm_kkt_residual".into(), r_ipm);
-        counters.insert("ipm_status".into(), ipm.status as u32 as f64);
-        let mut warnings = Vec::new();
-        if ipm.status != SolverStatus::Solved {
-            warnings.push(format!("the interior point method ended {:?} (status {})", ipm.status, ipm.status as u32));
-        }
-        counters.insert("return_mappings".into(), law.projected as f64);
-        if !self.polish {
-            counters.insert("polish_iterations".into(), 0.0);
-            let converged = r_ipm <= self.tol;
-            let stop_reason = match (converged, ipm.status) {
-                (true, _) => StopReason::Converged,
-                (false, SolverStatus::MaxIterations) => StopReason::MaxIterations,
-                (false, _) => StopReason::Stagnated,
-            };
-            let report = SolveReport {
-                solver: NAME.into(),
-                converged,
-                stop_reason,
-                iterations: ipm.iterations,
-                tolerance: self.tol,
-                kkt,
-                residual_history: vec![r_ipm],
-                phases: timer.into_phases(),
-                counters,
-                warnings,
-            };
-            return Ok(Solution { u, extras, stress, lambda, report, undetermined: Vec::new() });
-        }
+        Ok((prog, ipm))
+    }
+
+    /// Stage 3a (theory §4.4, `polish = false`): the interior point's solution is the answer,
+    /// converged if its residual meets `tol`.
+    fn unpolished(&self, found: Found, mut ipm: IpmReport, timer: PhaseTimer) -> Solution {
+        ipm.counters.insert("polish_iterations".into(), 0.0);
+        let converged = ipm.residual <= self.tol;
+        let stop_reason = match (converged, ipm.status) {
+            (true, _) => StopReason::Converged,
+            (false, SolverStatus::MaxIterations) => StopReason::MaxIterations,
+            (false, _) => StopReason::Stagnated,
+        };
+        let report = SolveReport {
+            solver: NAME.into(),
+            converged,
+            stop_reason,
+            iterations: ipm.iterations,
+            tolerance: self.tol,
+            kkt: found.kkt,
+            residual_history: vec![ipm.residual],
+            phases: timer.into_phases(),
+            counters: ipm.counters,
+            warnings: ipm.warnings,
+        };
+        let Found { u, extras, stress, lambda, .. } = found;
+        Solution { u, extras, stress, lambda, report, undetermined: Vec::new() }
+    }
+
+    /// Stage 3b (theory §4.4, polish): Newton (theory §4.2) from the interior point's (u, V, λ);
+    /// the report joins both, the interior point's residual first in the history.
+    fn polished(
+        &self,
+        l: &Lagrangian<'_>,
+        found: Found,
+        ipm: IpmReport,
+        monitor: &mut dyn Monitor,
+        mut timer: PhaseTimer,
+    ) -> Result<Solution, SolveError> {
+        let IpmReport { iterations, residual, mut counters, mut warnings, .. } = ipm;
         let newton = Newton { tol: self.tol, max_iter: self.polish_max_iter, line_search: true, ..Newton::default() };
-        let mut sol = newton.solve_from(l, Some(Start { u, extras, lambda }), monitor, &mut timer, NAME)?;
+        let start = Start { u: found.u, extras: found.extras, lambda: found.lambda };
+        let mut sol = newton.solve_from(l, Some(start), monitor, &mut timer, NAME)?;
         let report = &mut sol.report;
         counters.insert("polish_iterations".into(), report.iterations as f64);
         // the return mappings of the residual above and of the polish
@@ -230,11 +254,74 @@ impl Solver for Socp {
         counters.append(&mut report.counters);
         *counters.entry("return_mappings".into()).or_insert(0.0) += ipm_return_mappings;
         report.counters = counters;
-        report.residual_history.insert(0, r_ipm);
+        report.residual_history.insert(0, residual);
         warnings.append(&mut report.warnings);
         report.warnings = warnings;
-        report.iterations += ipm.iterations;
+        report.iterations += iterations;
         Ok(sol)
+    }
+}
+
+/// The interior point's solution in the units of `l`, with the residual of theory §3.4.
+struct Found {
+    u: Vec<f64>,
+    extras: Vec<f64>,
+    /// σ̂ from Clarabel's x, with the plastic flags of the local law at ε(u).
+    stress: StressField,
+    lambda: Vec<f64>,
+    /// The KKT residuals of (u, V, σ̂, λ).
+    kkt: KktResiduals,
+    /// Points at which P's return mapping ran for σ(u).
+    return_mappings: usize,
+}
+
+impl Found {
+    /// Stage 2 (theory §4.4, primal from dual; theory §3.4): (u, V, σ̂, λ) from Clarabel's x and
+    /// z, and their residual with σ(u) by the local law.
+    fn recover(l: &Lagrangian<'_>, prog: &ConeProgramme, ipm: &IpmResult, timer: &mut PhaseTimer) -> Self {
+        let (u, extras, mut stress, lambda) = prog.recover(l, ipm);
+        let mut ws = Workspace::new(l);
+        let (law, kkt) = timer.time("residual", || {
+            l.strain(&u, &mut ws.eps);
+            let law = l.data.local_law(&ws.eps, &mut ws.stress, None);
+            (law, kkt_with_stress(l, &Iterate { u: &u, extras: &extras, stress: &stress, lambda: &lambda }, &mut ws))
+        });
+        stress.plastic.clone_from(&ws.stress.plastic);
+        Self { u, extras, stress, lambda, kkt, return_mappings: law.projected }
+    }
+}
+
+/// The interior point's part of the report.
+struct IpmReport {
+    /// Clarabel's iterations and status.
+    iterations: usize,
+    status: SolverStatus,
+    /// The relative KKT residual of its solution.
+    residual: f64,
+    counters: BTreeMap<String, f64>,
+    warnings: Vec<String>,
+}
+
+impl IpmReport {
+    /// The sizes and scales of `prog`, Clarabel's figures from `ipm` in the units of the scene,
+    /// the residual `r_ipm` and the `return_mappings` of σ(u); a warning unless Clarabel solved.
+    fn new(prog: &ConeProgramme, ipm: &IpmResult, r_ipm: f64, return_mappings: usize) -> Self {
+        let mut counters = prog.counters();
+        let mut put = |k: &str, x: f64| counters.insert(k.to_string(), x);
+        put("ipm_iterations", ipm.iterations as f64);
+        put("ipm_duality_gap", ipm.gap_abs * prog.scales.energy());
+        put("ipm_relative_gap", ipm.gap_rel);
+        put("ipm_objective", ipm.objective * prog.scales.energy());
+        put("ipm_primal_residual", ipm.r_prim);
+        put("ipm_dual_residual", ipm.r_dual);
+        put("ipm_kkt_residual", r_ipm);
+        put("ipm_status", ipm.status as u32 as f64);
+        put("return_mappings", return_mappings as f64);
+        let mut warnings = Vec::new();
+        if ipm.status != SolverStatus::Solved {
+            warnings.push(format!("the interior point method ended {:?} (status {})", ipm.status, ipm.status as u32));
+        }
+        Self { iterations: ipm.iterations, status: ipm.status, residual: r_ipm, counters, warnings }
     }
 }
 
@@ -250,6 +337,27 @@ struct Scales {
 }
 
 impl Scales {
+    /// Stage 4 (theory §4.4, units): L = (Σ_T w_T)^{1/3}; S the largest offset of the cone
+    /// `blocks`, else max|f|/L², else E·10⁻³; E Young's modulus. An error without volume.
+    fn new(l: &Lagrangian<'_>, blocks: &[SocBlock]) -> Result<Self, SolveError> {
+        let young = l.data.elasticity.young;
+        let volume: f64 = l.weights().iter().sum();
+        if !(volume.is_finite() && volume > 0.0) {
+            return Err(unsupported(format!("the total weight of the stress points is {volume}: nothing to solve")));
+        }
+        let length = volume.cbrt();
+        let offsets = blocks.iter().flat_map(|b| b.offset.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+        let fmax = l.data.load.iter().chain(l.data.nodal_load).fold(0.0f64, |m, v| m.max(v.abs()));
+        let stress = if offsets > 0.0 {
+            offsets
+        } else if fmax > 0.0 {
+            fmax / (length * length)
+        } else {
+            1e-3 * young
+        };
+        Ok(Self { stress, length, stiffness: young })
+    }
+
     /// D = S L / E.
     fn displacement(&self) -> f64 {
         self.stress * self.length / self.stiffness
@@ -285,7 +393,35 @@ struct Layout {
     n_soc: usize,
 }
 
+/// B as explicit entries (point, Mandel component, dof, value).
+type StrainEntry = (usize, usize, usize, f64);
+
 impl Layout {
+    /// Stage 3 (theory §4.4, the layout of the variables): x = [(σ_T, kept q_T) per point, λ],
+    /// with the kept hardening variables `free_q` and `n_blocks` cones per point.
+    fn new(l: &Lagrangian<'_>, free_q: Vec<usize>, n_blocks: usize) -> Self {
+        Self {
+            n_points: l.n_points(),
+            q_dim: l.data.hardening_dim(),
+            free_q,
+            n_dofs: l.n_dofs(),
+            n_extras: l.n_extras(),
+            n_rows: l.data.rows.n_rows(),
+            n_soc: l.n_points() * n_blocks,
+        }
+    }
+
+    /// The hardening variables fixed at their state value (infinite metric).
+    fn fixed_q(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.q_dim).filter(|k| !self.free_q.contains(k))
+    }
+
+    /// The nonzeros of A: `n_strain` entries of B, the rows' G, H and signs, the cone maps.
+    fn constraint_nonzeros(&self, l: &Lagrangian<'_>, n_strain: usize, cone_map: &ConeMap) -> usize {
+        let (ne, nr) = (self.n_extras, self.n_rows);
+        n_strain + l.data.rows.val.len() + nr * ne + nr + self.n_points * cone_map.entries.len()
+    }
+
     /// Columns per point: σ (6) and the kept q.
     fn stride(&self) -> usize {
         6 + self.free_q.len()
@@ -402,147 +538,212 @@ fn check_block(name: &str, k: usize, blk: &SocBlock, width: usize) -> Result<(),
     Ok(())
 }
 
-impl ConeProgramme {
-    /// Builds the programme of theory §3 form 3 for `l`, non-dimensionalised.
-    fn build(l: &Lagrangian<'_>) -> Result<Self, SolveError> {
-        let plasticity = l.data.plasticity();
-        let cone = match plasticity {
-            Some(p) => Some(p.cone().ok_or_else(|| {
-                unsupported(format!(
-                    "cannot solve the yield surface `{}`: {} (AdmissibleStresses::cone is None); \
-                     use newton, uzawa or penalty, which need only the projection onto D",
-                    p.name(),
-                    p.cone_unavailable()
-                ))
-            })?),
-            None => None,
-        };
-        let blocks: &[SocBlock] = cone.as_ref().map_or(&[], |c| &c.blocks);
-        let q_dim = l.data.hardening_dim();
-        let width = 6 + q_dim;
-        let yield_name = plasticity.map_or("", |p| p.name());
-        for (k, blk) in blocks.iter().enumerate() {
-            check_block(yield_name, k, blk, width)?;
-        }
-        // the hardening metric H⁻¹ on the kept variables; an infinite metric fixes q_k = 0
-        let mut free_q = Vec::with_capacity(q_dim);
-        if let Some(p) = plasticity {
-            for k in 0..q_dim {
-                let e = unit(q_dim, k);
-                let d = p.hardening_inner(&e[..q_dim], &e[..q_dim]);
-                if d == f64::INFINITY {
-                    continue;
-                }
-                if !(d.is_finite() && d > 0.0) {
-                    return Err(unsupported(format!(
-                        "the hardening metric of `{}` is {d} on variable {k}: it must be positive (or +∞ to fix it)",
-                        p.name()
-                    )));
-                }
-                free_q.push(k);
-            }
-        }
-        let hinv: Vec<f64> = match plasticity {
-            Some(p) => free_q
-                .iter()
-                .flat_map(|&a| {
-                    free_q.iter().map(move |&b| p.hardening_inner(&unit(q_dim, a)[..q_dim], &unit(q_dim, b)[..q_dim]))
-                })
-                .collect(),
-            None => vec![],
-        };
-        let rows = l.data.rows;
-        let layout = Layout {
-            n_points: l.n_points(),
-            q_dim,
-            free_q,
-            n_dofs: l.n_dofs(),
-            n_extras: l.n_extras(),
-            n_rows: rows.n_rows(),
-            n_soc: l.n_points() * blocks.len(),
-        };
-        let nq = layout.free_q.len();
+/// Stage 1 (theory §4.4, the cone blocks): the second-order cones of P's set D at one point
+/// (none for an elastic problem), checked; an error if D has none.
+fn yield_cones(l: &Lagrangian<'_>) -> Result<Vec<SocBlock>, SolveError> {
+    let Some(p) = l.data.plasticity() else {
+        return Ok(Vec::new());
+    };
+    let cone = p.cone().ok_or_else(|| {
+        unsupported(format!(
+            "cannot solve the yield surface `{}`: {} (AdmissibleStresses::cone is None); \
+             use newton, uzawa or penalty, which need only the projection onto D",
+            p.name(),
+            p.cone_unavailable()
+        ))
+    })?;
+    let width = 6 + l.data.hardening_dim();
+    for (k, blk) in cone.blocks.iter().enumerate() {
+        check_block(p.name(), k, blk, width)?;
+    }
+    Ok(cone.blocks)
+}
 
-        // units
-        let law = *l.data.elasticity;
-        let w = l.weights();
-        let volume: f64 = w.iter().sum();
-        if !(volume.is_finite() && volume > 0.0) {
-            return Err(unsupported(format!("the total weight of the stress points is {volume}: nothing to solve")));
+/// Stage 2 (theory §4.4, perfect plasticity): the hardening variables kept — those of finite
+/// metric; an infinite one fixes q_k (module docs) — and the metric H⁻¹ on them, row-major.
+fn hardening_metric(l: &Lagrangian<'_>) -> Result<(Vec<usize>, Vec<f64>), SolveError> {
+    let q_dim = l.data.hardening_dim();
+    let mut free_q = Vec::with_capacity(q_dim);
+    let Some(p) = l.data.plasticity() else {
+        return Ok((free_q, Vec::new()));
+    };
+    let inner = |a: usize, b: usize| p.hardening_inner(&unit(q_dim, a)[..q_dim], &unit(q_dim, b)[..q_dim]);
+    for k in 0..q_dim {
+        let d = inner(k, k);
+        if d == f64::INFINITY {
+            continue;
         }
-        let length = volume.cbrt();
-        let offsets = blocks.iter().flat_map(|b| b.offset.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
-        let fmax = l.data.load.iter().chain(l.data.nodal_load).fold(0.0f64, |m, v| m.max(v.abs()));
-        let stress = if offsets > 0.0 {
-            offsets
-        } else if fmax > 0.0 {
-            fmax / (length * length)
-        } else {
-            1e-3 * law.young
+        if !(d.is_finite() && d > 0.0) {
+            return Err(unsupported(format!(
+                "the hardening metric of `{}` is {d} on variable {k}: it must be positive (or +∞ to fix it)",
+                p.name()
+            )));
+        }
+        free_q.push(k);
+    }
+    let hinv = free_q.iter().flat_map(|&a| free_q.iter().map(move |&b| inner(a, b))).collect();
+    Ok((free_q, hinv))
+}
+
+/// Stage 5 (theory §4.4, the objective's quadratic term): P per point, (w/L³)·E·A on σ and
+/// (w/L³)·E·H⁻¹ on the kept q, upper triangle.
+fn quadratic_term(l: &Lagrangian<'_>, layout: &Layout, hinv: &[f64], scales: &Scales) -> CscMatrix<f64> {
+    let law = *l.data.elasticity;
+    // E·A on the unit vectors: columns of a symmetric matrix, so also its rows
+    let compliance: [Sym; 6] = std::array::from_fn(|j| {
+        let mut e = Sym::zeros();
+        e[j] = 1.0;
+        law.compliance(&e) * law.young
+    });
+    let nq = layout.free_q.len();
+    let mut p = Triplets::with_capacity(layout.n_points * (21 + nq * (nq + 1) / 2));
+    let vol_scale = scales.length * scales.length * scales.length;
+    for (t, wt) in l.weights().iter().enumerate() {
+        let wt = wt / vol_scale;
+        for (a, row) in compliance.iter().enumerate() {
+            for (b, e_ab) in row.iter().enumerate().skip(a) {
+                p.push_nonzero(layout.point_col(t, a), layout.point_col(t, b), wt * e_ab);
+            }
+        }
+        for a in 0..nq {
+            for b in a..nq {
+                let v = wt * law.young * hinv[a * nq + b];
+                p.push_nonzero(layout.point_col(t, 6 + a), layout.point_col(t, 6 + b), v);
+            }
+        }
+    }
+    p.into_csc(layout.n_vars(), layout.n_vars())
+}
+
+/// Stage 6 (theory §4.4, the objective's linear term): the obstacle offsets c_i on λ, and for a
+/// load step's state (theory §11.1), whose objective ½Aσ:σ + ½(q − q_n)·H⁻¹(q − q_n) + (ε_p, σ)
+/// adds w ε_p·σ and −w q_n·H⁻¹q (scaled as P).
+fn linear_term(l: &Lagrangian<'_>, layout: &Layout, hinv: &[f64], scales: &Scales) -> Vec<f64> {
+    let mut q = vec![0.0; layout.n_vars()];
+    let s_d = scales.displacement();
+    for (i, c) in l.data.rows.offset.iter().enumerate() {
+        q[layout.lambda_col(i)] = c / s_d;
+    }
+    let Some(st) = l.data.state else {
+        return q;
+    };
+    let (young, stress, nq) = (l.data.elasticity.young, scales.stress, layout.free_q.len());
+    let vol_scale = scales.length * scales.length * scales.length;
+    for (t, wt) in l.weights().iter().enumerate() {
+        let wt = wt / vol_scale;
+        for c in 0..6 {
+            q[layout.point_col(t, c)] = wt * young / stress * st.plastic_strain[t][c];
+        }
+        let qn = st.q(t);
+        for (a, _) in layout.free_q.iter().enumerate() {
+            let lin: f64 = layout.free_q.iter().enumerate().map(|(b, &k)| hinv[a * nq + b] * qn[k]).sum();
+            q[layout.point_col(t, 6 + a)] = -wt * young * lin / stress;
+        }
+    }
+    q
+}
+
+/// Stage 8 (theory §4.4, constraint block 1, equilibrium): the columns of σ in the rows of the
+/// free dofs, Σ_T w_T B_Tᵀσ_T (scaled by 1/L²).
+/// `strain` holds B's entries ([`saddle_core::ElementOperators::strain_entries`]).
+fn equilibrium_rows(l: &Lagrangian<'_>, strain: Vec<StrainEntry>, layout: &Layout, scales: &Scales, a: &mut Triplets) {
+    let (w, len2) = (l.weights(), scales.length * scales.length);
+    for (t, c, j, v) in strain {
+        a.push(j, layout.point_col(t, c), w[t] * v / len2);
+    }
+}
+
+/// Stage 9 (theory §4.4, the contact rows): the column of each λ_i, −G_iᵀ in the equilibrium
+/// rows (block 1), −H_iᵀ in the load rows (block 2) and −1 in its sign row (block 3).
+fn contact_columns(l: &Lagrangian<'_>, layout: &Layout, a: &mut Triplets) {
+    let rows = l.data.rows;
+    let (n, ne) = (layout.n_dofs, layout.n_extras);
+    for i in 0..layout.n_rows {
+        let col = layout.lambda_col(i);
+        let (cols, vals) = rows.row(i);
+        for (&j, &g) in cols.iter().zip(vals) {
+            a.push(j, col, -g);
+        }
+        for (k, &h) in rows.extra_row(i).iter().enumerate() {
+            if h != 0.0 {
+                a.push(n + k, col, -h);
+            }
+        }
+        a.push(n + ne + i, col, -1.0);
+    }
+}
+
+/// Stage 10 (theory §4.4, constraint block 4): each point's cone maps on its (σ, kept q), in the
+/// rows after the equilibrium, load and sign rows.
+fn cone_rows(layout: &Layout, cone_map: &ConeMap, a: &mut Triplets) {
+    let cone_row0 = layout.n_dofs + layout.n_extras + layout.n_rows;
+    for t in 0..layout.n_points {
+        let row0 = cone_row0 + t * cone_map.rows;
+        for &(r, c, v) in &cone_map.entries {
+            a.push(row0 + r, layout.point_col(t, c), v);
+        }
+    }
+}
+
+/// Stage 11 (theory §4.4, the right-hand side b of length `m`): the loads f_u and f in the
+/// equilibrium and load rows, and each point's cone offsets, into which a fixed hardening
+/// variable moves with its state value q_n (0 without a state).
+fn right_hand_side(l: &Lagrangian<'_>, layout: &Layout, blocks: &[SocBlock], scales: &Scales, m: usize) -> Vec<f64> {
+    let (n, ne, s_f) = (layout.n_dofs, layout.n_extras, scales.force());
+    let mut b = vec![0.0; m];
+    for (j, f) in l.data.nodal_load.iter().enumerate() {
+        b[j] = f / s_f;
+    }
+    for (k, f) in l.data.load.iter().enumerate() {
+        b[n + k] = f / s_f;
+    }
+    let width = 6 + layout.q_dim;
+    let mut r0 = n + ne + layout.n_rows;
+    for t in 0..layout.n_points {
+        let fixed: Vec<(usize, f64)> = match l.data.state {
+            Some(st) => layout.fixed_q().map(|k| (k, st.q(t)[k])).collect(),
+            None => Vec::new(),
         };
-        let scales = Scales { stress, length, stiffness: law.young };
-        let (s_f, s_d) = (scales.force(), scales.displacement());
+        for blk in blocks {
+            for (r, (bi, o)) in b[r0..r0 + blk.dim].iter_mut().zip(&blk.offset).enumerate() {
+                let shift: f64 = fixed.iter().map(|&(k, qk)| blk.map[r * width + 6 + k] * qk).sum();
+                *bi = (o + shift) / scales.stress;
+            }
+            r0 += blk.dim;
+        }
+    }
+    b
+}
 
-        // P: per point (w/L³)·E·A on σ and (w/L³)·E·H⁻¹ on the kept q, upper triangle
-        // E·A on the unit vectors: columns of a symmetric matrix, so also its rows
-        let compliance: [Sym; 6] = std::array::from_fn(|j| {
-            let mut e = Sym::zeros();
-            e[j] = 1.0;
-            law.compliance(&e) * law.young
-        });
-        let n_vars = layout.n_vars();
-        let per_point = 21 + nq * (nq + 1) / 2;
-        let (mut pi, mut pj, mut pv) = (
-            Vec::with_capacity(layout.n_points * per_point),
-            Vec::with_capacity(layout.n_points * per_point),
-            Vec::with_capacity(layout.n_points * per_point),
-        );
-        let vol_scale = length * length * length;
-        for (t, wt) in w.iter().enumerate() {
-            let wt = wt / vol_scale;
-            for (a, row) in compliance.iter().enumerate() {
-                for (b, e_ab) in row.iter().enumerate().skip(a) {
-                    let v = wt * e_ab;
-                    if v != 0.0 {
-                        pi.push(layout.point_col(t, a));
-                        pj.push(layout.point_col(t, b));
-                        pv.push(v);
-                    }
-                }
-            }
-            for a in 0..nq {
-                for b in a..nq {
-                    let v = wt * law.young * hinv[a * nq + b];
-                    if v != 0.0 {
-                        pi.push(layout.point_col(t, 6 + a));
-                        pj.push(layout.point_col(t, 6 + b));
-                        pv.push(v);
-                    }
-                }
-            }
-        }
-        let p = CscMatrix::new_from_triplets(n_vars, n_vars, pi, pj, pv);
-        let mut q = vec![0.0; n_vars];
-        for (i, c) in rows.offset.iter().enumerate() {
-            q[layout.lambda_col(i)] = c / s_d;
-        }
-        // a load step's state (theory §11.1): the objective ½Aσ:σ + ½(q − q_n)·H⁻¹(q − q_n) +
-        // (ε_p, σ) adds the linear terms w ε_p·σ and −w q_n·H⁻¹q (scaled as P above)
-        if let Some(st) = l.data.state {
-            for (t, wt) in w.iter().enumerate() {
-                let wt = wt / vol_scale;
-                for c in 0..6 {
-                    q[layout.point_col(t, c)] = wt * law.young / stress * st.plastic_strain[t][c];
-                }
-                let qn = st.q(t);
-                for (a, _) in layout.free_q.iter().enumerate() {
-                    let lin: f64 = layout.free_q.iter().enumerate().map(|(b, &k)| hinv[a * nq + b] * qn[k]).sum();
-                    q[layout.point_col(t, 6 + a)] = -wt * law.young * lin / stress;
-                }
-            }
-        }
+/// Stage 12 (theory §4.4): the cones of the row blocks in order — zero (equilibrium and load
+/// rows), nonnegative (λ ≥ 0), and P's second-order cones at every point.
+fn cones(layout: &Layout, blocks: &[SocBlock]) -> Vec<SupportedConeT<f64>> {
+    let (n, ne, nr) = (layout.n_dofs, layout.n_extras, layout.n_rows);
+    let mut cones = Vec::with_capacity(2 + layout.n_soc);
+    if n + ne > 0 {
+        cones.push(ZeroConeT(n + ne));
+    }
+    if nr > 0 {
+        cones.push(NonnegativeConeT(nr));
+    }
+    for _ in 0..layout.n_points {
+        cones.extend(blocks.iter().map(|blk| SecondOrderConeT(blk.dim)));
+    }
+    cones
+}
 
-        // the cone maps on the kept columns, negated (s = b − A x): (row, local column, value)
+/// The cone maps of one point on its kept columns, negated (s = b − A x): (row, local column,
+/// value) over all blocks, and the number of rows.
+struct ConeMap {
+    entries: Vec<(usize, usize, f64)>,
+    rows: usize,
+}
+
+impl ConeMap {
+    /// Stage 7 (theory §4.4, the cone blocks per yield surface): the maps of `blocks` on (σ, q),
+    /// with the columns of fixed hardening variables dropped.
+    fn new(blocks: &[SocBlock], layout: &Layout) -> Self {
+        let width = 6 + layout.q_dim;
         let mut local_col = [usize::MAX; 6 + MAX_HARDENING_DIM];
         for (c, lc) in local_col.iter_mut().enumerate().take(6) {
             *lc = c;
@@ -550,93 +751,75 @@ impl ConeProgramme {
         for (kk, &k) in layout.free_q.iter().enumerate() {
             local_col[6 + k] = 6 + kk;
         }
-        let mut block_entries: Vec<(usize, usize, f64)> = Vec::new();
-        let mut block_rows = 0;
+        let (mut entries, mut rows) = (Vec::new(), 0);
         for blk in blocks {
             for (r, map_row) in blk.map.chunks_exact(width).enumerate() {
                 for (&v, &c) in map_row.iter().zip(&local_col) {
                     if v != 0.0 && c != usize::MAX {
-                        block_entries.push((block_rows + r, c, -v));
+                        entries.push((rows + r, c, -v));
                     }
                 }
             }
-            block_rows += blk.dim;
+            rows += blk.dim;
         }
+        Self { entries, rows }
+    }
+}
 
-        // A: equilibrium, load, sign and cone rows
-        let entries = l.strain_entries();
-        let (n, ne, nr) = (layout.n_dofs, layout.n_extras, layout.n_rows);
-        let n_cone_rows = layout.n_points * block_rows;
-        let m = n + ne + nr + n_cone_rows;
-        let nnz = entries.len() + rows.val.len() + nr * ne + nr + layout.n_points * block_entries.len();
-        let (mut ai, mut aj, mut av) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
-        let len2 = length * length;
-        for &(t, c, j, v) in &entries {
-            ai.push(j);
-            aj.push(layout.point_col(t, c));
-            av.push(w[t] * v / len2);
+/// A sparse matrix as (row, column, value) triplets in the order pushed.
+struct Triplets {
+    rows: Vec<usize>,
+    cols: Vec<usize>,
+    vals: Vec<f64>,
+}
+
+impl Triplets {
+    /// Room for `nnz` entries.
+    fn with_capacity(nnz: usize) -> Self {
+        Self { rows: Vec::with_capacity(nnz), cols: Vec::with_capacity(nnz), vals: Vec::with_capacity(nnz) }
+    }
+
+    /// Entry (i, j) = v.
+    fn push(&mut self, i: usize, j: usize, v: f64) {
+        self.rows.push(i);
+        self.cols.push(j);
+        self.vals.push(v);
+    }
+
+    /// Entry (i, j) = v unless v = 0.
+    fn push_nonzero(&mut self, i: usize, j: usize, v: f64) {
+        if v != 0.0 {
+            self.push(i, j, v);
         }
-        drop(entries);
-        for i in 0..nr {
-            let (cols, vals) = rows.row(i);
-            for (&j, &g) in cols.iter().zip(vals) {
-                ai.push(j);
-                aj.push(layout.lambda_col(i));
-                av.push(-g);
-            }
-            for (k, &h) in rows.extra_row(i).iter().enumerate() {
-                if h != 0.0 {
-                    ai.push(n + k);
-                    aj.push(layout.lambda_col(i));
-                    av.push(-h);
-                }
-            }
-            ai.push(n + ne + i);
-            aj.push(layout.lambda_col(i));
-            av.push(-1.0);
-        }
-        let mut b = vec![0.0; m];
-        // equilibrium Σ w Bᵀσ − Gᵀλ = f_u (tractions, body forces); load −Hᵀλ = f
-        for (j, f) in l.data.nodal_load.iter().enumerate() {
-            b[j] = f / s_f;
-        }
-        for (k, f) in l.data.load.iter().enumerate() {
-            b[n + k] = f / s_f;
-        }
-        let cone_row0 = n + ne + nr;
-        for t in 0..layout.n_points {
-            let row0 = cone_row0 + t * block_rows;
-            for &(r, c, v) in &block_entries {
-                ai.push(row0 + r);
-                aj.push(layout.point_col(t, c));
-                av.push(v);
-            }
-            let mut r0 = row0;
-            // a fixed hardening variable keeps its state value q_n (0 without a state): its
-            // column of the map moves to the offset
-            let fixed: Vec<(usize, f64)> = match l.data.state {
-                Some(st) => (0..q_dim).filter(|k| !layout.free_q.contains(k)).map(|k| (k, st.q(t)[k])).collect(),
-                None => Vec::new(),
-            };
-            for blk in blocks {
-                for (r, (bi, o)) in b[r0..r0 + blk.dim].iter_mut().zip(&blk.offset).enumerate() {
-                    let shift: f64 = fixed.iter().map(|&(k, qk)| blk.map[r * width + 6 + k] * qk).sum();
-                    *bi = (o + shift) / stress;
-                }
-                r0 += blk.dim;
-            }
-        }
-        let a = CscMatrix::new_from_triplets(m, n_vars, ai, aj, av);
-        let mut cones = Vec::with_capacity(2 + layout.n_soc);
-        if n + ne > 0 {
-            cones.push(ZeroConeT(n + ne));
-        }
-        if nr > 0 {
-            cones.push(NonnegativeConeT(nr));
-        }
-        for _ in 0..layout.n_points {
-            cones.extend(blocks.iter().map(|blk| SecondOrderConeT(blk.dim)));
-        }
+    }
+
+    /// The m × n matrix in compressed columns.
+    fn into_csc(self, m: usize, n: usize) -> CscMatrix<f64> {
+        CscMatrix::new_from_triplets(m, n, self.rows, self.cols, self.vals)
+    }
+}
+
+impl ConeProgramme {
+    /// Builds the programme of theory §3 form 3 for `l`, non-dimensionalised (module docs), in
+    /// stages: P's cones and hardening metric, the layout of x, the units, the objective, the
+    /// constraints and their cones.
+    fn build(l: &Lagrangian<'_>) -> Result<Self, SolveError> {
+        let blocks = yield_cones(l)?;
+        let (free_q, hinv) = hardening_metric(l)?;
+        let layout = Layout::new(l, free_q, blocks.len());
+        let scales = Scales::new(l, &blocks)?;
+        let p = quadratic_term(l, &layout, &hinv, &scales);
+        let q = linear_term(l, &layout, &hinv, &scales);
+        let cone_map = ConeMap::new(&blocks, &layout);
+        let strain = l.strain_entries();
+        let mut a = Triplets::with_capacity(layout.constraint_nonzeros(l, strain.len(), &cone_map));
+        equilibrium_rows(l, strain, &layout, &scales, &mut a);
+        contact_columns(l, &layout, &mut a);
+        cone_rows(&layout, &cone_map, &mut a);
+        let m = layout.n_dofs + layout.n_extras + layout.n_rows + layout.n_points * cone_map.rows;
+        let a = a.into_csc(m, layout.n_vars());
+        let b = right_hand_side(l, &layout, &blocks, &scales, m);
+        let cones = cones(&layout, &blocks);
         Ok(Self { p, q, a, b, cones, scales, layout })
     }
 
@@ -690,7 +873,7 @@ impl ConeProgramme {
             }
             // fixed hardening variables stay at the state's value (theory §11.1)
             if let Some(st) = l.data.state {
-                for k in (0..lay.q_dim).filter(|k| !lay.free_q.contains(k)) {
+                for k in lay.fixed_q() {
                     stress.q[t * stride + k] = st.q(t)[k];
                 }
             }

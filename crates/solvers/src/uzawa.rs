@@ -15,17 +15,34 @@
 //! then eliminated exactly inside the projection (m = 1 is the paper's choice, selectable as a
 //! multiple of V's natural stiffness). The iteration stops on the relative KKT residual of the
 //! iterate, never on the step length; divergence and NaN are detected and reported.
+//!
+//! The iteration runs in named stages (one method of the private `Run` each):
+//!
+//! 0. **set-up** (`Run::set_up`): M assembled and factorised, the projection onto K_h set up
+//!    (its Delassus matrix), the start;
+//! 1. **local law** (`Run::local_law`): step (i) and the KKT residual of the iterate
+//!    (uⁿ, Vⁿ, σ̂ⁿ⁺¹, λⁿ) (theory §3.4);
+//! 2. **stopping** (`Run::stop`): converged, the divergence guard (`Run::divergence_guard`),
+//!    the budget, stagnation;
+//! 3. **gradient step** (`Run::gradient_step`): z = uⁿ − ρM⁻¹Bᵀσ̂ⁿ⁺¹;
+//! 4. **projection** (`Run::project`): (uⁿ⁺¹, Vⁿ⁺¹) and the multipliers μ, the projection of z
+//!    onto K_h;
+//! 5. **step length** (`Run::measure_step`): ‖xⁿ⁺¹ − xⁿ‖ in diag(M, m), for the guard;
+//! 6. **update** (`Run::advance`): λⁿ⁺¹ = μ/ρ.
 
 use crate::kh_projection::MetricProjection;
 use crate::linear::{self, InSolver};
-use crate::residual;
-use saddle_core::SymOp;
+use crate::local_law::{IterateMut, local_law_and_residual};
+use crate::residual::History;
+use crate::warm_start::warm_solve;
 use saddle_core::error::{ParameterError, check};
+use saddle_core::linalg::SparseCholesky;
 use saddle_core::problem::fields::StressField;
-use saddle_core::problem::kkt::kkt_with_stress;
-use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
+use saddle_core::problem::kkt::KktResiduals;
+use saddle_core::problem::lagrangian::{Lagrangian, Workspace};
 use saddle_core::problem::operators::Material;
-use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, Start, StopReason};
+use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, Solver, Start, StopReason};
+use saddle_core::{Elasticity, SymOp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -106,183 +123,346 @@ impl Solver for Uzawa {
 
     /// The iteration from the previous step's (u, V, λ) (theory §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        start.check(l, "uzawa")?;
-        let mut sol = self.iterate(l, Some(start), monitor)?;
-        sol.report.counters.insert("warm_start".into(), 1.0);
-        Ok(sol)
+        warm_solve(l, start, "uzawa", || self.iterate(l, Some(start), monitor))
     }
 }
 
 impl Uzawa {
-    /// The iteration of theory §4.1 from `start` (zero if `None`).
+    /// The iteration of theory §4.1 from `start` (zero if `None`), in the stages of the module
+    /// docs.
     fn iterate(
         &self,
         l: &Lagrangian<'_>,
         start: Option<&Start>,
         monitor: &mut dyn Monitor,
     ) -> Result<Solution, SolveError> {
-        let mut timer = PhaseTimer::default();
-        let law = *l.data.elasticity;
-        // M and its Lipschitz bound L
-        let (metric, lip) = match self.metric {
+        let mut run = Run::set_up(self, l, start, monitor)?;
+        monitor.phase("iterations");
+        let (stop, kkt) = loop {
+            let kkt = run.local_law();
+            let r = kkt.max();
+            run.history.record(run.state.it, r, monitor)?;
+            if let Some(stop) = run.stop(r)? {
+                break (stop, kkt);
+            }
+            run.gradient_step();
+            run.project()?;
+            run.measure_step();
+            run.advance();
+        };
+        Ok(run.finish(stop, kkt))
+    }
+
+    /// The metric M of step (ii) and the Lipschitz bound L ≥ λ_max(M⁻¹K) of theory §4.1.
+    fn metric(&self, law: &Elasticity) -> (SymOp, f64) {
+        match self.metric {
             UzawaMetric::Energy => (law.stiffness_matrix(), 1.0),
             UzawaMetric::Strain => (SymOp::identity(), law.max_eigenvalue()),
-        };
-        let rho = self.rho / lip;
-        monitor.phase("assembly");
-        let m_values = timer.time("assembly", || l.stiffness(Material::Uniform(&metric)));
-        monitor.phase("factorisation");
-        let (mut symbolic_analyses, mut factorisations) = (0usize, 0usize);
-        let mut chol = timer.time("factorisation", || -> Result<_, SolveError> {
-            let mut chol = linear::analyse(l.pattern(), "Uzawa metric", "uzawa", &mut symbolic_analyses)?;
-            chol.factorise(&m_values).in_solver("uzawa")?;
-            factorisations += 1;
-            Ok(chol)
-        })?;
-        drop(m_values);
-        // without contact rows step (ii) is a plain gradient step: no contact structures at all
+        }
+    }
+}
+
+/// The iteration state of theory §4.1: the iterate and the projection's multipliers.
+struct State {
+    /// uⁿ.
+    u: Vec<f64>,
+    /// Vⁿ.
+    v: Vec<f64>,
+    /// μ = ρλ, the multipliers of the projection step.
+    mu: Vec<f64>,
+    /// λⁿ = μ/ρ.
+    lambda: Vec<f64>,
+    /// σ̂ⁿ⁺¹ = P_D(Cε(uⁿ), 0), from the last local law.
+    stress: StressField,
+    /// Iterations done.
+    it: usize,
+}
+
+/// What the divergence and stagnation tests of theory §4.1 watch. For ρ < 2 the iteration map
+/// is averaged in diag(M, m), so the step length δₙ = ‖xⁿ⁺¹ − xⁿ‖ never increases; above the
+/// bound it grows like |1 − ρ|ⁿ. (The relative KKT residual cannot tell: it saturates near 1
+/// when the iterate blows up.)
+struct Watch {
+    /// The best residual so far and its iteration.
+    best: (f64, usize),
+    /// The smallest step length after the first.
+    smallest_step: f64,
+    /// The first step length.
+    first_step: f64,
+    /// The last step length.
+    last_step: f64,
+}
+
+/// What an Uzawa run counts for its report.
+#[derive(Default)]
+struct Counts {
+    /// Symbolic analyses of M's pattern.
+    symbolic_analyses: usize,
+    /// Numeric factorisations of M.
+    factorisations: usize,
+    /// Triangular solve pairs of the iterations.
+    solves: usize,
+    /// Points at which P's return mapping ran, as the local law reports them.
+    return_mappings: usize,
+}
+
+/// Scratch of the stages, allocated once per solve.
+struct Scratch {
+    ws: Workspace,
+    /// The unprojected step z = uⁿ − ρM⁻¹Bᵀσⁿ⁺¹, then Gᵀμ.
+    z: Vec<f64>,
+    /// The previous iterate (uⁿ, Vⁿ).
+    u_prev: Vec<f64>,
+    v_prev: Vec<f64>,
+    /// Hᵀμ (unused).
+    ht_mu: Vec<f64>,
+}
+
+impl Scratch {
+    /// The scratch of the stages for `l`.
+    fn new(l: &Lagrangian<'_>) -> Self {
+        let (n, ne) = (l.n_dofs(), l.n_extras());
+        Self {
+            ws: Workspace::new(l),
+            z: vec![0.0; n],
+            u_prev: vec![0.0; n],
+            v_prev: vec![0.0; ne],
+            ht_mu: vec![0.0; ne],
+        }
+    }
+}
+
+/// One Uzawa solve: what it reads, the factorised metric, the projection onto K_h, state,
+/// counters and scratch.
+struct Run<'a> {
+    settings: &'a Uzawa,
+    l: &'a Lagrangian<'a>,
+    /// The step ρ/L.
+    rho: f64,
+    /// M, factorised.
+    chol: SparseCholesky,
+    /// The exact projection onto K_h in diag(M, m); `None` without contact rows, where step
+    /// (ii) is a plain gradient step.
+    proj: Option<MetricProjection>,
+    state: State,
+    watch: Watch,
+    count: Counts,
+    work: Scratch,
+    timer: PhaseTimer,
+    /// The KKT residual of every iterate.
+    history: History,
+}
+
+impl<'a> Run<'a> {
+    /// Stage 0 (theory §4.1): M assembled and factorised once, the projection onto K_h set up,
+    /// the iterate from `start` (zero if `None`, μ = ρλ) and the scratch.
+    fn set_up(
+        settings: &'a Uzawa,
+        l: &'a Lagrangian<'a>,
+        start: Option<&Start>,
+        monitor: &mut dyn Monitor,
+    ) -> Result<Self, SolveError> {
+        let mut timer = PhaseTimer::default();
+        let mut count = Counts::default();
+        let (metric, lip) = settings.metric(l.data.elasticity);
+        let rho = settings.rho / lip;
+        let mut chol = Self::factorise_metric(l, &metric, monitor, &mut timer, &mut count)?;
         let rows = l.data.rows;
-        let mut proj = if rows.n_rows() > 0 {
+        let proj = if rows.n_rows() > 0 {
             monitor.phase("contact set-up");
             Some(timer.time("contact set-up", || {
-                MetricProjection::new(rows, &mut chol, self.extra_metric, rho, l.data.load, "uzawa")
+                MetricProjection::new(rows, &mut chol, settings.extra_metric, rho, l.data.load, "uzawa")
             })?)
         } else {
             None
         };
+        Ok(Self {
+            settings,
+            l,
+            rho,
+            chol,
+            proj,
+            state: Self::start(l, start, rho),
+            watch: Watch { best: (f64::INFINITY, 0), smallest_step: f64::INFINITY, first_step: 0.0, last_step: 0.0 },
+            count,
+            work: Scratch::new(l),
+            timer,
+            history: History::new("uzawa", settings.tol),
+        })
+    }
 
-        let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
-        let mut u = vec![0.0; n];
-        let mut v = vec![0.0; ne];
-        let mut mu = vec![0.0; nr];
-        let mut lambda = vec![0.0; nr];
+    /// M = (metric ε(·), ε(·)) assembled on L's pattern, analysed and factorised once (theory
+    /// §4.1: one triangular solve pair per iteration).
+    fn factorise_metric(
+        l: &Lagrangian<'_>,
+        metric: &SymOp,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+        count: &mut Counts,
+    ) -> Result<SparseCholesky, SolveError> {
+        monitor.phase("assembly");
+        let m_values = timer.time("assembly", || l.stiffness(Material::Uniform(metric)));
+        monitor.phase("factorisation");
+        timer.time("factorisation", || {
+            let mut chol = linear::analyse(l.pattern(), "Uzawa metric", "uzawa", &mut count.symbolic_analyses)?;
+            chol.factorise(&m_values).in_solver("uzawa")?;
+            count.factorisations += 1;
+            Ok(chol)
+        })
+    }
+
+    /// The iterate (u⁰, V⁰, λ⁰): zero, or the previous load step's (theory §11.2), with the
+    /// projection's multipliers μ = ρλ.
+    fn start(l: &Lagrangian<'_>, start: Option<&Start>, rho: f64) -> State {
+        let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.data.rows.n_rows());
+        let mut s = State {
+            u: vec![0.0; n],
+            v: vec![0.0; ne],
+            mu: vec![0.0; nr],
+            lambda: vec![0.0; nr],
+            stress: StressField::new(l.n_points(), l.data.hardening_dim()),
+            it: 0,
+        };
         if let Some(st) = start {
-            u.copy_from_slice(&st.u);
-            v.copy_from_slice(&st.extras);
-            lambda.copy_from_slice(&st.lambda);
-            // μ = ρλ: the multipliers of the projection step (λ = μ/ρ below)
-            for (m, l) in mu.iter_mut().zip(&st.lambda) {
+            s.u.copy_from_slice(&st.u);
+            s.v.copy_from_slice(&st.extras);
+            s.lambda.copy_from_slice(&st.lambda);
+            for (m, l) in s.mu.iter_mut().zip(&st.lambda) {
                 *m = rho * l;
             }
         }
-        let mut z = vec![0.0; n];
-        let mut ws = Workspace::new(l);
-        let mut stress = StressField::new(l.n_points(), l.data.hardening_dim());
-        let mut history = Vec::new();
-        let mut solves = 0usize;
-        // Divergence: for ρ < 2 the iteration map is averaged in diag(M, m), so the step length
-        // δₙ = ‖xⁿ⁺¹ − xⁿ‖ never increases; above the bound it grows like |1 − ρ|ⁿ. (The relative
-        // KKT residual cannot tell: it saturates near 1 when the iterate blows up.)
-        let mut best = (f64::INFINITY, 0usize);
-        let mut smallest_step = f64::INFINITY;
-        let mut first_step = 0.0;
-        let (mut u_prev, mut v_prev) = (vec![0.0; n], vec![0.0; ne]);
-        let mut scratch_v = vec![0.0; ne];
-        let mut return_mappings = 0usize;
-        monitor.phase("iterations");
-        let mut it = 0;
-        let mut last_step = 0.0;
-        let (stop, kkt) = loop {
-            // (i) σ̂ⁿ⁺¹ = P_D(Cε(uⁿ), 0); the KKT residual of the iterate (uⁿ, Vⁿ, σ̂ⁿ⁺¹, λⁿ)
-            let law = timer.time("local law", || {
-                l.strain(&u, &mut ws.eps);
-                let law = l.data.local_law(&ws.eps, &mut stress, None);
-                ws.stress.clone_from(&stress);
-                law
+        s
+    }
+
+    /// Stage 1 (theory §4.1 step 1): σ̂ⁿ⁺¹ = P_D(Cε(uⁿ), 0) at every point, then the KKT
+    /// residuals of the iterate (uⁿ, Vⁿ, σ̂ⁿ⁺¹, λⁿ) (theory §3.4); `ws.force` holds Bᵀσ̂ⁿ⁺¹ − f_u
+    /// afterwards.
+    fn local_law(&mut self) -> KktResiduals {
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        let it = IterateMut { u: &s.u, extras: &s.v, lambda: &s.lambda, stress: &mut s.stress };
+        let (projected, kkt) = local_law_and_residual(l, it, None, &mut w.ws, &mut self.timer);
+        self.count.return_mappings += projected;
+        kkt
+    }
+
+    /// Stage 2 (theory §4.1, stopping): converged when the residual `r` meets `tol`; an error
+    /// when the step length grew (the divergence guard); else out of budget, or stagnated when
+    /// the best residual has not improved for max([`STAGNATION_WINDOW`], n/4) iterations; else
+    /// `None` (go on).
+    fn stop(&mut self, r: f64) -> Result<Option<StopReason>, SolveError> {
+        let (it, wt) = (self.state.it, &mut self.watch);
+        if r <= self.settings.tol {
+            return Ok(Some(StopReason::Converged));
+        }
+        if r < wt.best.0 {
+            wt.best = (r, it);
+        }
+        self.divergence_guard(r)?;
+        Ok(if it >= self.settings.max_iter {
+            Some(StopReason::MaxIterations)
+        } else if it - self.watch.best.1 > STAGNATION_WINDOW.max(it / 4) {
+            Some(StopReason::Stagnated)
+        } else {
+            None
+        })
+    }
+
+    /// The divergence guard (theory §4.1, stopping): from iteration [`DIVERGENCE_WARM_UP`], a
+    /// step length [`DIVERGENCE_GROWTH`] times the smallest one since the first (floored at
+    /// [`STEP_ROUND_OFF`] of the first) is an error with a hint on ρ.
+    fn divergence_guard(&self, r: f64) -> Result<(), SolveError> {
+        let (it, wt) = (self.state.it, &self.watch);
+        if it >= DIVERGENCE_WARM_UP
+            && wt.smallest_step < f64::INFINITY
+            && wt.last_step > DIVERGENCE_GROWTH * wt.smallest_step.max(STEP_ROUND_OFF * wt.first_step)
+        {
+            return Err(SolveError::Diverged {
+                solver: "uzawa".into(),
+                iteration: it,
+                residual: r,
+                hint: self.settings.divergence_hint(),
             });
-            return_mappings += law.projected;
-            let kkt = timer.time("residual", || {
-                kkt_with_stress(l, &Iterate { u: &u, extras: &v, stress: &stress, lambda: &lambda }, &mut ws)
-            });
-            let r = kkt.max();
-            residual::record("uzawa", it, r, self.tol, &mut history, monitor)?;
-            if r <= self.tol {
-                break (StopReason::Converged, kkt);
+        }
+        Ok(())
+    }
+
+    /// Stage 3 (theory §4.1 step 2, the gradient step): z = uⁿ − ρM⁻¹Bᵀσ̂ⁿ⁺¹ by one triangular
+    /// solve pair with the factorised M (`ws.force` holds Bᵀσ̂ⁿ⁺¹).
+    fn gradient_step(&mut self) {
+        let (rho, s, w, chol) = (self.rho, &self.state, &mut self.work, &mut self.chol);
+        self.timer.time("linear solves", || {
+            for (zi, fi) in w.z.iter_mut().zip(&w.ws.force) {
+                *zi = -rho * fi;
             }
-            if r < best.0 {
-                best = (r, it);
+            chol.solve(&mut w.z);
+            for (zi, ui) in w.z.iter_mut().zip(&s.u) {
+                *zi += ui;
             }
-            if it >= DIVERGENCE_WARM_UP
-                && smallest_step < f64::INFINITY
-                && last_step > DIVERGENCE_GROWTH * smallest_step.max(STEP_ROUND_OFF * first_step)
-            {
-                return Err(SolveError::Diverged {
-                    solver: "uzawa".into(),
-                    iteration: it,
-                    residual: r,
-                    hint: self.divergence_hint(),
-                });
+        });
+        self.count.solves += 1;
+    }
+
+    /// Stage 4 (theory §4.1 step 2, the multipliers): (uⁿ⁺¹, Vⁿ⁺¹) the projection of z onto
+    /// K_h in diag(M, m), exactly, with its multipliers μ ≥ 0 (u = z without contact rows).
+    fn project(&mut self) -> Result<(), SolveError> {
+        let (rows, s, w, chol) = (self.l.data.rows, &mut self.state, &mut self.work, &mut self.chol);
+        w.u_prev.clone_from(&s.u);
+        w.v_prev.clone_from(&s.v);
+        self.count.solves += match &mut self.proj {
+            Some(p) => self.timer.time("projection", || p.project(rows, chol, &w.z, &mut s.v, &mut s.u, &mut s.mu))?,
+            None => {
+                s.u.copy_from_slice(&w.z);
+                0
             }
-            if it >= self.max_iter {
-                break (StopReason::MaxIterations, kkt);
-            }
-            if it - best.1 > STAGNATION_WINDOW.max(it / 4) {
-                break (StopReason::Stagnated, kkt);
-            }
-            // (ii) z = uⁿ − ρ M⁻¹ Bᵀσⁿ⁺¹ (ws.force holds Bᵀσⁿ⁺¹), then project onto K_h in M
-            timer.time("linear solves", || {
-                for (zi, fi) in z.iter_mut().zip(&ws.force) {
-                    *zi = -rho * fi;
-                }
-                chol.solve(&mut z);
-                for (zi, ui) in z.iter_mut().zip(&u) {
-                    *zi += ui;
-                }
-            });
-            solves += 1;
-            u_prev.clone_from(&u);
-            v_prev.clone_from(&v);
-            solves += match &mut proj {
-                Some(p) => timer.time("projection", || p.project(rows, &mut chol, &z, &mut v, &mut u, &mut mu))?,
-                None => {
-                    u.copy_from_slice(&z);
-                    0
-                }
-            };
-            // δₙ² = Δuᵀ M Δu + Σ m ΔV², with M Δu = Gᵀμ − ρ Bᵀσ (z is free again: it takes Gᵀμ)
-            z.iter_mut().for_each(|x| *x = 0.0);
-            rows.add_transpose(&mu, &mut z, &mut scratch_v);
-            let du_m_du: f64 = (0..n).map(|j| (u[j] - u_prev[j]) * (z[j] - rho * ws.force[j])).sum();
-            let weights = proj.as_ref().map_or(&[][..], |p| p.extra_weights());
-            let dv_m_dv: f64 = weights.iter().zip(v.iter().zip(&v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
-            last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
-            if it == 0 {
-                first_step = last_step;
-            } else {
-                smallest_step = smallest_step.min(last_step);
-            }
-            for (l, m) in lambda.iter_mut().zip(&mu) {
-                *l = m / rho;
-            }
-            it += 1;
         };
+        Ok(())
+    }
+
+    /// Stage 5 (theory §4.1, stopping): the step length δₙ² = Δuᵀ M Δu + Σ m ΔV², with
+    /// M Δu = Gᵀμ − ρ Bᵀσ̂ⁿ⁺¹ (z is free again: it takes Gᵀμ), for the divergence guard.
+    fn measure_step(&mut self) {
+        let (rho, s, w, wt) = (self.rho, &self.state, &mut self.work, &mut self.watch);
+        w.z.iter_mut().for_each(|x| *x = 0.0);
+        self.l.data.rows.add_transpose(&s.mu, &mut w.z, &mut w.ht_mu);
+        let du_m_du: f64 = (0..s.u.len()).map(|j| (s.u[j] - w.u_prev[j]) * (w.z[j] - rho * w.ws.force[j])).sum();
+        let weights = self.proj.as_ref().map_or(&[][..], |p| p.extra_weights());
+        let dv_m_dv: f64 = weights.iter().zip(s.v.iter().zip(&w.v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
+        wt.last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
+        if s.it == 0 {
+            wt.first_step = wt.last_step;
+        } else {
+            wt.smallest_step = wt.smallest_step.min(wt.last_step);
+        }
+    }
+
+    /// Stage 6 (theory §4.1): the contact forces λⁿ⁺¹ = μ/ρ; the next iteration.
+    fn advance(&mut self) {
+        let s = &mut self.state;
+        for (l, m) in s.lambda.iter_mut().zip(&s.mu) {
+            *l = m / self.rho;
+        }
+        s.it += 1;
+    }
+
+    /// The solution and its report (theory §5): the iterate, `stop` and the last residuals
+    /// `kkt`, the counters and the phases.
+    fn finish(self, stop: StopReason, kkt: KktResiduals) -> Solution {
+        let (c, proj) = (&self.count, self.proj.as_ref());
         let mut counters = BTreeMap::new();
-        counters.insert("rho".into(), self.rho);
-        counters.insert("rho_bound".into(), RHO_BOUND);
-        counters.insert("symbolic_analyses".into(), symbolic_analyses as f64);
-        counters.insert("factorisations".into(), factorisations as f64);
-        counters.insert("setup_solves".into(), proj.as_ref().map_or(0, |p| p.setup_solves) as f64);
-        counters.insert("triangular_solve_pairs".into(), solves as f64);
-        counters.insert("qp_factorisations".into(), proj.as_ref().map_or(0, |p| p.qp_work().1) as f64);
-        counters.insert("return_mappings".into(), return_mappings as f64);
-        counters.insert("contact_structures".into(), proj.is_some() as u8 as f64);
-        counters.insert(
-            "delassus_columns_kept".into(),
-            proj.as_ref().is_some_and(|p| p.keeps_delassus_columns()) as u8 as f64,
-        );
-        let report = SolveReport {
-            solver: "uzawa".into(),
-            converged: stop == StopReason::Converged,
-            stop_reason: stop,
-            iterations: it,
-            tolerance: self.tol,
-            kkt,
-            residual_history: history,
-            phases: timer.into_phases(),
-            counters,
-            warnings: Vec::new(),
-        };
-        Ok(Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() })
+        let mut put = |k: &str, x: f64| counters.insert(k.to_string(), x);
+        put("rho", self.settings.rho);
+        put("rho_bound", RHO_BOUND);
+        put("symbolic_analyses", c.symbolic_analyses as f64);
+        put("factorisations", c.factorisations as f64);
+        put("setup_solves", proj.map_or(0, |p| p.setup_solves) as f64);
+        put("triangular_solve_pairs", c.solves as f64);
+        put("qp_factorisations", proj.map_or(0, |p| p.qp_work().1) as f64);
+        put("return_mappings", c.return_mappings as f64);
+        put("contact_structures", proj.is_some() as u8 as f64);
+        put("delassus_columns_kept", proj.is_some_and(|p| p.keeps_delassus_columns()) as u8 as f64);
+        let State { u, v, lambda, stress, it, .. } = self.state;
+        let report = self.history.report(stop, it, kkt, self.timer.into_phases(), counters);
+        Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }
     }
 }
 

@@ -2,13 +2,13 @@
 //! operators and data of L — independently of the solver that produced the iterate.
 
 use crate::problem::comm::Comm;
-use crate::problem::energies::hardening_increment;
 use crate::problem::elasticity::Elasticity;
+use crate::problem::energies::hardening_increment;
 use crate::problem::fields::PlasticState;
 use crate::problem::lagrangian::{Iterate, Lagrangian, Workspace};
 use crate::problem::operators::ElementOperators;
-use crate::problem::tensor::Sym;
 use crate::problem::stresses::energy_inner;
+use crate::problem::tensor::Sym;
 use rayon::prelude::*;
 use serde::Serialize;
 

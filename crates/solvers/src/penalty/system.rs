@@ -1,0 +1,354 @@
+//! The Newton system of J_μ (theory §4.3): the penalty scales, J_μ itself, and the step of the
+//! contact model — an active-set loop of Newton steps on the fixed pattern of L, the extras
+//! coupled through a Schur complement free of cancellation ([`PenaltySystem`]).
+
+use super::{MODEL_SWEEPS, non_finite};
+use crate::linear::{self, InSolver};
+use crate::row_basis::RowBasis;
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use saddle_core::SymOp;
+use saddle_core::error::ParameterError;
+use saddle_core::linalg::SparseCholesky;
+use saddle_core::problem::energies::energy;
+use saddle_core::problem::lagrangian::{Lagrangian, Workspace};
+use saddle_core::problem::operators::Material;
+use saddle_core::problem::solver::SolveError;
+
+/// The penalty scales of J_μ and its Newton system.
+///
+/// For a set A of rows, with D_A = diag(k_i a_i²) at the slave dofs, z_s = −g_i/a_i and
+/// `P_k[s] = H_ik/a_i` on A, the u-block is A = K' + D_A (K' = K_t + μK_el) and the coupling to
+/// the extras is D_A P. Since `A⁻¹D_A x = x − A⁻¹K'x`, eliminating du needs
+/// `[y⁰ Y] = A⁻¹[r + K'z, K'P]` (r = Bᵀ(σ + μCε), right-hand sides of moderate size), and then
+///
+/// ```text
+/// S = μ diag(k_V) + Pᵀ D_A Y,   S dV = f − μ k_V V + Pᵀ D_A y⁰,   du = z − y⁰ − (P − Y) dV,
+/// ```
+///
+/// free of the cancellation of `C − BᵀA⁻¹B` (two terms of size 1/μ whose difference is of size 1).
+///
+/// `condition_estimate` is max/min of the diagonal of the last factorised u-block: a lower
+/// bound of its spectral condition number, which the penalty raises by ~1/μ.
+pub struct PenaltySystem {
+    /// μ.
+    mu: f64,
+    /// The rows' coordinates (theory §8): each row acts on one coordinate s_i, a_i = G_{i s_i}.
+    slaves: RowBasis,
+    /// k_i = (K_el)_{ss} / (μ a_i²).
+    pub(super) k: Vec<f64>,
+    /// k_V,k = E · |Ω|^{1/3} · mean_i H_ik² over the rows touching extra k.
+    pub(super) k_v: Vec<f64>,
+    /// The elastic stiffness C.
+    pub(super) c_el: SymOp,
+    /// The Cholesky factorisation of K' + D_A, analysed once.
+    chol: SparseCholesky,
+    /// K' = K_t + μK_el on L's pattern.
+    pub(super) kprime: Vec<f64>,
+    /// TᵀK'T in the rows' coordinates, and Tᵀr (empty when T = I).
+    kprime_t: Vec<f64>,
+    r_t: Vec<f64>,
+    /// K' + D_A, factorised.
+    hess: Vec<f64>,
+    /// n × (1 + n_extras): [z, P_1, …].
+    cols: Vec<f64>,
+    /// n × (1 + n_extras): [r + K'z, K'P_1, …], then [y⁰, Y_1, …].
+    kcols: Vec<f64>,
+    /// The model's next active set.
+    next: Vec<bool>,
+    /// Symbolic analyses of L's pattern so far (one, in [`PenaltySystem::new`]).
+    pub symbolic_analyses: usize,
+    /// Numeric factorisations so far.
+    pub factorisations: usize,
+    /// Triangular solve pairs so far.
+    pub solves: usize,
+    /// max/min diagonal of the last factorised matrix.
+    pub condition_estimate: f64,
+}
+
+impl std::fmt::Debug for PenaltySystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PenaltySystem").field("mu", &self.mu).field("rows", &self.k.len()).finish()
+    }
+}
+
+/// The current iterate as the Newton step sees it.
+pub(super) struct Point<'a> {
+    /// Bᵀ(σ + μCε) − f_u: the gradient of the smooth part.
+    pub r: &'a [f64],
+    /// The carried gaps g.
+    pub gap: &'a [f64],
+    /// V.
+    pub v: &'a [f64],
+}
+
+/// The Newton step and the gaps it leads to.
+pub(super) struct Direction<'a> {
+    /// du.
+    pub du: &'a mut [f64],
+    /// dV.
+    pub dv: &'a mut [f64],
+    /// ĝ = g(u + du, V + dV).
+    pub g_next: &'a mut [f64],
+}
+
+impl PenaltySystem {
+    /// The penalty scales from the elastic stiffness diagonal, and the symbolic analysis of L's
+    /// pattern (once).
+    pub fn new(l: &Lagrangian<'_>, mu: f64) -> Result<Self, SolveError> {
+        let rows = l.data.rows;
+        let slaves = RowBasis::new(rows, l.n_dofs(), l.pattern(), "penalty")?;
+        let c_el = l.data.elasticity.stiffness_matrix();
+        let mut kprime = l.stiffness(Material::Uniform(&c_el));
+        let k = contact_stiffness(&slaves, l, &kprime, mu)?;
+        let k_v = extra_stiffness(l)?;
+        let (n, ne) = (l.n_dofs(), l.n_extras());
+        kprime.iter_mut().for_each(|x| *x = 0.0);
+        let mut symbolic_analyses = 0;
+        let pattern = slaves.pattern(l.pattern());
+        let chol = linear::analyse(pattern, "penalty Hessian", "penalty", &mut symbolic_analyses)?;
+        let nnz = pattern.nnz();
+        let transformed = !slaves.is_identity();
+        Ok(Self {
+            mu,
+            slaves,
+            k,
+            k_v,
+            c_el,
+            chol,
+            hess: vec![0.0; nnz],
+            kprime_t: if transformed { vec![0.0; nnz] } else { Vec::new() },
+            r_t: if transformed { vec![0.0; n] } else { Vec::new() },
+            kprime,
+            cols: vec![0.0; n * (1 + ne)],
+            kcols: vec![0.0; n * (1 + ne)],
+            next: vec![false; rows.n_rows()],
+            symbolic_analyses,
+            factorisations: 0,
+            solves: 0,
+            condition_estimate: f64::NAN,
+        })
+    }
+
+    /// χ_i = k_i g_i⁻.
+    pub(super) fn pressures(&self, gap: &[f64], chi: &mut [f64]) {
+        for ((c, g), k) in chi.iter_mut().zip(gap).zip(&self.k) {
+            *c = k * (-g).max(0.0);
+        }
+    }
+
+    /// J_μ(u, V) with the gaps `gap` = g(u, V); `ws.eps` holds ε(u) afterwards.
+    pub(super) fn energy(&self, l: &Lagrangian<'_>, u: &[f64], v: &[f64], gap: &[f64], ws: &mut Workspace) -> f64 {
+        let j = energy(l, u, v, ws);
+        let c = &self.c_el;
+        let reg: f64 = ws.eps.par_iter().zip(l.weights().par_iter()).map(|(e, w)| w * e.dot(&(c * e))).sum();
+        let pen: f64 = gap.iter().zip(&self.k).map(|(g, k)| k * (-g).max(0.0).powi(2)).sum();
+        let reg_v: f64 = self.k_v.iter().zip(v).map(|(k, v)| k * v * v).sum();
+        j + 0.5 * (self.mu * (reg + reg_v) + pen)
+    }
+
+    /// The Newton step of the contact model (module docs, step 6) with K' in `self.kprime`: an
+    /// active-set loop from `model`, which holds the final set on return. Returns the number of
+    /// sweeps and whether the set settled; if not, and `descent` asks for a descent direction of
+    /// J_μ, d is the plain semismooth Newton direction (A = {g < 0}), else the last sweep's.
+    pub(super) fn model_step(
+        &mut self,
+        l: &Lagrangian<'_>,
+        model: &mut [bool],
+        at: &Point<'_>,
+        d: &mut Direction<'_>,
+        descent: bool,
+    ) -> Result<(usize, bool), SolveError> {
+        if !self.slaves.is_identity() {
+            // K' and r in the rows' coordinates, once for all the sweeps
+            self.slaves.stiffness(&self.kprime, &mut self.kprime_t);
+            self.slaves.force_to_coordinates(at.r, &mut self.r_t);
+        }
+        for sweep in 1..=MODEL_SWEEPS {
+            self.step(l, model, at, d)?;
+            let mut settled = true;
+            for ((next, g), a) in self.next.iter_mut().zip(d.g_next.iter()).zip(model.iter()) {
+                *next = *g < 0.0;
+                settled &= *next == *a;
+            }
+            if settled {
+                return Ok((sweep, true));
+            }
+            if sweep == MODEL_SWEEPS && !descent {
+                return Ok((sweep, false));
+            }
+            model.copy_from_slice(&self.next);
+        }
+        for (a, g) in model.iter_mut().zip(at.gap) {
+            *a = *g < 0.0;
+        }
+        self.step(l, model, at, d)?;
+        Ok((MODEL_SWEEPS + 1, false))
+    }
+
+    /// The Newton step for the quadratic model in which the rows `active` carry ½k_i g_i²
+    /// (formulas in the type's docs), and the gaps ĝ after it, in stages: the right-hand sides,
+    /// the factorisation and solves, dV from the extras' Schur complement, du, ĝ.
+    fn step(
+        &mut self,
+        l: &Lagrangian<'_>,
+        active: &[bool],
+        at: &Point<'_>,
+        d: &mut Direction<'_>,
+    ) -> Result<(), SolveError> {
+        self.right_hand_sides(l, active, at);
+        self.factorise_and_solve(l, active)?;
+        if l.n_extras() > 0 {
+            self.extras_step(l, active, at, d.dv)?;
+        }
+        self.displacement_step(d);
+        self.next_gaps(l, active, at, d);
+        // du = T dy
+        self.slaves.displacement_from_coordinates(d.du);
+        Ok(())
+    }
+
+    /// The columns [z, P] on the active slave dofs (z_s = −g_i/a_i, P_k[s] = H_ik/a_i) and
+    /// [r + K'z, K'P], with K' and r in the rows' coordinates (transformed once per Newton step,
+    /// [`Self::model_step`]).
+    fn right_hand_sides(&mut self, l: &Lagrangian<'_>, active: &[bool], at: &Point<'_>) {
+        let p = self.slaves.pattern(l.pattern());
+        let rows = l.data.rows;
+        let n = l.n_dofs();
+        let (kprime, r): (&[f64], &[f64]) =
+            if self.slaves.is_identity() { (&self.kprime, at.r) } else { (&self.kprime_t, &self.r_t) };
+        self.cols.iter_mut().for_each(|x| *x = 0.0);
+        for i in (0..rows.n_rows()).filter(|&i| active[i]) {
+            let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
+            self.cols[s] = -at.gap[i] / a;
+            for (kx, h) in rows.extra_row(i).iter().enumerate() {
+                self.cols[(1 + kx) * n + s] = h / a;
+            }
+        }
+        for c in 0..1 + l.n_extras() {
+            p.matvec(kprime, &self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
+        }
+        for (x, ri) in self.kcols[..n].iter_mut().zip(r) {
+            *x += ri;
+        }
+    }
+
+    /// A = K' + D_A on the fixed pattern, its condition estimate, its numeric factorisation,
+    /// and [y⁰ Y] = A⁻¹[r + K'z, K'P] in place of the right-hand sides.
+    fn factorise_and_solve(&mut self, l: &Lagrangian<'_>, active: &[bool]) -> Result<(), SolveError> {
+        let cp = self.slaves.pattern(l.pattern()).col_ptr();
+        let n = l.n_dofs();
+        self.hess.copy_from_slice(if self.slaves.is_identity() { &self.kprime } else { &self.kprime_t });
+        for i in (0..l.data.rows.n_rows()).filter(|&i| active[i]) {
+            self.hess[cp[self.slaves.dof[i]]] += self.k[i] * self.slaves.coef[i].powi(2);
+        }
+        let (dmin, dmax) = cp[..n].iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &q| {
+            let x = self.hess[q];
+            (lo.min(x), hi.max(x))
+        });
+        self.condition_estimate = dmax / dmin;
+        self.chol.factorise(&self.hess).in_solver("penalty")?;
+        self.factorisations += 1;
+        let nc = 1 + l.n_extras();
+        self.chol.solve_columns(&mut self.kcols, nc);
+        self.solves += nc;
+        Ok(())
+    }
+
+    /// dV from the extras' Schur complement S dV = f − μ k_V V + Pᵀ D_A y⁰, S = μ diag(k_V) +
+    /// Pᵀ D_A Y (symmetrised), by a dense LU.
+    fn extras_step(
+        &self,
+        l: &Lagrangian<'_>,
+        active: &[bool],
+        at: &Point<'_>,
+        dv: &mut [f64],
+    ) -> Result<(), SolveError> {
+        let rows = l.data.rows;
+        let (n, ne) = (l.n_dofs(), l.n_extras());
+        let (y0, y) = self.kcols.split_at(n);
+        let mut s = DMatrix::<f64>::zeros(ne, ne);
+        let mut b = DVector::<f64>::zeros(ne);
+        for kx in 0..ne {
+            s[(kx, kx)] = self.mu * self.k_v[kx];
+            b[kx] = l.data.load[kx] - self.mu * self.k_v[kx] * at.v[kx];
+        }
+        for i in (0..rows.n_rows()).filter(|&i| active[i]) {
+            let (sd, ka) = (self.slaves.dof[i], self.k[i] * self.slaves.coef[i]);
+            for (kx, h) in rows.extra_row(i).iter().enumerate() {
+                b[kx] += ka * h * y0[sd];
+                for ly in 0..ne {
+                    s[(kx, ly)] += ka * h * y[ly * n + sd];
+                }
+            }
+        }
+        let s = (&s + s.transpose()) * 0.5;
+        let sol = s.lu().solve(&b).filter(|x| x.iter().all(|x| x.is_finite()));
+        let sol = sol.ok_or_else(|| non_finite("the extras' Schur complement", self.factorisations))?;
+        dv.copy_from_slice(sol.as_slice());
+        Ok(())
+    }
+
+    /// du = z − y⁰ − (P − Y) dV, in the rows' coordinates.
+    fn displacement_step(&self, d: &mut Direction<'_>) {
+        let n = d.du.len();
+        let (y0, y) = self.kcols.split_at(n);
+        for j in 0..n {
+            let mut x = self.cols[j] - y0[j];
+            for (kx, dv) in d.dv.iter().enumerate() {
+                x -= (self.cols[(1 + kx) * n + j] - y[kx * n + j]) * dv;
+            }
+            d.du[j] = x;
+        }
+    }
+
+    /// ĝ: on the active rows from the model, ĝ_i = g_i + a_i du_s + H_i dV = −a_i(y⁰ − Y dV)_s,
+    /// which is of size χ/k and would be lost in the rounding of g + G du + H dV at μ ≲ 1e-14;
+    /// on the others by the increment.
+    fn next_gaps(&self, l: &Lagrangian<'_>, active: &[bool], at: &Point<'_>, d: &mut Direction<'_>) {
+        let rows = l.data.rows;
+        let n = l.n_dofs();
+        let (y0, y) = self.kcols.split_at(n);
+        for (i, gn) in d.g_next.iter_mut().enumerate() {
+            let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
+            *gn = if active[i] {
+                -a * (y0[s] - d.dv.iter().enumerate().map(|(kx, dv)| y[kx * n + s] * dv).sum::<f64>())
+            } else {
+                at.gap[i] + a * d.du[s] + rows.extra_row(i).iter().zip(d.dv.iter()).map(|(h, x)| h * x).sum::<f64>()
+            };
+        }
+    }
+}
+
+/// k_i = (K_el)_{s_i s_i} / (μ a_i²) from the assembled elastic stiffness `k_el` (module docs);
+/// an error naming `solver.mu` if one overflows.
+fn contact_stiffness(slaves: &RowBasis, l: &Lagrangian<'_>, k_el: &[f64], mu: f64) -> Result<Vec<f64>, SolveError> {
+    let k: Vec<f64> = slaves.row_stiffness(l.pattern(), k_el).iter().map(|k| k / mu).collect();
+    if let Some(i) = k.iter().position(|k| !k.is_finite()) {
+        let why = format!("is too small: the penalty stiffness (elastic stiffness / mu) of contact row {i} overflows");
+        return Err(ParameterError::new("solver.mu", mu, why).into());
+    }
+    Ok(k)
+}
+
+/// k_V,k = E · |Ω|^{1/3} · mean_i H_ik² over the rows touching extra k (module docs); an error
+/// if a loaded extra has no row.
+fn extra_stiffness(l: &Lagrangian<'_>) -> Result<Vec<f64>, SolveError> {
+    let rows = l.data.rows;
+    let body_stiffness = l.data.elasticity.young * l.weights().iter().sum::<f64>().cbrt();
+    let k_v: Vec<f64> = (0..l.n_extras())
+        .map(|kx| {
+            let h2: Vec<f64> = (0..rows.n_rows()).map(|i| rows.extra_row(i)[kx].powi(2)).filter(|h| *h > 0.0).collect();
+            if h2.is_empty() { 0.0 } else { body_stiffness * h2.iter().sum::<f64>() / h2.len() as f64 }
+        })
+        .collect();
+    for (kx, kv) in k_v.iter().enumerate() {
+        if *kv <= 0.0 && l.data.load[kx] != 0.0 {
+            return Err(SolveError::Unsupported {
+                solver: "penalty".into(),
+                message: format!("extra unknown {kx} carries a load but no contact row acts on it"),
+            });
+        }
+    }
+    Ok(k_v)
+}
