@@ -5,7 +5,7 @@
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use saddle::app::run::solve_and_write_with;
-use saddle::app::setup::{RunError, load_with};
+use saddle::app::setup::{Loaded, RunError, load_with};
 use saddle::app::sweep;
 use saddle::io::outdir;
 use saddle::io::scene::element_by_type;
@@ -254,7 +254,6 @@ fn run(
     element: Option<String>,
     quiet: bool,
 ) -> Result<ExitCode, RunError> {
-    let out = out.unwrap_or_else(|| PathBuf::from("out").join(scene.file_stem().unwrap_or_default()));
     let element = element.as_deref().map(element_by_type).transpose()?;
     let loaded = load_with(&scene, solver.as_deref(), |s| {
         if let Some(e) = element {
@@ -271,9 +270,20 @@ fn run(
             loaded.solver.name()
         );
     }
+    run_loaded(&scene, &loaded, out, quiet)
+}
+
+/// Solves and writes a loaded scene, with a progress bar unless `quiet`; prints the summary.
+fn run_loaded(
+    scene: &std::path::Path,
+    loaded: &Loaded,
+    out: Option<PathBuf>,
+    quiet: bool,
+) -> Result<ExitCode, RunError> {
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(scene.file_stem().unwrap_or_default()));
     let mut bar = Bar::new(quiet);
     let lines = bar.bar.clone();
-    let result = solve_and_write_with(&loaded, &out, &mut bar, &mut |line| {
+    let result = solve_and_write_with(loaded, &out, &mut bar, &mut |line| {
         if quiet {
         } else if lines.is_hidden() {
             eprintln!("  {line}");
@@ -283,6 +293,12 @@ fn run(
     });
     bar.bar.finish_and_clear();
     let outcome = result?;
+    if !loaded.ranks.is_root() {
+        return Ok(if outcome.summary.converged { ExitCode::SUCCESS } else { ExitCode::from(2) });
+    }
+    if let Some(n) = outcome.summary.ranks {
+        println!("  {:<22} {n}", "ranks");
+    }
     print_summary(&outcome.summary);
     if let Some(p) = &outcome.summary.load_path {
         let stopped = if p.completed { "" } else { ", stopped" };
@@ -383,6 +399,10 @@ fn bench_meshes(_: PathBuf, _: PathBuf, _: Vec<PathBuf>, _: Vec<PathBuf>) -> Res
 /// Exit statuses: 0 done (converged), 1 bad input or usage (the command line included) or any
 /// other error, 2 stopped without converging with the outputs written.
 fn main() -> ExitCode {
+    #[cfg(feature = "mpi")]
+    if saddle::app::mpi::launched_by_mpirun() {
+        return mpi_main();
+    }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -411,6 +431,62 @@ fn main() -> ExitCode {
     };
     result.unwrap_or_else(|e| {
         eprintln!("error: {e}");
+        ExitCode::FAILURE
+    })
+}
+
+/// `saddle` under `mpirun` (feature `mpi`, theory §12): MPI and PETSc initialised with PETSc's
+/// words of the command line (`-ksp_view`, `-log_view`, …; [`saddle::app::mpi::split_petsc_args`]),
+/// then `saddle run` on every rank. A solver that runs on one rank only runs as on one machine
+/// when there is one rank. Every rank prints an error it ends with; the progress and the summary
+/// are rank 0's.
+#[cfg(feature = "mpi")]
+fn mpi_main() -> ExitCode {
+    use saddle::app::mpi;
+    let (ours, petsc) = mpi::split_petsc_args(std::env::args().collect());
+    let session = match saddle_parallel::saddle_mpi::Petsc::initialize_with_args(petsc) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: cannot initialise MPI and PETSc: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (rank, size) = (session.rank(), session.size());
+    let cli = match Cli::try_parse_from(ours) {
+        Ok(cli) => cli,
+        Err(e) => {
+            if rank == 0 {
+                let _ = e.print();
+            }
+            return ExitCode::FAILURE;
+        }
+    };
+    let Command::Run { scene, out, solver, discretisation, quiet } = cli.command else {
+        eprintln!("error: under mpirun saddle runs `saddle run` only; run the other commands without mpirun");
+        return ExitCode::FAILURE;
+    };
+    let quiet = quiet || rank != 0;
+    let result = match mpi::load(&session, &scene, solver.as_deref(), discretisation.as_deref()) {
+        // one rank and a solver that runs on one rank only: as on one machine
+        Ok(loaded) if size == 1 && !loaded.solver.runs_distributed() => run(scene, out, solver, discretisation, quiet),
+        Ok(loaded) => {
+            if !quiet {
+                eprintln!(
+                    "{}: {} ranks, {} dofs on rank 0, solver {}",
+                    scene.display(),
+                    size,
+                    loaded.problem.element.n_dofs(),
+                    loaded.solver.name()
+                );
+            }
+            run_loaded(&scene, &loaded, out, quiet)
+        }
+        Err(e) => Err(e),
+    };
+    result.unwrap_or_else(|e| {
+        // one write, so that the ranks' lines do not interleave
+        let line = format!("error (rank {rank} of {size}): {e}\n");
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
         ExitCode::FAILURE
     })
 }

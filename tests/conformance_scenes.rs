@@ -28,6 +28,7 @@ fn scene_of(setup: &Setup) -> Scene {
         solver: None,
         load_path: None,
         base_dir: PathBuf::new(),
+        petsc_options: None,
     }
 }
 

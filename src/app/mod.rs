@@ -3,11 +3,16 @@
 //! | module | command |
 //! |---|---|
 //! | [`setup`] | a scene read and assembled with its solver ([`setup::Loaded`]); a run's errors and outcome |
+//! | `mpi` | `saddle run` under `mpirun` (feature `mpi`): the scene distributed, [`ranks::Ranks`] over MPI |
+//! | [`ranks`] | where the problem lives: this process, or the ranks of `mpirun` (theory §12) |
 //! | [`path`] | the steps of a `[load_path]` solved and written (theory §11) |
 //! | [`run`] | `saddle run`: one step, or the load path |
 //! | [`sweep`] | `saddle sweep`: the scene at each load factor |
 
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod path;
+pub mod ranks;
 pub mod run;
 pub mod setup;
 pub mod sweep;

@@ -26,7 +26,6 @@ use super::setup::{Loaded, Outcome, RunError};
 use crate::io::outdir::OutDir;
 use crate::io::scene::LoadPath;
 use crate::io::summary::{PathSummary, ResidualState, StepSummary, Summary, check_quantity, reported_quantities};
-use crate::io::vtu::write_vtu;
 use saddle_core::{Evolution, Monitor, PathError, SceneError, StepSolution};
 use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
@@ -67,7 +66,8 @@ pub fn solve_and_write(
     for (i, q) in path.plot.iter().flatten().enumerate() {
         check_quantity(&format!("load_path.plot[{i}]"), q, &known).map_err(SceneError::from)?;
     }
-    let mut out = OutDir::claim(out_dir)?;
+    let ranks = loaded.ranks.as_ref();
+    let mut out = RunError::agree(ranks, ranks.claim(out_dir).map_err(RunError::from))?;
     let mut timer = loaded.timer.clone();
     let factors = path.step_factors();
     let names = loaded.problem.view().extra_names();
@@ -78,9 +78,15 @@ pub fn solve_and_write(
     let mut failure: Option<(usize, String)> = None;
     for (k, &factor) in factors.iter().enumerate() {
         let started = Instant::now();
-        let step = match timer.time("solve", || evolution.step(factor, loaded.solver.as_ref(), monitor)) {
-            Ok(step) => step,
-            Err(e) => {
+        let step = timer.time("solve", || evolution.step(factor, loaded.solver.as_ref(), monitor));
+        let shared = ranks.agree(step.as_ref().map(|_| ()).map_err(|e| e.to_string()));
+        let step = match (step, shared) {
+            (Ok(step), Ok(())) => step,
+            (Ok(_), Err(message)) => {
+                out.abandon();
+                return Err(RunError::Ranks(message));
+            }
+            (Err(e), _) => {
                 let why = match &e {
                     PathError::Solve { source, .. } => source.to_string(),
                     PathError::Scene { source, .. } => source.to_string(),
@@ -92,26 +98,34 @@ pub fn solve_and_write(
                     return Err(RunError::Path(e));
                 }
                 steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
-                timer.time("write", || series.append(&mut out, &steps))?;
+                if ranks.is_root() {
+                    timer.time("write", || series.append(&mut out, &steps))?;
+                }
                 failure = Some((k, why));
                 break;
             }
         };
-        let mut s = timer.time("summary", || Summary::new(step.problem.view(), &step.solution, loaded.title.clone()));
+        let mut s = timer.time("summary", || ranks.summary(step.problem.view(), &step.solution, loaded.title.clone()));
         s.warnings.extend(step.warnings.iter().cloned());
         let converged = step.converged();
-        let file = (writes_step_file(k, factors.len()) || !converged).then(|| format!("solution_{k:04}.vtu"));
-        if let Some(f) = &file {
-            timer
-                .time("write", || write_vtu(&out.path(f), step.problem.view(), &step.solution))
-                .map_err(io(&out.path(f)))?;
-            out.wrote(f)?;
+        let mut file = None;
+        if writes_step_file(k, factors.len()) || !converged {
+            let stem = format!("solution_{k:04}");
+            let files =
+                timer.time("write", || ranks.write_solution(out.dir(), &stem, step.problem.view(), &step.solution));
+            let files = RunError::agree(ranks, files.map_err(io(&out.path(&stem))))?;
+            for f in &files {
+                out.wrote(f)?;
+            }
+            file = files.into_iter().next();
         }
         let entry = StepSummary::new(k, factor, &s, file, started.elapsed().as_secs_f64());
         progress(&step_line(&entry, path));
         steps.push(entry);
         // the series and the table so far, so that an interrupted path leaves them readable
-        timer.time("write", || series.append(&mut out, &steps))?;
+        if ranks.is_root() {
+            timer.time("write", || series.append(&mut out, &steps))?;
+        }
         if !converged {
             failure = Some((k, format!("the solver stopped without converging ({:?})", s.stop_reason)));
         }
@@ -150,20 +164,18 @@ pub fn solve_and_write(
     });
     summary.steps = steps;
     // solution.vtu: the last step solved, as a one-step run writes it
-    let vtu = out.path("solution.vtu");
-    timer.time("write", || write_vtu(&vtu, step.problem.view(), &step.solution)).map_err(io(&vtu))?;
-    out.wrote("solution.vtu")?;
+    let files =
+        timer.time("write", || ranks.write_solution(out.dir(), "solution", step.problem.view(), &step.solution));
+    let files = RunError::agree(ranks, files.map_err(io(&out.path("solution"))))?;
     #[cfg(feature = "report")]
-    if plot(&summary, path, out.dir())? {
+    if ranks.is_root() && plot(&summary, path, out.dir())? {
         out.wrote("load_path.png")?;
         out.wrote("load_path.svg")?;
     }
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
-    let json = out.path("summary.json");
-    summary.write(&json).map_err(io(&json))?;
-    out.wrote("summary.json")?;
-    let written = out.finish()?;
+    ranks.describe(&mut summary);
+    let written = super::run::finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
 }
 

@@ -3,12 +3,12 @@
 //! the solve returns a solution.
 
 use super::path;
+use super::ranks::{Ranks, write_in_place};
 use super::setup::{Loaded, Outcome, RunError};
 use crate::io::outdir::OutDir;
 use crate::io::summary::Summary;
-use crate::io::vtu::write_vtu;
-use saddle_core::{Evolution, Monitor, PathError, ProblemView, Solution};
-use std::path::{Path, PathBuf};
+use saddle_core::{Evolution, Monitor, PathError};
+use std::path::Path;
 
 /// Solves a loaded problem and writes `out_dir/summary.json` and `out_dir/solution.vtu`. The
 /// folder is claimed before the solve ([`OutDir::claim`]: an unusable `--out` fails before any
@@ -33,55 +33,63 @@ pub fn solve_and_write_with(
     if let Some(path) = &loaded.load_path {
         return path::solve_and_write(loaded, path, out_dir, monitor, progress);
     }
-    let mut out = OutDir::claim(out_dir)?;
+    let ranks = loaded.ranks.as_ref();
+    let out = RunError::agree(ranks, ranks.claim(out_dir).map_err(RunError::from))?;
     let mut timer = loaded.timer.clone();
     // one step at the scene's load from the zero state: the stationary problem, through the same
     // load-scaling path as sweeps and load paths (an obstacle without load leaves its extras
     // undetermined, theory §11.3)
     let mut evolution = Evolution::new(&loaded.problem);
-    let step = match timer.time("solve", || evolution.step(1.0, loaded.solver.as_ref(), monitor)) {
+    let step = timer.time("solve", || evolution.step(1.0, loaded.solver.as_ref(), monitor)).map_err(|e| match e {
+        PathError::Solve { source, .. } => RunError::Solve(source),
+        PathError::Scene { source, .. } => RunError::Scene(source),
+    });
+    let step = match RunError::agree(ranks, step) {
         Ok(step) => step,
         Err(e) => {
             out.abandon();
-            return Err(match e {
-                PathError::Solve { source, .. } => RunError::Solve(source),
-                PathError::Scene { source, .. } => RunError::Scene(source),
-            });
+            return Err(e);
         }
     };
     let view = step.problem.view();
-    let mut summary = timer.time("summary", || Summary::new(view, &step.solution, loaded.title.clone()));
+    let mut summary = timer.time("summary", || ranks.summary(view, &step.solution, loaded.title.clone()));
     summary.warnings.extend(step.warnings.iter().cloned());
-    let (vtu_tmp, vtu) = timer.time("write", || write_vtu_file(out_dir, view, &step.solution))?;
+    let files = timer.time("write", || ranks.write_solution(out_dir, "solution", view, &step.solution));
+    let files = RunError::agree(ranks, files.map_err(io_error(&out_dir.join("solution"))))?;
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
-    write_summary(out_dir, &summary, &vtu_tmp, &vtu)?;
-    out.wrote("solution.vtu")?;
-    out.wrote("summary.json")?;
-    let written = out.finish()?;
+    ranks.describe(&mut summary);
+    let written = finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
+}
+
+/// The end of a run on the root: the solution's files and `summary.json` (under a temporary
+/// name first) entered in the manifest, the folder cleaned of the earlier run's files; every
+/// rank learns whether it worked. Collective.
+pub(crate) fn finish(
+    ranks: &dyn Ranks,
+    mut out: OutDir,
+    summary: &Summary,
+    files: &[String],
+    out_dir: &Path,
+) -> Result<Vec<String>, RunError> {
+    let written = if ranks.is_root() {
+        (|| {
+            for f in files {
+                out.wrote(f)?;
+            }
+            let json = out_dir.join("summary.json");
+            write_in_place(out_dir, "summary.json", |p| summary.write(p)).map_err(io_error(&json))?;
+            out.wrote("summary.json")?;
+            Ok(out.finish()?)
+        })()
+    } else {
+        Ok(out.finish()?)
+    };
+    RunError::agree(ranks, written)
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
     let path = path.to_path_buf();
     move |source| RunError::Io { path, source }
-}
-
-/// Writes solution.vtu under a temporary name in `out_dir`: (temporary, final) path.
-fn write_vtu_file(out_dir: &Path, p: ProblemView<'_>, sol: &Solution) -> Result<(PathBuf, PathBuf), RunError> {
-    let vtu = out_dir.join("solution.vtu");
-    let vtu_tmp = out_dir.join(".solution.vtu.partial");
-    write_vtu(&vtu_tmp, p, sol).map_err(io_error(&vtu))?;
-    Ok((vtu_tmp, vtu))
-}
-
-/// Writes summary.json under a temporary name, then moves both files into place, so that a
-/// failure leaves no half-written file.
-fn write_summary(out_dir: &Path, summary: &Summary, vtu_tmp: &Path, vtu: &Path) -> Result<(), RunError> {
-    let json = out_dir.join("summary.json");
-    let json_tmp = out_dir.join(".summary.json.partial");
-    summary.write(&json_tmp).map_err(io_error(&json))?;
-    std::fs::rename(vtu_tmp, vtu).map_err(io_error(vtu))?;
-    std::fs::rename(&json_tmp, &json).map_err(io_error(&json))?;
-    Ok(())
 }

@@ -2,6 +2,7 @@
 //! a [`Loaded`] problem with its solver; and what a run returns ([`Outcome`], [`RunError`]) —
 //! shared by a one-step run ([`super::run`]) and a load path ([`super::path`]).
 
+use super::ranks::{OneMachine, Ranks};
 use crate::io::outdir::OutError;
 use crate::io::scene::{LoadPath, Scene};
 use crate::io::summary::Summary;
@@ -30,6 +31,22 @@ pub enum RunError {
     /// `--out` cannot be used, or a file in it cannot be written.
     #[error(transparent)]
     Out(#[from] OutError),
+    /// Another rank of a distributed run failed (theory §12): its message.
+    #[error("{0}")]
+    Ranks(String),
+}
+
+impl RunError {
+    /// `result` on every rank ([`Ranks::agree`]): an error on any rank is an error on all, this
+    /// rank's own where it failed, the failing rank's message on the others. Collective.
+    pub fn agree<T>(ranks: &dyn Ranks, result: Result<T, RunError>) -> Result<T, RunError> {
+        let shared = ranks.agree(result.as_ref().map(|_| ()).map_err(|e| e.to_string()));
+        match (result, shared) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Err(message)) => Err(RunError::Ranks(message)),
+            (Ok(x), Ok(())) => Ok(x),
+        }
+    }
 }
 
 /// The solver used when a scene names none: the paper's Uzawa method.
@@ -60,6 +77,8 @@ pub struct Loaded {
     /// Wall time of the phases so far: `read` (the scene file, and the mesh built or read) and
     /// `setup` (L assembled).
     pub timer: PhaseTimer,
+    /// Where the problem lives: this process ([`OneMachine`]) or the ranks of `mpirun`.
+    pub ranks: Box<dyn Ranks>,
 }
 
 /// Reads a scene, applies a `--solver` override, and assembles L.
@@ -86,7 +105,7 @@ pub fn load_with(
     let override_solver = solver_override.map(solver_by_type).transpose()?;
     let (problem, solver) = timer.time("setup", || scene.assemble(mesh))?;
     let solver = override_solver.or(solver).unwrap_or_else(default_solver);
-    Ok(Loaded { problem, solver, title, load_path, timer })
+    Ok(Loaded { problem, solver, title, load_path, timer, ranks: Box::new(OneMachine) })
 }
 
 /// The result of a run.

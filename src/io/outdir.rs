@@ -52,6 +52,9 @@ pub struct OutDir {
     seen: HashSet<String>,
     /// The manifest, open for appending once the first file is written.
     manifest: Option<File>,
+    /// A rank other than the root of a distributed run ([`OutDir::follow`]): it writes its own
+    /// files into the folder, and the root keeps the manifest.
+    follower: bool,
 }
 
 impl OutDir {
@@ -76,6 +79,7 @@ impl OutDir {
             written: Vec::new(),
             seen: HashSet::new(),
             manifest: None,
+            follower: false,
         };
         let probe = dir.join(format!(".saddle-probe-{}", std::process::id()));
         if let Err(e) = File::create(&probe).and_then(|_| std::fs::remove_file(&probe)) {
@@ -85,6 +89,21 @@ impl OutDir {
         let earlier = std::fs::read_to_string(dir.join(MANIFEST)).unwrap_or_default();
         let earlier = earlier.lines().filter(|n| is_plain_name(n)).map(str::to_string).collect();
         Ok(Self { earlier, ..out })
+    }
+
+    /// The folder another rank claimed, followed (theory §12): files are written into it, but
+    /// the manifest and the clean-up are the claiming rank's ([`OutDir::wrote`],
+    /// [`OutDir::finish`] and [`OutDir::abandon`] do nothing).
+    pub fn follow(dir: &Path) -> Self {
+        Self {
+            dir: dir.to_path_buf(),
+            created: None,
+            earlier: Vec::new(),
+            written: Vec::new(),
+            seen: HashSet::new(),
+            manifest: None,
+            follower: true,
+        }
     }
 
     /// The folder.
@@ -106,7 +125,7 @@ impl OutDir {
     /// manifest at once (once per name).
     pub fn wrote(&mut self, name: &str) -> Result<(), OutError> {
         debug_assert!(is_plain_name(name), "{name}");
-        if self.seen.contains(name) {
+        if self.follower || self.seen.contains(name) {
             return Ok(());
         }
         let path = self.path(MANIFEST);
@@ -124,6 +143,9 @@ impl OutDir {
     /// The run is done: removes the files of the earlier run that this run did not rewrite, and
     /// leaves the manifest listing this run's files. Returns them, in the order written.
     pub fn finish(mut self) -> Result<Vec<String>, OutError> {
+        if self.follower {
+            return Ok(self.written);
+        }
         for name in self.earlier.iter().filter(|n| !self.seen.contains(*n)) {
             let path = self.dir.join(name);
             match std::fs::remove_file(&path) {

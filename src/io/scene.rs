@@ -107,6 +107,11 @@ pub struct Scene {
     /// The folder relative file names are resolved against.
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// `[solver.petsc] options = "-pc_gamg_threshold 0.02 …"`: PETSc options for a run under
+    /// `mpirun` (theory §12), parsed as PETSc parses its command line, which has the last word;
+    /// unused on one machine.
+    #[serde(skip)]
+    pub petsc_options: Option<String>,
 }
 
 impl Scene {
@@ -125,12 +130,14 @@ impl Scene {
     /// fails on (`scene_de`: also inside plugins), then validated.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self, SceneError> {
         let parse_error = |message: String| SceneError::Parse { path: origin.to_path_buf(), message };
-        let root = toml::Value::Table(
+        let mut root = toml::Value::Table(
             toml::from_str(text).map_err(|e: toml::de::Error| parse_error(e.to_string().trim_end().into()))?,
         );
         non_finite_number(&root, &mut String::new())?;
-        let scene: Scene =
+        let petsc_options = take_petsc_options(&mut root)?;
+        let mut scene: Scene =
             serde_path_to_error::deserialize(TypeFirst(&root)).map_err(|e| parse_error(field_error(&root, e)))?;
+        scene.petsc_options = petsc_options;
         scene.validate()?;
         Ok(scene)
     }
@@ -238,6 +245,35 @@ impl Scene {
     pub fn with_element(&self, element: Box<dyn FiniteElement>) -> Self {
         Self { discretisation: Some(element), ..self.clone() }
     }
+}
+
+/// Takes `[solver.petsc]` out of the parsed scene (the solvers know no PETSc): its `options`, a
+/// string, the table's only key. A `[solver]` table left empty goes too (no solver named).
+fn take_petsc_options(root: &mut toml::Value) -> Result<Option<String>, SceneError> {
+    let Some(solver) = root.get_mut("solver").and_then(toml::Value::as_table_mut) else {
+        return Ok(None);
+    };
+    let Some(petsc) = solver.remove("petsc") else {
+        return Ok(None);
+    };
+    let field = |key: &str, value: &dyn std::fmt::Display, message: &str| {
+        SceneError::from(saddle_core::ParameterError::new(format!("solver.petsc{key}"), value.to_string(), message))
+    };
+    let toml::Value::Table(mut table) = petsc else {
+        return Err(field("", &petsc, "must be a table: [solver.petsc] options = \"-ksp_monitor …\""));
+    };
+    let options = match table.remove("options") {
+        Some(toml::Value::String(s)) => s,
+        Some(other) => return Err(field(".options", &other, "must be a string of PETSc options")),
+        None => return Err(field("", &"{}", "needs `options`, a string of PETSc options")),
+    };
+    if let Some(key) = table.keys().next() {
+        return Err(field(&format!(".{key}"), &table[key], "unknown key: [solver.petsc] takes `options` only"));
+    }
+    if solver.is_empty() {
+        root.as_table_mut().map(|t| t.remove("solver"));
+    }
+    Ok(Some(options))
 }
 
 /// The most steps a load path may have: 100 000. A step costs a solve and about 1.4 KB of

@@ -16,6 +16,14 @@ use std::path::Path;
 /// `plastic` (0/1: one of the element's points is plastic), and with plasticity
 /// `plastic_strain` (tensor, ε(u) − Aσ) and `equivalent_plastic_strain` (√(2/3)|ε_p|).
 pub fn write_vtu(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Result<()> {
+    write_piece(path, p, sol).map(drop)
+}
+
+/// [`write_vtu`] for a rank's part of a distributed problem (theory §12): its elements on its
+/// nodes, ghosts included. Returns the declarations of the data arrays, for the `.pvtu` file
+/// that lists the pieces ([`write_pvtu`]). Collective (the ghosts' displacements come from their
+/// owners).
+pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Result<String> {
     let (l, element) = (&p.l, p.element);
     let mesh = element.mesh();
     let k = element.points_per_element();
@@ -72,6 +80,22 @@ pub fn write_vtu(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Re
         "connectivity" | "offsets" => "Int64",
         _ => "Float64",
     };
+    // the declarations of a .pvtu file, the same arrays without data
+    let mut parallel = String::new();
+    for (which, tag) in [
+        ("point", "PPointData Vectors=\"displacement\""),
+        ("cell", "PCellData Scalars=\"von_mises\" Tensors=\"stress\""),
+        ("points", "PPoints"),
+    ] {
+        parallel.push_str(&format!("    <{tag}>\n"));
+        for (_, name, comps, _) in arrays.iter().filter(|a| a.0 == which) {
+            let t = vtk_type(name);
+            parallel.push_str(&format!(
+                "      <PDataArray type=\"{t}\" Name=\"{name}\" NumberOfComponents=\"{comps}\"/>\n"
+            ));
+        }
+        parallel.push_str(&format!("    </{}>\n", tag.split(' ').next().unwrap_or(tag)));
+    }
     let mut xml = String::new();
     let mut offset = 0usize;
     let mut section = |xml: &mut String, which: &str| {
@@ -115,5 +139,23 @@ pub fn write_vtu(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Re
         }
     }
     file.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
-    file.flush()
+    file.flush()?;
+    Ok(parallel)
+}
+
+/// A `.pvtu` file (VTK's parallel unstructured grid, which ParaView opens as one grid): the
+/// data arrays `declarations` ([`write_piece`]'s) and one piece per rank, its file named
+/// relative to the `.pvtu`'s folder.
+pub fn write_pvtu(path: &Path, declarations: &str, pieces: &[String]) -> std::io::Result<()> {
+    let mut xml = String::from("<?xml version=\"1.0\"?>\n");
+    xml.push_str(
+        "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+    );
+    xml.push_str("  <PUnstructuredGrid GhostLevel=\"0\">\n");
+    xml.push_str(declarations);
+    for piece in pieces {
+        xml.push_str(&format!("    <Piece Source=\"{piece}\"/>\n"));
+    }
+    xml.push_str("  </PUnstructuredGrid>\n</VTKFile>\n");
+    std::fs::write(path, xml)
 }

@@ -54,6 +54,8 @@ pub use problem::lagrangian::{Data, Iterate, Lagrangian, LocalLaw, Workspace};
 pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};
 pub use problem::operators::{ElementOperators, Material, RigidBodyModes};
 pub use problem::pattern::SymmetricPattern;
-pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason};
+pub use problem::solver::{
+    Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason, one_rank,
+};
 pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
 pub use problem::tensor::{Sym, SymOp};

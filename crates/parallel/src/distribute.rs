@@ -59,6 +59,8 @@ pub struct RankProblem {
     pub global_rows: Vec<usize>,
     /// The global index of every local element.
     pub elements: Vec<usize>,
+    /// The nodes this rank owns (its part's other nodes are ghosts).
+    pub owned_nodes: usize,
     /// Sizes of the whole problem.
     pub totals: Totals,
     /// The whole mesh and obstacles, on rank 0.
@@ -98,7 +100,10 @@ pub fn distribute(
     saddle_mpi::broadcast_bytes(comm.world(), 0, &mut bytes);
     let mesh = decode(&bytes);
     drop(bytes);
-    let mut element_rank: Vec<u64> = if rank == 0 { partition(&mesh, size)? } else { Vec::new() };
+    // rank 0's partition, or its error on every rank
+    let element_rank = if rank == 0 { partition(&mesh, size) } else { Ok(Vec::new()) };
+    let mut element_rank = saddle_mpi::agree(comm.world(), element_rank)
+        .map_err(|e| SceneError::Region { field: "mesh".into(), message: rank_message(e) })?;
     saddle_mpi::broadcast(comm.world(), 0, &mut element_rank);
     let element_rank: Vec<usize> = element_rank.into_iter().map(|r| r as usize).collect();
     let partition = Partition::new(&mesh, element_rank, size)
@@ -135,18 +140,24 @@ pub fn distribute(
         .map_err(|e| SceneError::Region { field: "mesh".into(), message: format!("distributed vectors: {e}") })?;
     let problem = DiscreteProblem::from_discretised(Box::new(operators), elasticity, stresses, obstacles, nodal_load);
     let whole = (rank == 0).then(|| Whole { mesh, obstacles: whole_obstacles });
-    Ok(RankProblem { problem, comm, global_rows, elements: part.elements, totals, whole })
+    let owned_nodes = part.n_owned_nodes;
+    Ok(RankProblem { problem, comm, global_rows, elements: part.elements, owned_nodes, totals, whole })
+}
+
+/// The message of an error shared by [`saddle_mpi::agree`]: the failing rank's own.
+fn rank_message(e: saddle_mpi::Error) -> String {
+    match e {
+        saddle_mpi::Error::Rank { message, .. } => message,
+        other => other.to_string(),
+    }
 }
 
 /// The ranks of the elements of `mesh`: METIS on its face dual graph (rank 0).
-fn partition(mesh: &TetMesh, ranks: usize) -> Result<Vec<u64>, SceneError> {
+fn partition(mesh: &TetMesh, ranks: usize) -> Result<Vec<u64>, String> {
     let connectivity: Vec<usize> = mesh.tets.iter().flatten().copied().collect();
-    saddle_mpi::partition_elements(&connectivity, 4, ranks).map(|p| p.into_iter().map(|r| r as u64).collect()).map_err(
-        |e| SceneError::Region {
-            field: "mesh".into(),
-            message: format!("cannot partition the mesh's {} elements over {ranks} ranks: {e}", mesh.n_elements()),
-        },
-    )
+    saddle_mpi::partition_elements(&connectivity, 4, ranks)
+        .map(|p| p.into_iter().map(|r| r as u64).collect())
+        .map_err(|e| format!("cannot partition the mesh's {} elements over {ranks} ranks: {e}", mesh.n_elements()))
 }
 
 // ---- the mesh as bytes, for the broadcast ----

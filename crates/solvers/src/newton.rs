@@ -241,6 +241,11 @@ impl Solver for Newton {
         self.tol
     }
 
+    /// Every stage's decision is taken from sums over the ranks (theory §12).
+    fn runs_distributed(&self) -> bool {
+        true
+    }
+
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         self.solve_from(l, None, monitor, &mut PhaseTimer::default(), "newton")
     }

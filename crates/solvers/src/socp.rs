@@ -163,6 +163,7 @@ impl Solver for Socp {
     /// Builds the cone programme, runs Clarabel, recovers (u, V, σ̂, λ) and polishes them, in
     /// stages.
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        saddle_core::one_rank("socp", l)?;
         let mut timer = PhaseTimer::default();
         let (prog, ipm) = self.interior_point(l, monitor, &mut timer)?;
         let found = Found::recover(l, &prog, &ipm, &mut timer);

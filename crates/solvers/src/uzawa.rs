@@ -118,11 +118,13 @@ impl Solver for Uzawa {
     }
 
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        saddle_core::one_rank("uzawa", l)?;
         self.iterate(l, None, monitor)
     }
 
     /// The iteration from the previous step's (u, V, λ) (theory §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        saddle_core::one_rank("uzawa", l)?;
         warm_solve(l, start, "uzawa", || self.iterate(l, Some(start), monitor))
     }
 }

@@ -60,6 +60,7 @@ pub fn near_incompressible_fraction(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
             near += w[i];
         }
     }
+    let (near, total) = (l.comm().sum(near), l.comm().sum(total));
     if total > 0.0 { near / total } else { 0.0 }
 }
 

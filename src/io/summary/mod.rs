@@ -112,6 +112,42 @@ pub struct Summary {
     /// residual state after unloading). Absent for a one-step solve.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load_path: Option<PathSummary>,
+    /// Under `mpirun` (theory §12): the number of ranks. Absent on one machine.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranks: Option<usize>,
+    /// Under `mpirun`: each rank's part, time and memory, in rank order. Absent on one machine.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub per_rank: Vec<RankSummary>,
+}
+
+/// One rank's share of a distributed run (theory §12), in `summary.json`'s `per_rank`.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct RankSummary {
+    /// The rank.
+    pub rank: usize,
+    /// Its elements.
+    pub elements: usize,
+    /// The dofs it owns.
+    pub owned_dofs: usize,
+    /// The nodes of its elements it does not own (its ghost layer).
+    pub ghost_nodes: usize,
+    /// Its wall time of the whole run so far (read, set-up, solve, summary, write), seconds.
+    pub wall_s: f64,
+    /// Its wall time in the solver, seconds.
+    pub solve_s: f64,
+    /// Its peak resident memory (the kernel's VmHWM), MB; 0 where the system does not say.
+    pub peak_memory_mb: f64,
+}
+
+/// What a summary takes from the whole problem (theory §12): the obstacles' reports
+/// ([`imprints`] and [`complete_reports`] added) and the mesh. On one machine the problem's
+/// own; under `mpirun`, rank 0's, made from the whole mesh and obstacles (the other ranks' summary
+/// is not written: they pass no reports and their part of the mesh).
+pub struct Whole<'a> {
+    /// Each obstacle's report.
+    pub reports: Vec<ObstacleReport>,
+    /// The mesh: its nodes, and its quality.
+    pub mesh: &'a saddle_core::TetMesh,
 }
 
 /// One step of a load path in `summary.json` (theory §11): the keys of a one-step summary.
@@ -322,9 +358,28 @@ fn reports_with_imprints(
     undetermined: &[usize],
 ) -> Vec<ObstacleReport> {
     let mut reports = p.contact_reports(extras, lambda);
+    complete_reports(p, &mut reports, &imprints(p, u), undetermined);
+    reports
+}
+
+/// Each obstacle's imprint max_i (G u)_i over its rows (theory §11.4), the maximum over the
+/// ranks; −∞ for an obstacle without rows. Collective.
+pub fn imprints(p: ProblemView<'_>, u: &[f64]) -> Vec<f64> {
+    let comm = p.l.comm();
+    let parts = p.obstacles.parts();
+    parts
+        .iter()
+        .map(|part| {
+            comm.max((0..part.rows.n_rows()).map(|i| part.rows.row_times(i, u)).fold(f64::NEG_INFINITY, f64::max))
+        })
+        .collect()
+}
+
+/// Adds each obstacle's imprint ([`imprints`]) to its report and makes the quantities named like
+/// an extra in `undetermined` (theory §11.3) NaN: written null.
+pub fn complete_reports(p: ProblemView<'_>, reports: &mut [ObstacleReport], imprints: &[f64], undetermined: &[usize]) {
     let names = p.extra_names();
-    for (r, part) in reports.iter_mut().zip(p.obstacles.parts()) {
-        let m = (0..part.rows.n_rows()).map(|i| part.rows.row_times(i, u)).fold(f64::NEG_INFINITY, f64::max);
+    for ((r, part), &m) in reports.iter_mut().zip(p.obstacles.parts()).zip(imprints) {
         if m.is_finite() {
             r.report.quantities.push(("imprint".into(), m));
         }
@@ -335,7 +390,6 @@ fn reports_with_imprints(
             }
         }
     }
-    reports
 }
 
 /// The obstacles' quantities as `contact` holds them: plain names with one obstacle, else
@@ -385,11 +439,20 @@ impl Summary {
     /// extras the solution marks undetermined (theory §11.3) are null, and so are the obstacles'
     /// quantities of the same name (`U`).
     pub fn new(p: ProblemView<'_>, sol: &Solution, title: Option<String>) -> Self {
+        let reports = reports_with_imprints(p, &sol.u, &sol.extras, &sol.lambda, &sol.undetermined);
+        Self::of_whole(p, sol, title, Whole { reports, mesh: p.element.mesh() })
+    }
+
+    /// [`Summary::new`] with the obstacles' reports and the mesh given ([`Whole`]): the summary
+    /// of a rank's part of a distributed problem, its counts, sums and maxima over the ranks
+    /// (theory §12). Collective.
+    pub fn of_whole(p: ProblemView<'_>, sol: &Solution, title: Option<String>, whole: Whole<'_>) -> Self {
         let l = &p.l;
+        let comm = l.comm();
         let mut ws = Workspace::new(l);
         let kkt = kkt(l, &sol.iterate(), &mut ws);
         let j = energy(l, &sol.u, &sol.extras, &mut ws);
-        let reports = reports_with_imprints(p, &sol.u, &sol.extras, &sol.lambda, &sol.undetermined);
+        let reports = whole.reports;
         let single = match reports.as_slice() {
             [r] => Some(&r.report),
             _ => None,
@@ -403,7 +466,7 @@ impl Summary {
         // ws.eps holds ε(u), left there by `l.energy` above
         let near_incompressible_fraction = locking::near_incompressible_fraction(l, &ws.eps);
         warnings.extend(locking::locking_warning(p.element, near_incompressible_fraction));
-        let mesh_quality = p.element.mesh().quality();
+        let mesh_quality = whole.mesh.quality();
         if mesh_quality.max_aspect_ratio > 30.0 {
             warnings.push(format!(
                 "the mesh has elements of aspect ratio up to {:.0} (element {}): expect larger discretisation errors \
@@ -428,22 +491,22 @@ impl Summary {
             force: single.and_then(|c| c.get("force")),
             contact_nodes: reports.iter().map(|r| r.report.contact_nodes).sum(),
             contact_radius: reports.iter().map(|r| r.report.contact_radius).fold(0.0, f64::max),
-            plastic_elements: plastic_elements(p.element, sol),
-            plastic_points: sol.stress.n_plastic(),
-            max_von_mises: sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max),
-            max_equivalent_plastic_strain: max_equivalent_plastic_strain(l, &ws.eps, sol),
+            plastic_elements: comm.sum_count(plastic_elements(p.element, sol)),
+            plastic_points: comm.sum_count(sol.stress.n_plastic()),
+            max_von_mises: comm.max(sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max)),
+            max_equivalent_plastic_strain: comm.max(max_equivalent_plastic_strain(l, &ws.eps, sol)),
             J: j,
             dual_energy: dual_energy(l, &sol.stress, &sol.lambda),
             kkt_residual: kkt.max(),
             kkt,
             tolerance: sol.report.tolerance,
-            dofs: l.n_dofs(),
-            elements: p.element.mesh().n_elements(),
-            stress_points: l.n_points(),
+            dofs: comm.sum_count(l.n_dofs()),
+            elements: comm.sum_count(p.element.mesh().n_elements()),
+            stress_points: comm.sum_count(l.n_points()),
             discretisation: p.element.name().to_string(),
-            nodes: p.element.mesh().n_nodes(),
+            nodes: whole.mesh.n_nodes(),
             near_incompressible_fraction,
-            contact_rows: l.data.rows.n_rows(),
+            contact_rows: comm.sum_count(l.data.rows.n_rows()),
             contact,
             extras,
             obstacles: reports.iter().map(ObstacleSummary::new).collect(),
@@ -456,6 +519,8 @@ impl Summary {
             warnings,
             steps: Vec::new(),
             load_path: None,
+            ranks: None,
+            per_rank: Vec::new(),
         }
     }
 

@@ -472,7 +472,19 @@ impl DiscreteObstacles {
 
     /// Each obstacle's report on its own rows, extras and multipliers.
     pub fn reports(&self, mesh: &TetMesh, extras: &[f64], lambda: &[f64]) -> Vec<ObstacleReport> {
-        self.obstacles
+        self.reports_of(&self.obstacles, mesh, extras, lambda)
+    }
+
+    /// Each obstacle of `obstacles` (these rows' obstacles at another load: a load step's) reporting
+    /// on these rows — the whole problem's, on rank 0 of a distributed run (theory §12).
+    pub fn reports_of(
+        &self,
+        obstacles: &Obstacles,
+        mesh: &TetMesh,
+        extras: &[f64],
+        lambda: &[f64],
+    ) -> Vec<ObstacleReport> {
+        obstacles
             .iter()
             .zip(&self.parts)
             .map(|(o, p)| ObstacleReport {

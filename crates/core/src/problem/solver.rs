@@ -114,6 +114,22 @@ impl SolveError {
     }
 }
 
+/// The error of a solver that runs on one rank only ([`Solver::runs_distributed`] false) given a
+/// problem distributed over several (theory §12); `Ok` on one rank.
+pub fn one_rank(solver: &str, l: &Lagrangian<'_>) -> Result<(), SolveError> {
+    let ranks = l.comm().size();
+    if ranks > 1 {
+        return Err(SolveError::Unsupported {
+            solver: solver.to_string(),
+            message: format!(
+                "runs on one rank only, and this problem is distributed over {ranks} ranks: use `newton` \
+                 (`--solver newton` or `[solver] type = \"newton\"`), or run without mpirun"
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// Observer of a running solve (progress bars, logs).
 pub trait Monitor {
     /// The solver enters a phase ("factorisation", "iterations", ...).
@@ -141,6 +157,12 @@ pub trait Solver: Debug + Send + Sync + dyn_clone::DynClone {
     fn tolerance(&self) -> f64;
     /// Solves the discrete problem.
     fn solve(&self, problem: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError>;
+
+    /// True when the solver solves a problem distributed over several ranks (theory §12); the
+    /// others refuse one ([`one_rank`]).
+    fn runs_distributed(&self) -> bool {
+        false
+    }
 
     /// Solves the discrete problem from `start`, the previous load step's solution (theory §11.2:
     /// a warm start). A solver that can use a start reports the counter `warm_start` = 1; the

@@ -194,12 +194,14 @@ impl Solver for Penalty {
     }
 
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        saddle_core::one_rank("penalty", l)?;
         self.newton(l, None, monitor)
     }
 
     /// Newton on J_μ from the previous step's (u, V), without the elastic iteration (theory
     /// §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        saddle_core::one_rank("penalty", l)?;
         warm_solve(l, start, "penalty", || self.newton(l, Some(start), monitor))
     }
 }
