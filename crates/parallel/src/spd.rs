@@ -90,6 +90,13 @@ impl PetscSpd {
                 self.matrix.0.add_values(&[rows[j]], &global[1..], &values[range.start + 1..range.end])?;
             }
         }
+        // the diagonal of the Dirichlet rows, which no element adds to: a zero keeps it in the
+        // nonzero structure, so that the identity set there after assembly needs no new entry
+        // (PETSc drops unused preallocation at assembly; each later insertion reallocates the
+        // whole matrix: 3 939 of them cost 2 s on 10k dofs, measured with `-info`)
+        for &r in &self.layout.dirichlet_rows {
+            self.matrix.0.add_values(&[r], &[r], &[0.0])?;
+        }
         Ok(())
     }
 }
