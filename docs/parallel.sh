@@ -7,12 +7,14 @@
 #
 # P1_CELLS (default 64: 64×64×32 cells, about 400k dofs) and P2_CELLS (default 24: about 180k
 # dofs). Runs one after the other; state the machine's load with the numbers (2 cores here:
-# two ranks take both).
+# two ranks take both). With PEER_VENV set (the DOLFINx venv of examples/peers/README.md) also
+# the DOLFINx peer at 2 ranks against saddle at 2 ranks on the peer's mesh (PEER_N, default 24:
+# 2N×2N×N hexahedra of 6 tetrahedra), its fastest configuration that runs on 2 ranks.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 p1=${1:-64}
 p2=${2:-24}
-bin=target/release/saddle
+bin=${SADDLE:-target/release/saddle}
 out=$(mktemp -d)
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 RAYON_NUM_THREADS=1
 scene() { # element cells
@@ -28,6 +30,18 @@ for e in p1 p2; do
         mpirun -n "$n" "$bin" run "$out/$e.toml" --out "$out/$e-$n" -q -log_view >"$out/$e-$n.log" 2>&1
     done
 done
+peer_n=${PEER_N:-24}
+if [ -n "${PEER_VENV:-}" ]; then
+    export LD_LIBRARY_PATH="$PEER_VENV/lib" OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
+    (cd "$out" && "$PEER_VENV/bin/python" "$OLDPWD/examples/peers/dolfinx/punch.py" "$peer_n" --contact pdas \
+        --solver gamg --no-linear-ref --export-msh peer.msh --json peer-1.json >peer-1.log 2>&1)
+    (cd "$out" && "$PEER_VENV/bin/mpirun" -n 2 "$PEER_VENV/bin/python" "$OLDPWD/examples/peers/dolfinx/punch.py" \
+        "$peer_n" --contact vi --solver gamg --no-linear-ref --json peer-2.json >peer-2.log 2>&1)
+    unset LD_LIBRARY_PATH
+    sed "s|box16.msh|$out/peer.msh|" examples/peers/punch.toml >"$out/peer.toml"
+    "$bin" run "$out/peer.toml" --out "$out/peer-saddle-serial" -q >/dev/null
+    mpirun -n 2 "$bin" run "$out/peer.toml" --out "$out/peer-saddle-2" -q >/dev/null
+fi
 python3 - "$out" "$p1" "$p2" "$(git rev-parse --short HEAD)" "$(uptime | sed 's/.*load average: //')" <<'EOF' >docs/parallel.md
 import json, re, sys
 out, p1, p2, commit, load = sys.argv[1:]
@@ -47,9 +61,9 @@ print(f"summary: {load}. The default scene (theory §6) with `newton` (tol 1e-10
 print("(`end_to_end_s`: read, set-up, solve, summary, write). One machine: the serial build's own")
 print("linear algebra (`linear = \"auto\"`); ranks: PETSc's CG with GAMG. One thread per rank on a")
 print("2-core machine, so 2 ranks use both cores; the peak memory is each process's VmHWM.\n")
-print("| element | dofs | run | end to end (s) | solve (s) | Newton its | J | peak memory per rank (MB) | comm. share (-log_view) |")
-print("|---|---:|---|---:|---:|---:|---:|---:|---:|")
 for e in ("p1", "p2"):
+    print("| element | dofs | run | end to end (s) | solve (s) | Newton its | J | peak memory per rank (MB) | comm. share (-log_view) |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|")
     ser = s(e, "serial")
     mem = int(open(f"{out}/{e}-serial.mem").read().split()[-1]) / 1024
     print(f"| {e} | {ser['dofs']} | one machine | {ser['end_to_end_s']:.2f} | {ser['end_to_end']['solve']:.2f} | {ser['iterations']} | {ser['J']:.10e} | {mem:.0f} | — |")
@@ -62,5 +76,20 @@ for e in ("p1", "p2"):
           f"{one['end_to_end_s'] / two['end_to_end_s'] / 2:.2f}); 2 ranks against one machine "
           f"{ser['end_to_end_s'] / two['end_to_end_s']:.2f}×; largest rank's peak memory at 2 ranks / one "
           f"machine's: {max(r['peak_memory_mb'] for r in two['per_rank']) / mem:.2f}.\n")
+import os
+if os.path.exists(f"{out}/peer-2.json"):
+    p1j, p2j = json.load(open(f"{out}/peer-1.json")), json.load(open(f"{out}/peer-2.json"))
+    ss, s2 = s("peer-saddle", "serial"), s("peer-saddle", 2)
+    tot = lambda p: p["timings"]["total"]
+    print("## Against DOLFINx at 2 ranks\n")
+    print("The peer of [peer.md](peer.md) (DOLFINx 0.11 + PETSc) on its own mesh, exported and read by saddle;")
+    print("its `--contact pdas` does not converge on 2 ranks (its active set is a rank's), so at 2 ranks it runs")
+    print("`--contact vi` (PETSc's SNES VI). End to end: the peer's `total`, saddle's `end_to_end_s`.\n")
+    print("| run | dofs | force | wall (s) |\n|---|---:|---:|---:|")
+    print(f"| DOLFINx, 1 rank, pdas | {p1j['free_dofs']} | {p1j['plastic']['F']:.6f} | {tot(p1j):.2f} |")
+    print(f"| DOLFINx, 2 ranks, vi | {p2j['free_dofs']} | {p2j['plastic']['F']:.6f} | {tot(p2j):.2f} |")
+    print(f"| saddle, one machine | {ss['dofs']} | {ss['contact']['force']:.6f} | {ss['end_to_end_s']:.2f} |")
+    print(f"| saddle, 2 ranks | {s2['dofs']} | {s2['contact']['force']:.6f} | {s2['end_to_end_s']:.2f} |")
+    print(f"\nAt 2 ranks DOLFINx / saddle: {tot(p2j) / s2['end_to_end_s']:.2f}×.\n")
 EOF
 echo "wrote docs/parallel.md"

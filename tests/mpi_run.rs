@@ -196,6 +196,42 @@ fn two_ranks_agree_with_one_machine() {
     }
 }
 
+/// PETSc's other solvers, chosen on the command line as PETSc users do (MUMPS's direct solve,
+/// hypre's BoomerAMG), and GAMG on a strongly plastic tangent (the DOLFINx peer's punch: E = 1000,
+/// h = 100, a prescribed U = 0.02; PETSc's default Chebyshev bound made CG stop with
+/// DIVERGED_INDEFINITE_PC) agree with one machine at 2 ranks.
+#[test]
+fn petsc_solvers_and_a_strongly_plastic_tangent_agree_with_one_machine() {
+    let dir = tempfile::tempdir().unwrap();
+    let default = scene(dir.path(), "default", [10, 10, 5], NEWTON);
+    let one = dir.path().join("one");
+    let o = serial(&["run", default.to_str().unwrap(), "--out", one.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", text(&o));
+    for (name, options) in [
+        ("mumps", &["-ksp_type", "preonly", "-pc_type", "lu", "-pc_factor_mat_solver_type", "mumps"][..]),
+        ("hypre", &["-pc_type", "hypre"][..]),
+    ] {
+        let two = dir.path().join(name);
+        let mut args = vec!["run", default.to_str().unwrap(), "--out", two.to_str().unwrap(), "-q"];
+        args.extend_from_slice(options);
+        let o = mpirun(2, &args);
+        assert!(o.status.success(), "{name}: {}", text(&o));
+        agree(name, &summary(&two), &summary(&one));
+    }
+    // the peer's punch on a box mesh: displacement-controlled, no extras
+    let peer = scene(dir.path(), "peer", [10, 10, 5], NEWTON);
+    let t = std::fs::read_to_string(&peer).unwrap();
+    let t = t.replace("E = 100.0", "E = 1000.0").replace("h = 5.0", "h = 100.0");
+    let t = t.replace("type = \"rigid_punch\"\nF = 0.3", "type = \"rigid_punch_displacement\"\nU = 0.02");
+    std::fs::write(&peer, t).unwrap();
+    let (one, two) = (dir.path().join("peer-1"), dir.path().join("peer-2"));
+    let o = serial(&["run", peer.to_str().unwrap(), "--out", one.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = mpirun(2, &["run", peer.to_str().unwrap(), "--out", two.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "peer: {}", text(&o));
+    agree("peer", &summary(&two), &summary(&one));
+}
+
 /// A run under `mpirun -n ranks` that must fail on every rank: non-zero status, every rank's
 /// error line, and `needle` in the message.
 fn fails_everywhere(ranks: usize, args: &[&str], needle: &str) {

@@ -80,6 +80,7 @@ mod petsc {
         "KSPDestroy",
         "KSPSetOperators",
         "KSPSetType",
+        "KSPGetType",
         "KSPGetPC",
         "KSPSetOptionsPrefix",
         "KSPSetFromOptions",

@@ -124,9 +124,20 @@ impl Ksp {
 
     /// Starts from the values in `x` (`true`) instead of zero (`false`, the default).
     pub fn initial_guess_nonzero(&mut self, nonzero: bool) -> Result<()> {
+        // a direct solve (`preonly`, as MUMPS runs) takes no guess: PETSc refuses one
+        let nonzero = nonzero && self.method_name()? != "preonly";
         let flag = if nonzero { ffi::PetscBool::PETSC_TRUE } else { ffi::PetscBool::PETSC_FALSE };
         // SAFETY: `self.raw` is live.
         check("KSPSetInitialGuessNonzero", unsafe { ffi::KSPSetInitialGuessNonzero(self.raw, flag) })
+    }
+
+    /// PETSc's name of the Krylov method (`cg`, `preonly`, …), the options applied.
+    pub fn method_name(&self) -> Result<String> {
+        let mut name = ptr::null();
+        // SAFETY: `self.raw` is live; PETSc returns a pointer to its own string.
+        check("KSPGetType", unsafe { ffi::KSPGetType(self.raw, &mut name) })?;
+        // SAFETY: a NUL-terminated string owned by the KSP, copied at once.
+        Ok(if name.is_null() { String::new() } else { unsafe { CStr::from_ptr(name) }.to_string_lossy().into_owned() })
     }
 
     /// Solves A x = b. A diverged solve (iteration limit, breakdown, indefinite preconditioner)
