@@ -55,5 +55,5 @@ pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, O
 pub use problem::operators::{ElementOperators, Material, RigidBodyModes};
 pub use problem::pattern::SymmetricPattern;
 pub use problem::solver::{Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason};
-pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
+pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock, StepInput, StepOutput};
 pub use problem::tensor::{Sym, SymOp};
