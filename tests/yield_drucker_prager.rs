@@ -21,30 +21,12 @@ use std::path::Path;
 
 /// The `[yield]` table of Drucker–Prager.
 fn drucker_prager(k0: f64, alpha: f64, h: f64) -> toml::Value {
-    let mut t = toml::Table::new();
-    t.insert("type".into(), "drucker_prager".into());
-    t.insert("k0".into(), k0.into());
-    t.insert("alpha".into(), alpha.into());
-    t.insert("h".into(), h.into());
-    toml::Value::Table(t)
+    yield_table("drucker_prager", &[("k0", k0), ("alpha", alpha), ("h", h)])
 }
 
 /// The solvers of the tests, tight enough for 1e-8 on the closed forms.
 fn solvers() -> Vec<(&'static str, Box<dyn Solver>)> {
-    let mut v: Vec<(&'static str, Box<dyn Solver>)> = vec![
-        ("newton", Box::new(Newton { tol: 1e-12, ..Newton::default() })),
-        ("uzawa", Box::new(Uzawa { tol: 1e-11, ..Uzawa::default() })),
-        ("penalty", Box::new(Penalty { tol: 1e-10, ..Penalty::default() })),
-    ];
-    #[cfg(feature = "socp")]
-    v.push(("socp", Box::new(saddle::solvers::Socp { tol: 1e-11, ..saddle::solvers::Socp::default() })));
-    v
-}
-
-fn solve(l: &DiscreteProblem, name: &str, s: &dyn Solver) -> Solution {
-    let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
-    assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
-    sol
+    solvers_with(1e-12, 1e-11, 1e-10, 1e-11)
 }
 
 /// Homogeneous compression (theory §7.1, §9.1): σ = −F e₃⊗e₃ exactly, so tr σ = −F,
@@ -74,20 +56,10 @@ fn homogeneous_compression_matches_the_closed_form() {
     assert!(xi > 0.5, "clearly plastic: ξ = {xi}");
     let tol = 1e-8;
     for (name, s) in solvers() {
-        let sol = solve(&l, name, s.as_ref());
+        let sol = solve_converged(&l, name, s.as_ref());
         let u = sol.extras[0];
-        let (mut es, mut eq, mut eu) = (0.0f64, 0.0f64, 0.0f64);
-        for i in 0..l.element.n_points() {
-            let exact = Sym::new(0.0, 0.0, -f, 0.0, 0.0, 0.0);
-            es = es.max((sol.stress.sigma[i] - exact).norm() / f);
-            eq = eq.max((sol.stress.q(i)[0] - xi).abs() / xi);
-        }
-        for (x, d) in l.element.mesh().nodes.iter().zip(l.element.nodal_vectors(&sol.u)) {
-            let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
-            for k in 0..3 {
-                eu = eu.max((d[k] - exact[k]).abs() / u_exact);
-            }
-        }
+        let (es, eu) = compression_errors(&l, &sol, f, e11, e33, u_exact);
+        let eq = (0..l.element.n_points()).map(|i| (sol.stress.q(i)[0] - xi).abs() / xi).fold(0.0f64, f64::max);
         let e_u = (u - u_exact).abs() / u_exact;
         println!(
             "DP homogeneous compression k0 = {k0}, α = {alpha}, h = {h}, F = {f}: {name:>7} | {:>3} it | U {e_u:.1e} | σ {es:.1e} | ξ {eq:.1e} | u {eu:.1e}",
@@ -113,8 +85,8 @@ fn alpha_zero_is_von_mises_on_the_small_default_scene() {
     let (lv, ld) = (problem(&text), problem(&dp_text));
     assert_eq!(ld.lagrangian().data.plasticity().unwrap().name(), "drucker_prager");
     let newton = Newton { tol: 1e-12, ..Newton::default() };
-    let a = solve(&lv, "newton", &newton);
-    let b = solve(&ld, "newton", &newton);
+    let a = solve_converged(&lv, "newton", &newton);
+    let b = solve_converged(&ld, "newton", &newton);
     let ag = agreement(&ld.lagrangian(), &b, &a);
     println!(
         "DP α = 0 vs von Mises, small default scene: newton {} / {} it | U {:.1e} | σ̂ {:.1e} | plastic {} / {}",
@@ -225,7 +197,7 @@ fn confined_tension_returns_every_element_to_the_apex() {
         }),
     ));
     for (name, sv) in list {
-        let sol = solve(&l, name, sv.as_ref());
+        let sol = solve_converged(&l, name, sv.as_ref());
         let u = sol.extras[0];
         let e_u = (u - u_exact).abs() / u_exact.abs();
         let es = sol.stress.sigma.iter().map(|x| (x - Sym::new(s, s, s, 0.0, 0.0, 0.0)).norm() / s).fold(0.0, f64::max);
@@ -249,7 +221,7 @@ fn all_solvers_agree_on_a_scene_with_apex_returns() {
     let (k0, alpha, h) = (0.5, 0.2, 5.0);
     let zone = "{ all = [ { group = \"zmin\" }, { disc = { center = [0.0, 0.0], radius = 0.5 } } ] }";
     let l = confined_cube(k0, alpha, h, 4.0, 1.0, zone, 6);
-    let reference = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
+    let reference = solve_converged(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
     let apex = apex_elements(&reference, k0, alpha);
     println!(
         "DP confined tension, punch on a quarter disc: {} elements, {} plastic, {apex} on the apex",
@@ -261,7 +233,7 @@ fn all_solvers_agree_on_a_scene_with_apex_returns() {
     let mut list = solvers();
     list[0].1 = Box::new(Newton::default());
     for (name, s) in list {
-        let sol = solve(&l, name, s.as_ref());
+        let sol = solve_converged(&l, name, s.as_ref());
         let a = agreement(&l.lagrangian(), &sol, &reference);
         println!(
             "DP confined tension, punch on a quarter disc: {name:>7} vs newton 1e-12 | {:>4} it | U {:.1e} | σ̂ {:.1e} | apex {}",

@@ -10,36 +10,18 @@
 
 mod common;
 use common::*;
-use saddle::core::{DiscreteProblem, Silent, Solution, Solver, Sym};
+use saddle::core::{Solution, Solver};
 use saddle::solvers::conformance::agreement;
 use saddle::solvers::{Newton, Penalty, Uzawa};
 
 /// The `[yield]` table of kinematic hardening.
 fn kinematic(k0: f64, h: f64, c: f64) -> toml::Value {
-    let mut t = toml::Table::new();
-    t.insert("type".into(), "von_mises_kinematic".into());
-    t.insert("k0".into(), k0.into());
-    t.insert("h".into(), h.into());
-    t.insert("c".into(), c.into());
-    toml::Value::Table(t)
+    yield_table("von_mises_kinematic", &[("k0", k0), ("h", h), ("c", c)])
 }
 
 /// The solvers of the tests, tight enough for 1e-8 on the closed form.
 fn solvers() -> Vec<(&'static str, Box<dyn Solver>)> {
-    let mut v: Vec<(&'static str, Box<dyn Solver>)> = vec![
-        ("newton", Box::new(Newton { tol: 1e-12, ..Newton::default() })),
-        ("uzawa", Box::new(Uzawa { tol: 1e-11, ..Uzawa::default() })),
-        ("penalty", Box::new(Penalty { tol: 1e-10, ..Penalty::default() })),
-    ];
-    #[cfg(feature = "socp")]
-    v.push(("socp", Box::new(saddle::solvers::Socp { tol: 1e-11, ..saddle::solvers::Socp::default() })));
-    v
-}
-
-fn solve(l: &DiscreteProblem, name: &str, s: &dyn Solver) -> Solution {
-    let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
-    assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
-    sol
+    solvers_with(1e-12, 1e-11, 1e-10, 1e-11)
 }
 
 /// Homogeneous compression with kinematic hardening (theory §9.3): σ = −F e₃⊗e₃,
@@ -65,22 +47,15 @@ fn homogeneous(h: f64, c: f64, f: f64) {
     assert!(chi[1] > 0.1, "clearly plastic: |χ| = {}", chi[1]);
     let tol = 1e-8;
     for (name, s) in solvers() {
-        let sol = solve(&l, name, s.as_ref());
+        let sol = solve_converged(&l, name, s.as_ref());
         let u = sol.extras[0];
-        let (mut es, mut eq, mut eu) = (0.0f64, 0.0f64, 0.0f64);
+        let (es, eu) = compression_errors(&l, &sol, f, e11, e33, u_exact);
+        let mut eq = 0.0f64;
         for i in 0..l.element.n_points() {
-            let exact = Sym::new(0.0, 0.0, -f, 0.0, 0.0, 0.0);
-            es = es.max((sol.stress.sigma[i] - exact).norm() / f);
             let q = sol.stress.q(i);
             eq = eq.max((q[0] - xi).abs() / (xi.abs() + chi[1]));
             for k in 0..5 {
                 eq = eq.max((q[1 + k] - chi[k]).abs() / chi[1]);
-            }
-        }
-        for (x, d) in l.element.mesh().nodes.iter().zip(l.element.nodal_vectors(&sol.u)) {
-            let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
-            for k in 0..3 {
-                eu = eu.max((d[k] - exact[k]).abs() / u_exact);
             }
         }
         let e_u = (u - u_exact).abs() / u_exact;
@@ -122,15 +97,10 @@ fn pure_kinematic_hardening_gives_the_stresses_of_isotropic_hardening_with_h_equ
     let (li, _) = build(&iso);
     let (lk, _) = build(&kin);
     assert_eq!(lk.lagrangian().data.plasticity().unwrap().name(), "von_mises_kinematic");
-    let mut pairs: Vec<(&str, Box<dyn Solver>)> = vec![
-        ("newton", Box::new(Newton { tol: 1e-12, ..Newton::default() })),
-        ("uzawa", Box::new(Uzawa { tol: 1e-12, ..Uzawa::default() })),
-    ];
-    #[cfg(feature = "socp")]
-    pairs.push(("socp", Box::new(saddle::solvers::Socp { tol: 1e-12, ..saddle::solvers::Socp::default() })));
+    let pairs = solvers_with(1e-12, 1e-12, 1e-12, 1e-12).into_iter().filter(|(name, _)| *name != "penalty");
     for (name, s) in pairs {
-        let a = solve(&li, name, s.as_ref());
-        let b = solve(&lk, name, s.as_ref());
+        let a = solve_converged(&li, name, s.as_ref());
+        let b = solve_converged(&lk, name, s.as_ref());
         let ds = a.stress.sigma.iter().zip(&b.stress.sigma).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max)
             / a.stress.sigma.iter().map(|x| x.norm()).fold(0.0, f64::max);
         let du = u_distance(&b, &a);
@@ -163,7 +133,7 @@ fn all_solvers_agree_on_the_small_default_scene_with_kinematic_hardening() {
     let mut t = small_johnson();
     t.insert("yield".into(), kinematic(1.0, 2.0, 3.0));
     let (l, _) = build(&t);
-    let reference = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
+    let reference = solve_converged(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
     assert!(reference.stress.n_plastic() > 0);
     let mut list: Vec<(&str, Box<dyn Solver>)> = vec![
         ("newton", Box::new(Newton::default())),
@@ -173,7 +143,7 @@ fn all_solvers_agree_on_the_small_default_scene_with_kinematic_hardening() {
     #[cfg(feature = "socp")]
     list.push(("socp", Box::new(saddle::solvers::Socp::default())));
     for (name, s) in list {
-        let sol = solve(&l, name, s.as_ref());
+        let sol = solve_converged(&l, name, s.as_ref());
         let a = agreement(&l.lagrangian(), &sol, &reference);
         println!(
             "kinematic (h, c) = (2, 3), small default scene: {name:>7} vs newton 1e-12 | {:>4} it | KKT {:.1e} | U {:.1e} | σ̂ {:.1e} | plastic {}",
@@ -199,10 +169,10 @@ fn the_interior_point_on_the_kinematic_cone_agrees_with_newton() {
         let mut t = small_johnson();
         t.insert("yield".into(), kinematic(1.0, h, c));
         let (l, _) = build(&t);
-        let reference = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
+        let reference = solve_converged(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
         let ipm =
             saddle::solvers::Socp { polish: false, ipm_tol: 1e-12, tol: 1e-6, ..saddle::solvers::Socp::default() };
-        let sol = solve(&l, "interior point", &ipm);
+        let sol = solve_converged(&l, "interior point", &ipm);
         let counters = &sol.report.counters;
         assert_eq!(counters["ipm_soc_cones"], l.element.n_points() as f64);
         assert_eq!(counters["ipm_fixed_hardening_variables"], if h > 0.0 { 0.0 } else { 1.0 });
@@ -228,7 +198,7 @@ fn the_vtu_names_the_hardening_fields_of_the_plugin() {
     t.insert("yield".into(), kinematic(1.0, h, c));
     set(&mut t, "obstacle.F", toml::Value::Float(f));
     let (l, _) = build(&t);
-    let sol = solve(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
+    let sol = solve_converged(&l, "newton", &Newton { tol: 1e-12, ..Newton::default() });
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("solution.vtu");
     saddle::io::vtu::write_vtu(&path, l.view(), &sol).unwrap();

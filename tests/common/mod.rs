@@ -1,9 +1,9 @@
 //! Helpers shared by the integration tests: scenes from the examples with edits.
 #![allow(dead_code)]
 
-use saddle::core::DiscreteProblem;
-use saddle::core::Solver;
+use saddle::core::{DiscreteProblem, Silent, Solution, Solver, Sym};
 use saddle::io::scene::Scene;
+use saddle::solvers::{Newton, Penalty, Uzawa};
 use std::path::{Path, PathBuf};
 
 /// Path of a file in the repository.
@@ -40,6 +40,53 @@ pub fn small_johnson() -> toml::Table {
     set(&mut t, "mesh.cells", toml::Value::try_from([12, 12, 6]).unwrap());
     set(&mut t, "mesh.grading.ratio", toml::Value::Float(3.0));
     t
+}
+
+/// A `[yield]` table: `type = kind` with the numbers `fields`.
+pub fn yield_table(kind: &str, fields: &[(&str, f64)]) -> toml::Value {
+    let mut t = toml::Table::new();
+    t.insert("type".into(), kind.into());
+    for (k, v) in fields {
+        t.insert(k.to_string(), (*v).into());
+    }
+    toml::Value::Table(t)
+}
+
+/// Newton, Uzawa, the penalty method and (with the feature) SOCP with these tolerances, by name.
+pub fn solvers_with(newton: f64, uzawa: f64, penalty: f64, socp: f64) -> Vec<(&'static str, Box<dyn Solver>)> {
+    let mut v: Vec<(&'static str, Box<dyn Solver>)> = vec![
+        ("newton", Box::new(Newton { tol: newton, ..Newton::default() })),
+        ("uzawa", Box::new(Uzawa { tol: uzawa, ..Uzawa::default() })),
+        ("penalty", Box::new(Penalty { tol: penalty, ..Penalty::default() })),
+    ];
+    #[cfg(feature = "socp")]
+    v.push(("socp", Box::new(saddle::solvers::Socp { tol: socp, ..saddle::solvers::Socp::default() })));
+    #[cfg(not(feature = "socp"))]
+    let _ = socp;
+    v
+}
+
+/// `s` (called `name` in messages) on `l`; panics unless it converges.
+pub fn solve_converged(l: &DiscreteProblem, name: &str, s: &dyn Solver) -> Solution {
+    let sol = s.solve(&l.lagrangian(), &mut Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert!(sol.report.converged, "{name}: {:?}", sol.report.stop_reason);
+    sol
+}
+
+/// The largest errors of a solution of homogeneous compression (theory §7.1) against the
+/// uniaxial stress σ = −F e₃⊗e₃, relative to F, and against the nodal displacements
+/// u = (ε₁₁x, ε₁₁y, ε₃₃(z − 1)) of the unit cube, relative to `u_scale`: (σ error, u error).
+pub fn compression_errors(l: &DiscreteProblem, sol: &Solution, f: f64, e11: f64, e33: f64, u_scale: f64) -> (f64, f64) {
+    let exact = Sym::new(0.0, 0.0, -f, 0.0, 0.0, 0.0);
+    let es = sol.stress.sigma.iter().map(|s| (s - exact).norm() / f).fold(0.0f64, f64::max);
+    let mut eu = 0.0f64;
+    for (x, d) in l.element.mesh().nodes.iter().zip(l.element.nodal_vectors(&sol.u)) {
+        let exact = [e11 * x[0], e11 * x[1], e33 * (x[2] - 1.0)];
+        for k in 0..3 {
+            eu = eu.max((d[k] - exact[k]).abs() / u_scale);
+        }
+    }
+    (es, eu)
 }
 
 /// A solver from TOML text.

@@ -53,7 +53,7 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use saddle_core::problem::elasticity::Elasticity;
-use saddle_core::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM, energy_inner};
+use saddle_core::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM, StepInput, StepOutput, energy_inner};
 use saddle_core::problem::tensor::{Sym, SymOp, deviator, from_matrix, identity};
 use thiserror::Error;
 
@@ -689,7 +689,9 @@ pub fn step_energy_gradient(p: &dyn AdmissibleStresses, cfg: &KitConfig) -> Resu
         let mut fd = Sym::zeros();
         for k in 0..6 {
             let e = Sym::from_fn(|j, _| if j == k { h } else { 0.0 });
-            fd[k] = (p.step_energy(law, &(eps + e), &ep, &qn[..m]) - p.step_energy(law, &(eps - e), &ep, &qn[..m]))
+            let (plus, minus) = (eps + e, eps - e);
+            fd[k] = (p.step_energy(law, StepInput::new(&plus, &ep, &qn[..m]))
+                - p.step_energy(law, StepInput::new(&minus, &ep, &qn[..m])))
                 / (2.0 * h);
         }
         let err = (fd - sigma).norm();
@@ -853,7 +855,7 @@ impl<'a> Kit<'a> {
     fn local_law(&self, eps: &Sym, tangent: Option<&mut SymOp>) -> (Sym, [f64; MAX_HARDENING_DIM], bool) {
         let mut s = Sym::from_element(f64::NAN);
         let mut q = [f64::NAN; MAX_HARDENING_DIM];
-        let plastic = self.p.local_law(&self.cfg.law, eps, &mut s, &mut q[..self.m], tangent);
+        let plastic = self.p.local_law(&self.cfg.law, eps, StepOutput::new(&mut s, &mut q[..self.m], tangent));
         (s, q, plastic)
     }
 
@@ -886,7 +888,11 @@ impl<'a> Kit<'a> {
         let mut s = Sym::from_element(f64::NAN);
         let mut q = [f64::NAN; MAX_HARDENING_DIM];
         let m = self.m;
-        let plastic = self.p.step_law(&self.cfg.law, eps, ep, &qn[..m], &mut s, &mut q[..m], tangent);
+        let plastic = self.p.step_law(
+            &self.cfg.law,
+            StepInput::new(eps, ep, &qn[..m]),
+            StepOutput::new(&mut s, &mut q[..m], tangent),
+        );
         (s, q, plastic)
     }
 
@@ -1032,7 +1038,7 @@ mod tests {
                     }
                     out
                 })
-                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+                .with_local_law(|m, law, eps, out| m.local_law_from_projection(law, eps, out)),
             Breakage::NotIdempotent => m
                 .with_project(move |_, law, sigma, q| {
                     let out = vm.project(law, sigma, q);
@@ -1042,10 +1048,10 @@ mod tests {
                     }
                     out
                 })
-                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+                .with_local_law(|m, law, eps, out| m.local_law_from_projection(law, eps, out)),
             Breakage::WrongMetric => m
                 .with_project(move |_, law, sigma, q| VonMises { k0: vm.k0, h: 10.0 * vm.h }.project(law, sigma, q))
-                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+                .with_local_law(|m, law, eps, out| m.local_law_from_projection(law, eps, out)),
             Breakage::DoublesPressure => m
                 .with_project(move |_, law, sigma, q| {
                     let mean = identity() * (saddle_core::problem::tensor::trace(sigma) / 3.0);
@@ -1055,13 +1061,11 @@ mod tests {
                     }
                     out
                 })
-                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+                .with_local_law(|m, law, eps, out| m.local_law_from_projection(law, eps, out)),
             Breakage::ElasticEnergy => m.with_energy(|_, law, eps| 0.5 * eps.dot(&law.stress(eps))),
-            Breakage::ElasticTangent => m.with_local_law(move |_, law, eps, s, q, t| {
-                let plastic = vm.local_law(law, eps, s, q, None);
-                if let Some(t) = t {
-                    *t = law.stiffness_matrix();
-                }
+            Breakage::ElasticTangent => m.with_local_law(move |_, law, eps, mut out| {
+                let plastic = vm.local_law(law, eps, StepOutput::new(out.sigma, out.q, None));
+                out.set_tangent(|| law.stiffness_matrix());
                 plastic
             }),
             Breakage::ConcaveEnergy => m.with_energy(move |_, law, eps| {
@@ -1070,7 +1074,7 @@ mod tests {
             }),
             Breakage::LocalLawOfOtherH => {
                 let other = VonMises { k0: vm.k0, h: 2.0 * vm.h };
-                m.with_local_law(move |_, law, eps, s, q, t| other.local_law(law, eps, s, q, t))
+                m.with_local_law(move |_, law, eps, out| other.local_law(law, eps, out))
                     .with_energy(move |_, law, eps| other.energy(law, eps))
             }
             Breakage::NarrowCone => m.with_cone(move |_| {
@@ -1082,17 +1086,15 @@ mod tests {
             }),
             Breakage::EnergyOffset => m.with_energy(move |_, law, eps| vm.energy(law, eps) + 1e-3),
             Breakage::StepIgnoresHardening => {
-                m.with_step_law(move |_, law, eps, ep, _, s, q, t| vm.step_law(law, eps, ep, &[0.0], s, q, t))
+                m.with_step_law(move |_, law, step, out| vm.step_law(law, StepInput { q_n: &[0.0], ..step }, out))
             }
-            Breakage::StepElasticTangent => m.with_step_law(move |_, law, eps, ep, q_n, s, q, t| {
-                let plastic = vm.step_law(law, eps, ep, q_n, s, q, None);
-                if let Some(t) = t {
-                    *t = law.stiffness_matrix();
-                }
+            Breakage::StepElasticTangent => m.with_step_law(move |_, law, step, mut out| {
+                let plastic = vm.step_law(law, step, StepOutput::new(out.sigma, out.q, None));
+                out.set_tangent(|| law.stiffness_matrix());
                 plastic
             }),
             Breakage::StepEnergyIgnoresHardening => {
-                m.with_step_energy(move |_, law, eps, ep, _| vm.step_energy(law, eps, ep, &[0.0]))
+                m.with_step_energy(move |_, law, step| vm.step_energy(law, StepInput { q_n: &[0.0], ..step }))
             }
         }
     }
@@ -1154,9 +1156,7 @@ mod tests {
     /// `p` with the step law by differences of its projection
     /// ([`step_law_by_differences`]), as a plugin without a closed form gives it.
     fn by_differences(p: Box<dyn AdmissibleStresses>) -> Mutant {
-        Mutant::boxed(p).with_step_law(|m, law, eps, ep, q_n, s, q, t| {
-            step_law_by_differences(m.inner.as_ref(), law, eps, ep, q_n, s, q, t)
-        })
+        Mutant::boxed(p).with_step_law(|m, law, step, out| step_law_by_differences(m.inner.as_ref(), law, step, out))
     }
 
     #[test]
@@ -1183,7 +1183,11 @@ mod tests {
                 let (mut t1, mut t2) = (SymOp::zeros(), SymOp::zeros());
                 let (s1, q1, f1) = kit.step_law(&eps, &ep, &qn, Some(&mut t1));
                 let (mut s2, mut q2, m) = (Sym::zeros(), [0.0; MAX_HARDENING_DIM], kit.m);
-                let f2 = default.step_law(&cfg.law, &eps, &ep, &qn[..m], &mut s2, &mut q2[..m], Some(&mut t2));
+                let f2 = default.step_law(
+                    &cfg.law,
+                    StepInput::new(&eps, &ep, &qn[..m]),
+                    StepOutput::new(&mut s2, &mut q2[..m], Some(&mut t2)),
+                );
                 assert_eq!(f1, f2, "{name}, sample {i}");
                 plastic += f1 as usize;
                 let scale = s1.norm() + 1.0;

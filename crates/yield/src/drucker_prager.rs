@@ -31,11 +31,12 @@
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
 use saddle_core::problem::return_mapping::{DeviatoricTrial, elastic_step, radial_tangent};
-use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
-use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity, trace, volumetric_projector};
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock, StepInput, StepOutput};
+use saddle_core::problem::tensor::{Sym, deviator, identity, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
 use crate::VonMises;
+use crate::hardening::{check_modulus, isotropic_inner};
 
 /// Drucker–Prager yield with linear isotropic hardening (theory §9):
 /// `D = {|dev σ| + α tr σ ≤ k₀ + ξ}`, `[σ̂, τ̂] = Aσ:τ + ξη/h`. Scene table:
@@ -77,8 +78,7 @@ impl AdmissibleStresses for DruckerPrager {
         check::bounded(path, "k0", self.k0)?;
         check::non_negative(path, "alpha", self.alpha)?;
         check::bounded(path, "alpha", self.alpha)?;
-        check::non_negative(path, "h", self.h)?;
-        check::scale(path, "h", self.h, true)?;
+        check_modulus(path, self.h)?;
         Ok(())
     }
 
@@ -92,9 +92,9 @@ impl AdmissibleStresses for DruckerPrager {
         1
     }
 
-    /// ξη/h, as von Mises: for h = 0 the metric is infinite in ξ (0 when ξη = 0, else ±∞).
+    /// ξη/h. For h = 0 the metric is infinite in ξ: 0 when ξη = 0, else ±∞ with the sign of ξη.
     fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-        VonMises { k0: self.k0, h: self.h }.hardening_inner(q, r)
+        isotropic_inner(self.h, q[0], r[0])
     }
 
     /// `|dev σ| + α tr σ ≤ k₀ + ξ + tol · max(k₀, |σ|, α|tr σ|, |ξ|)`: the tolerance is relative
@@ -148,54 +148,41 @@ impl AdmissibleStresses for DruckerPrager {
     /// return with k₀ + ξ_n for k₀, ξ from the yield condition (frozen for h = 0), and the same
     /// tangents; when α = h = 0 and k₀ + ξ_n ≤ 0 (empty slice) the trial's mean stress with
     /// `K_b I⊗I`, as [`AdmissibleStresses::project`].
-    fn step_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        plastic_strain: &Sym,
-        q_n: &[f64],
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        let trial = DeviatoricTrial::new(law, eps, plastic_strain);
+    fn step_law(&self, law: &Elasticity, step: StepInput<'_>, mut out: StepOutput<'_>) -> bool {
+        let trial = DeviatoricTrial::new(law, &step);
         let DeviatoricTrial { g2, kb, s: s_tr, r, p } = trial;
-        let a = self.alpha;
+        let (a, q_n) = (self.alpha, step.q_n);
         let t0 = self.k0 + q_n[0];
         if r + a * (3.0 * p) <= t0 {
-            return elastic_step(law, trial.stress(), q_n, sigma, q, tangent);
+            return elastic_step(law, trial.stress(), q_n, out);
         }
         let v = self.apex_modulus(law);
         let t = if v > 0.0 { (v * r + g2 * (t0 - a * (3.0 * p))) / (v + g2) } else { t0 };
         if t > 0.0 {
             let gamma = (r - t) / g2;
             let p_new = p - 3.0 * kb * a * gamma;
-            *sigma = s_tr * (t / r) + identity() * p_new;
-            q[0] = if self.h > 0.0 { t + a * (3.0 * p_new) - self.k0 } else { q_n[0] };
-            if let Some(c) = tangent {
+            *out.sigma = s_tr * (t / r) + identity() * p_new;
+            out.q[0] = if self.h > 0.0 { t + a * (3.0 * p_new) - self.k0 } else { q_n[0] };
+            out.set_tangent(|| {
                 let n = s_tr / r;
                 let i = identity();
                 let dd = v + g2;
-                *c = radial_tangent(kb, &n, g2 * t / r, g2 * v / dd)
+                radial_tangent(kb, &n, g2 * t / r, g2 * v / dd)
                     - (n * i.transpose() + i * n.transpose()) * (g2 * 3.0 * kb * a / dd)
-                    - i * i.transpose() * (9.0 * kb * kb * a * a / dd);
-            }
+                    - i * i.transpose() * (9.0 * kb * kb * a * a / dd)
+            });
         } else if v > 0.0 {
             // apex: γ = (αT − t₀)/v ≥ r/(2G), T' = T − 9K_b α γ
             let gamma = (a * (3.0 * p) - t0) / v;
             let p_new = p - 3.0 * kb * a * gamma;
-            *sigma = identity() * p_new;
-            q[0] = if self.h > 0.0 { a * (3.0 * p_new) - self.k0 } else { q_n[0] };
-            if let Some(c) = tangent {
-                *c = volumetric_projector() * (3.0 * kb * self.h / v);
-            }
+            *out.sigma = identity() * p_new;
+            out.q[0] = if self.h > 0.0 { a * (3.0 * p_new) - self.k0 } else { q_n[0] };
+            out.set_tangent(|| volumetric_projector() * (3.0 * kb * self.h / v));
         } else {
             // α = 0, h = 0 and k₀ + ξ_n ≤ 0: the slice of D is empty; the limit h → 0
-            *sigma = identity() * p;
-            q[0] = -self.k0;
-            if let Some(c) = tangent {
-                *c = volumetric_projector() * (3.0 * kb);
-            }
+            *out.sigma = identity() * p;
+            out.q[0] = -self.k0;
+            out.set_tangent(|| volumetric_projector() * (3.0 * kb));
         }
         true
     }
@@ -262,16 +249,9 @@ mod tests {
     use super::*;
     use crate::conformance::{self, KitConfig, names};
     use crate::mutant::Mutant;
+    use crate::testing::{assert_tangent_by_differences, close, law};
     use nalgebra::Matrix3;
-    use saddle_core::problem::tensor::from_matrix;
-
-    fn law() -> Elasticity {
-        Elasticity::new(100.0, 0.3).unwrap()
-    }
-
-    fn close(a: f64, b: f64, tol: f64) -> bool {
-        (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
-    }
+    use saddle_core::problem::tensor::{SymOp, from_matrix};
 
     #[test]
     fn kit_passes_for_several_parameter_sets() {
@@ -316,19 +296,19 @@ mod tests {
     fn broken_apex(dp: DruckerPrager, how: ApexBreakage) -> Mutant {
         let m = Mutant::of(dp);
         match how {
-            ApexBreakage::LocalLawKeepsTrace => m.with_local_law(move |_, law, eps, sigma, q, tangent| {
-                let plastic = dp.local_law(law, eps, sigma, q, tangent);
+            ApexBreakage::LocalLawKeepsTrace => m.with_local_law(move |_, law, eps, out| {
+                let StepOutput { sigma, q, tangent } = out;
+                let plastic = dp.local_law(law, eps, StepOutput::new(sigma, q, tangent));
                 if plastic && deviator(sigma).norm() == 0.0 {
                     *sigma = identity() * (trace(&law.stress(eps)) / 3.0);
                 }
                 plastic
             }),
-            ApexBreakage::ApexTangentZero => m.with_local_law(move |_, law, eps, sigma, q, tangent| {
+            ApexBreakage::ApexTangentZero => m.with_local_law(move |_, law, eps, mut out| {
                 let mut c = SymOp::zeros();
-                let plastic = dp.local_law(law, eps, sigma, q, Some(&mut c));
-                if let Some(t) = tangent {
-                    *t = if plastic && deviator(sigma).norm() == 0.0 { SymOp::zeros() } else { c };
-                }
+                let plastic = dp.local_law(law, eps, StepOutput::new(out.sigma, out.q, Some(&mut c)));
+                let at_apex = plastic && deviator(out.sigma).norm() == 0.0;
+                out.set_tangent(|| if at_apex { SymOp::zeros() } else { c });
                 plastic
             }),
             _ => m
@@ -356,7 +336,7 @@ mod tests {
                     }
                     true
                 })
-                .with_local_law(|m, law, eps, s, q, t| m.local_law_from_projection(law, eps, s, q, t)),
+                .with_local_law(|m, law, eps, out| m.local_law_from_projection(law, eps, out)),
         }
     }
 
@@ -390,8 +370,8 @@ mod tests {
                 let eps = Sym::from_fn(|_, _| rng.random_range(-0.05..0.05));
                 let (mut s1, mut q1, mut c1) = (Sym::zeros(), [0.0], SymOp::zeros());
                 let (mut s2, mut q2, mut c2) = (Sym::zeros(), [0.0], SymOp::zeros());
-                let p1 = dp.local_law(&law, &eps, &mut s1, &mut q1, Some(&mut c1));
-                let p2 = vm.local_law(&law, &eps, &mut s2, &mut q2, Some(&mut c2));
+                let p1 = dp.local_law(&law, &eps, StepOutput::new(&mut s1, &mut q1, Some(&mut c1)));
+                let p2 = vm.local_law(&law, &eps, StepOutput::new(&mut s2, &mut q2, Some(&mut c2)));
                 assert_eq!(p1, p2);
                 plastic += p1 as usize;
                 let scale = s2.norm().max(k0).max(1.0);
@@ -426,7 +406,7 @@ mod tests {
             let e = -0.01 + 0.05 * k as f64 / n as f64;
             let eps = identity() * e + dev * (1e-4 * (k % 3) as f64);
             let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
-            let pl = dp.local_law(&law, &eps, &mut s, &mut q, Some(&mut c));
+            let pl = dp.local_law(&law, &eps, StepOutput::new(&mut s, &mut q, Some(&mut c)));
             plastic += pl as usize;
             if pl && deviator(&s).norm() == 0.0 {
                 apex += 1;
@@ -464,14 +444,14 @@ mod tests {
         let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
 
         let eps = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.025));
-        assert!(dp.local_law(&law, &eps, &mut s, &mut q, Some(&mut c)));
+        assert!(dp.local_law(&law, &eps, StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!((s - (m * 0.56 + identity() * 1.28)).norm() < 1e-13, "{s:?}");
         assert!((q[0] - 0.504).abs() < 1e-14, "{q:?}");
         assert!((dp.energy(&law, &eps) - 0.0652).abs() < 1e-14);
         assert!((c - c.transpose()).norm() < 1e-12);
 
         let eps = from_matrix(&(Matrix3::identity() * 0.05 + mm * 0.0025));
-        assert!(dp.local_law(&law, &eps, &mut s, &mut q, Some(&mut c)));
+        assert!(dp.local_law(&law, &eps, StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!((s - identity() * 8.0).norm() < 1e-13, "{s:?}");
         assert!((q[0] - 1.4).abs() < 1e-13, "{q:?}");
         assert!((dp.energy(&law, &eps) - 0.65).abs() < 1e-13, "{}", dp.energy(&law, &eps));
@@ -499,7 +479,6 @@ mod tests {
     ///   law, with k₀ = 1, is plastic there).
     #[test]
     fn step_law_from_a_hardened_state_worked_by_hand() {
-        use saddle_core::problem::stresses::step_law_by_differences;
         let law = Elasticity::new(100.0, 0.25).unwrap();
         let dp = DruckerPrager::new(1.0, 0.1, 14.0).unwrap();
         let m = from_matrix(&Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 1.0, 0.0));
@@ -507,41 +486,34 @@ mod tests {
         let ep = m * 0.01 - i3 * 0.002;
         let near = |a: f64, b: f64| (a - b).abs() <= 1e-12;
         let (mut s, mut q, mut c) = (Sym::zeros(), [0.0], SymOp::zeros());
-        let (mut s2, mut q2, mut c2) = (Sym::zeros(), [0.0], SymOp::zeros());
 
         let eps = ep + i3 * 0.01 + m * 0.025;
-        assert!(dp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!(dp.step_law(&law, StepInput::new(&eps, &ep, &[0.6]), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!((s - (m * 0.8 + i3 * 1.4)).norm() < 1e-13 && near(q[0], 1.02), "σ = {s}, ξ = {}", q[0]);
         let (n, cross) = (m * 0.5, Sym::new(1.0, 1.0, -2.0, 0.0, 0.0, 0.0) / 6.0f64.sqrt());
         assert!(near(n.dot(&(c * n)), 16.0) && near(cross.dot(&(c * cross)), 32.0));
         assert!(near(n.dot(&(c * i3)), -48.0) && near(i3.dot(&(c * i3)), 564.0), "{c}");
-        step_law_by_differences(&dp, &law, &eps, &ep, &[0.6], &mut s2, &mut q2, Some(&mut c2));
-        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c2}");
+        assert_tangent_by_differences(&dp, &law, StepInput::new(&eps, &ep, &[0.6]), &c);
         let (mut s3, mut q3) = (law.stress(&(eps - ep)), [0.6]);
         assert!(dp.project(&law, &mut s3, &mut q3) && (s3 - s).norm() < 1e-13 && near(q3[0], 1.02));
 
         let eps = ep + i3 * 0.05 + m * 0.0025;
-        assert!(dp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!(dp.step_law(&law, StepInput::new(&eps, &ep, &[0.6]), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!((s - i3 * 8.6).norm() < 1e-13 && near(q[0], 1.58), "σ = {s}, ξ = {}", q[0]);
         assert!(near(i3.dot(&(c * i3)) / 9.0, 140.0 / 3.0) && (c * m).norm() < 1e-12);
-        step_law_by_differences(&dp, &law, &eps, &ep, &[0.6], &mut s2, &mut q2, Some(&mut c2));
-        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "apex: closed form {c}, by differences {c2}");
+        assert_tangent_by_differences(&dp, &law, StepInput::new(&eps, &ep, &[0.6]), &c);
 
         let eps = ep + i3 * 0.01 + m * 0.006;
-        assert!(!dp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!(!dp.step_law(&law, StepInput::new(&eps, &ep, &[0.6]), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!(s == law.stress(&(eps - ep)) && q[0] == 0.6 && c == law.stiffness_matrix());
-        assert!(dp.local_law(&law, &(eps - ep), &mut s, &mut q, None));
+        assert!(dp.local_law(&law, &(eps - ep), StepOutput::new(&mut s, &mut q, None)));
 
-        // h = 0: ξ frozen at ξ_n, on the boundary k₀ + ξ_n; the zero state is the local law
+        // h = 0: ξ frozen at ξ_n, on the boundary k₀ + ξ_n
         let pp = DruckerPrager::new(1.0, 0.1, 0.0).unwrap();
         let eps = ep + i3 * 0.01 + m * 0.025;
-        assert!(pp.step_law(&law, &eps, &ep, &[0.6], &mut s, &mut q, Some(&mut c)));
+        assert!(pp.step_law(&law, StepInput::new(&eps, &ep, &[0.6]), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!(q[0] == 0.6 && near(deviator(&s).norm() + 0.1 * trace(&s), 1.6));
-        step_law_by_differences(&pp, &law, &eps, &ep, &[0.6], &mut s2, &mut q2, Some(&mut c2));
-        assert!((c2 - c).norm() <= 1e-6 * c.norm(), "h = 0: closed form {c}, by differences {c2}");
-        dp.step_law(&law, &eps, &Sym::zeros(), &[0.0], &mut s, &mut q, Some(&mut c));
-        dp.local_law(&law, &eps, &mut s2, &mut q2, Some(&mut c2));
-        assert!((s - s2).norm() < 1e-13 && near(q[0], q2[0]) && (c - c2).norm() < 1e-12);
+        assert_tangent_by_differences(&pp, &law, StepInput::new(&eps, &ep, &[0.6]), &c);
     }
 
     #[test]

@@ -3,8 +3,8 @@
 use saddle_core::error::ParameterError;
 use saddle_core::problem::elasticity::Elasticity;
 use saddle_core::problem::return_mapping::elastic_step;
-use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription};
-use saddle_core::problem::tensor::{Sym, SymOp};
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, StepInput, StepOutput};
+use saddle_core::problem::tensor::Sym;
 use serde::{Deserialize, Serialize};
 
 /// A linear elastic body: D = the whole space, no hardening variables, `[σ̂, τ̂] = Aσ:τ`.
@@ -47,17 +47,8 @@ impl AdmissibleStresses for Elastic {
     }
 
     /// σ = C(ε − ε_p), tangent C (theory §11.1 with D the whole space).
-    fn step_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        plastic_strain: &Sym,
-        q_n: &[f64],
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        elastic_step(law, law.stress(&(eps - plastic_strain)), q_n, sigma, q, tangent)
+    fn step_law(&self, law: &Elasticity, step: StepInput<'_>, out: StepOutput<'_>) -> bool {
+        elastic_step(law, law.stress(&step.elastic_strain()), step.q_n, out)
     }
 
     /// ψ(ε) = ½Cε:ε.
@@ -75,6 +66,7 @@ impl AdmissibleStresses for Elastic {
 mod tests {
     use super::*;
     use crate::conformance::{KitConfig, check_all};
+    use saddle_core::problem::tensor::SymOp;
 
     #[test]
     fn elastic_is_the_identity_with_stiffness_c() {
@@ -82,7 +74,7 @@ mod tests {
         let p = Elastic {};
         let eps = Sym::new(1e-3, -2e-3, 5e-4, 3e-4, -1e-4, 2e-4);
         let (mut s, mut c) = (Sym::zeros(), SymOp::zeros());
-        assert!(!p.local_law(&law, &eps, &mut s, &mut [], Some(&mut c)));
+        assert!(!p.local_law(&law, &eps, StepOutput::new(&mut s, &mut [], Some(&mut c))));
         assert_eq!(s, law.stress(&eps));
         assert_eq!(c, law.stiffness_matrix());
         assert!((p.energy(&law, &eps) - 0.5 * eps.dot(&(law.stiffness_matrix() * eps))).abs() < 1e-18);

@@ -33,8 +33,8 @@
 //! ```
 //! use saddle_core::error::{ParameterError, check};
 //! use saddle_core::problem::return_mapping::{DeviatoricTrial, elastic_step, radial_tangent};
-//! use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity, trace};
-//! use saddle_core::{AdmissibleStresses, Elasticity};
+//! use saddle_core::problem::tensor::{Sym, deviator, identity, trace};
+//! use saddle_core::{AdmissibleStresses, Elasticity, StepInput, StepOutput};
 //! use saddle_yield::conformance::{KitConfig, check_all};
 //! use serde::{Deserialize, Serialize};
 //!
@@ -68,16 +68,13 @@
 //!         true
 //!     }
 //!     /// The radial return from the trial C(ε − ε_p) (theory §11.1) and its tangent.
-//!     fn step_law(&self, law: &Elasticity, eps: &Sym, ep: &Sym, q_n: &[f64], sigma: &mut Sym, q: &mut [f64],
-//!                 tangent: Option<&mut SymOp>) -> bool {
-//!         let trial = DeviatoricTrial::new(law, eps, ep);
+//!     fn step_law(&self, law: &Elasticity, step: StepInput<'_>, mut out: StepOutput<'_>) -> bool {
+//!         let trial = DeviatoricTrial::new(law, &step);
 //!         if trial.r <= self.k {
-//!             return elastic_step(law, trial.stress(), q_n, sigma, q, tangent);
+//!             return elastic_step(law, trial.stress(), step.q_n, out);
 //!         }
-//!         *sigma = trial.s * (self.k / trial.r) + identity() * trial.p;
-//!         if let Some(t) = tangent {
-//!             *t = radial_tangent(trial.kb, &(trial.s / trial.r), trial.g2 * self.k / trial.r, 0.0);
-//!         }
+//!         *out.sigma = trial.s * (self.k / trial.r) + identity() * trial.p;
+//!         out.set_tangent(|| radial_tangent(trial.kb, &(trial.s / trial.r), trial.g2 * self.k / trial.r, 0.0));
 //!         true
 //!     }
 //! }
@@ -108,7 +105,10 @@
 pub mod conformance;
 mod drucker_prager;
 mod elastic;
+mod hardening;
 pub mod mutant;
+#[cfg(test)]
+mod testing;
 mod tresca;
 mod von_mises;
 mod von_mises_kinematic;

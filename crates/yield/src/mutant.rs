@@ -7,14 +7,12 @@
 //! use saddle_yield::VonMises;
 //! use saddle_yield::conformance::{KitConfig, names, tangent};
 //! use saddle_yield::mutant::Mutant;
-//! use saddle_core::Elasticity;
+//! use saddle_core::{Elasticity, StepOutput};
 //!
 //! // the tangent of the local law is C even where the point is plastic
-//! let broken = Mutant::of(VonMises::new(1.0, 5.0).unwrap()).with_local_law(|m, law, eps, s, q, t| {
-//!     let plastic = m.inner.local_law(law, eps, s, q, None);
-//!     if let Some(t) = t {
-//!         *t = law.stiffness_matrix();
-//!     }
+//! let broken = Mutant::of(VonMises::new(1.0, 5.0).unwrap()).with_local_law(|m, law, eps, mut out| {
+//!     let plastic = m.inner.local_law(law, eps, StepOutput::new(out.sigma, out.q, None));
+//!     out.set_tangent(|| law.stiffness_matrix());
 //!     plastic
 //! });
 //! let cfg = KitConfig::new(Elasticity::new(100.0, 0.3).unwrap(), 1.0);
@@ -26,24 +24,22 @@
 
 use saddle_core::error::ParameterError;
 use saddle_core::problem::elasticity::Elasticity;
-use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription};
-use saddle_core::problem::tensor::{Sym, SymOp};
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, StepInput, StepOutput};
+use saddle_core::problem::tensor::Sym;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
 use std::sync::Arc;
 
 /// A replaced [`AdmissibleStresses::project`].
 pub type ProjectFn = dyn Fn(&Mutant, &Elasticity, &mut Sym, &mut [f64]) -> bool + Send + Sync;
-/// A replaced [`AdmissibleStresses::local_law`]: (mutant, law, ε, σ, q, tangent).
-pub type LocalLawFn =
-    dyn Fn(&Mutant, &Elasticity, &Sym, &mut Sym, &mut [f64], Option<&mut SymOp>) -> bool + Send + Sync;
-/// A replaced [`AdmissibleStresses::step_law`]: (mutant, law, ε, ε_p, q_n, σ, q, tangent).
-pub type StepLawFn =
-    dyn Fn(&Mutant, &Elasticity, &Sym, &Sym, &[f64], &mut Sym, &mut [f64], Option<&mut SymOp>) -> bool + Send + Sync;
+/// A replaced [`AdmissibleStresses::local_law`]: (mutant, law, ε, out).
+pub type LocalLawFn = dyn Fn(&Mutant, &Elasticity, &Sym, StepOutput<'_>) -> bool + Send + Sync;
+/// A replaced [`AdmissibleStresses::step_law`]: (mutant, law, step, out).
+pub type StepLawFn = dyn Fn(&Mutant, &Elasticity, StepInput<'_>, StepOutput<'_>) -> bool + Send + Sync;
 /// A replaced [`AdmissibleStresses::energy`].
 pub type EnergyFn = dyn Fn(&Mutant, &Elasticity, &Sym) -> f64 + Send + Sync;
-/// A replaced [`AdmissibleStresses::step_energy`]: (mutant, law, ε, ε_p, q_n).
-pub type StepEnergyFn = dyn Fn(&Mutant, &Elasticity, &Sym, &Sym, &[f64]) -> f64 + Send + Sync;
+/// A replaced [`AdmissibleStresses::step_energy`]: (mutant, law, step).
+pub type StepEnergyFn = dyn Fn(&Mutant, &Elasticity, StepInput<'_>) -> f64 + Send + Sync;
 /// A replaced [`AdmissibleStresses::cone`].
 pub type ConeFn = dyn Fn(&Mutant) -> Option<ConeDescription> + Send + Sync;
 /// A replaced [`AdmissibleStresses::hardening_inner`].
@@ -96,7 +92,7 @@ impl Mutant {
     /// With the local law replaced.
     pub fn with_local_law(
         mut self,
-        f: impl Fn(&Mutant, &Elasticity, &Sym, &mut Sym, &mut [f64], Option<&mut SymOp>) -> bool + Send + Sync + 'static,
+        f: impl Fn(&Mutant, &Elasticity, &Sym, StepOutput<'_>) -> bool + Send + Sync + 'static,
     ) -> Self {
         self.local_law = Some(Arc::new(f));
         self
@@ -105,10 +101,7 @@ impl Mutant {
     /// With the step law replaced.
     pub fn with_step_law(
         mut self,
-        f: impl Fn(&Mutant, &Elasticity, &Sym, &Sym, &[f64], &mut Sym, &mut [f64], Option<&mut SymOp>) -> bool
-        + Send
-        + Sync
-        + 'static,
+        f: impl Fn(&Mutant, &Elasticity, StepInput<'_>, StepOutput<'_>) -> bool + Send + Sync + 'static,
     ) -> Self {
         self.step_law = Some(Arc::new(f));
         self
@@ -123,7 +116,7 @@ impl Mutant {
     /// With the energy of a load step replaced.
     pub fn with_step_energy(
         mut self,
-        f: impl Fn(&Mutant, &Elasticity, &Sym, &Sym, &[f64]) -> f64 + Send + Sync + 'static,
+        f: impl Fn(&Mutant, &Elasticity, StepInput<'_>) -> f64 + Send + Sync + 'static,
     ) -> Self {
         self.step_energy = Some(Arc::new(f));
         self
@@ -143,20 +136,14 @@ impl Mutant {
 
     /// The local law as a careless author would write it from a (replaced) projection: σ̂ =
     /// `self.project`(Cε, 0), with the wrapped surface's tangent.
-    pub fn local_law_from_projection(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
+    pub fn local_law_from_projection(&self, law: &Elasticity, eps: &Sym, out: StepOutput<'_>) -> bool {
+        let StepOutput { sigma, q, tangent } = out;
         *sigma = law.stress(eps);
         q.iter_mut().for_each(|x| *x = 0.0);
         let plastic = self.project(law, sigma, q);
         if let Some(t) = tangent {
             let (mut s, mut r) = (Sym::zeros(), q.to_vec());
-            self.inner.local_law(law, eps, &mut s, &mut r, Some(t));
+            self.inner.local_law(law, eps, StepOutput::new(&mut s, &mut r, Some(t)));
         }
         plastic
     }
@@ -215,38 +202,22 @@ impl AdmissibleStresses for Mutant {
             None => self.inner.project(law, sigma, q),
         }
     }
-    fn step_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        plastic_strain: &Sym,
-        q_n: &[f64],
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
+    fn step_law(&self, law: &Elasticity, step: StepInput<'_>, out: StepOutput<'_>) -> bool {
         match &self.step_law {
-            Some(f) => f(self, law, eps, plastic_strain, q_n, sigma, q, tangent),
-            None => self.inner.step_law(law, eps, plastic_strain, q_n, sigma, q, tangent),
+            Some(f) => f(self, law, step, out),
+            None => self.inner.step_law(law, step, out),
         }
     }
-    fn local_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
+    fn local_law(&self, law: &Elasticity, eps: &Sym, out: StepOutput<'_>) -> bool {
         match &self.local_law {
-            Some(f) => f(self, law, eps, sigma, q, tangent),
-            None => self.inner.local_law(law, eps, sigma, q, tangent),
+            Some(f) => f(self, law, eps, out),
+            None => self.inner.local_law(law, eps, out),
         }
     }
-    fn step_energy(&self, law: &Elasticity, eps: &Sym, plastic_strain: &Sym, q_n: &[f64]) -> f64 {
+    fn step_energy(&self, law: &Elasticity, step: StepInput<'_>) -> f64 {
         match &self.step_energy {
-            Some(f) => f(self, law, eps, plastic_strain, q_n),
-            None => self.inner.step_energy(law, eps, plastic_strain, q_n),
+            Some(f) => f(self, law, step),
+            None => self.inner.step_energy(law, step),
         }
     }
     fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {

@@ -42,11 +42,12 @@
 //! the deviatoric tangent is `2G c/(2G + c) I_dev`.
 
 use crate::VonMises;
+use crate::hardening::{check_modulus, isotropic_inner};
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
 use saddle_core::problem::return_mapping::{DeviatoricTrial, elastic_step, radial_tangent};
-use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock};
-use saddle_core::problem::tensor::{Sym, SymOp, deviator, identity, trace};
+use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock, StepInput, StepOutput};
+use saddle_core::problem::tensor::{Sym, deviator, identity, trace};
 use serde::{Deserialize, Serialize};
 
 /// Von Mises yield with linear kinematic and isotropic hardening (theory §9.3):
@@ -99,8 +100,7 @@ impl AdmissibleStresses for VonMisesKinematic {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::non_negative(path, "k0", self.k0)?;
         check::bounded(path, "k0", self.k0)?;
-        check::non_negative(path, "h", self.h)?;
-        check::scale(path, "h", self.h, true)?;
+        check_modulus(path, self.h)?;
         check::positive(path, "c", self.c)?;
         check::scale(path, "c", self.c, false)?;
         Ok(())
@@ -119,16 +119,8 @@ impl AdmissibleStresses for VonMisesKinematic {
     /// `ξη/h + χ:ω/c`. For h = 0 the metric is infinite in ξ: the ξ part is 0 when ξη = 0,
     /// else ±∞ with the sign of ξη.
     fn hardening_inner(&self, q: &[f64], r: &[f64]) -> f64 {
-        let p = q[0] * r[0];
-        let iso = if self.h > 0.0 {
-            p / self.h
-        } else if p == 0.0 {
-            0.0
-        } else {
-            p * f64::INFINITY
-        };
         let kin: f64 = q[1..6].iter().zip(&r[1..6]).map(|(a, b)| a * b).sum();
-        iso + kin / self.c
+        isotropic_inner(self.h, q[0], r[0]) + kin / self.c
     }
 
     /// `|dev σ − χ| ≤ k₀ + ξ + tol · max(k₀, |σ|, |ξ|, |χ|)`: the tolerance is relative to the
@@ -175,24 +167,16 @@ impl AdmissibleStresses for VonMisesKinematic {
     /// `K_b I⊗I + 2G[(1 − 2Gλ/r)(I_dev − n⊗n) + (h + c)/(2G + c + h) n⊗n]` when plastic, with
     /// h → 0 where t does not move with r (h = 0, or the apex: there `2G c/(2G + c) I_dev`); C
     /// when elastic.
-    fn step_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        plastic_strain: &Sym,
-        q_n: &[f64],
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        let trial = DeviatoricTrial::new(law, eps, plastic_strain);
+    fn step_law(&self, law: &Elasticity, step: StepInput<'_>, mut out: StepOutput<'_>) -> bool {
+        let trial = DeviatoricTrial::new(law, &step);
         let DeviatoricTrial { g2, kb, s: s_tr, p, .. } = trial;
+        let q_n = step.q_n;
         let chi = Self::back_stress(q_n);
         let a = s_tr - chi;
         let r = a.norm();
         let t0 = self.k0 + q_n[0];
         if r <= t0 {
-            return elastic_step(law, trial.stress(), q_n, sigma, q, tangent);
+            return elastic_step(law, trial.stress(), q_n, out);
         }
         let gc = g2 + self.c;
         let t = if self.h > 0.0 { (gc * t0 + self.h * r) / (gc + self.h) } else { t0 };
@@ -201,15 +185,13 @@ impl AdmissibleStresses for VonMisesKinematic {
         let t = t.max(0.0);
         let lambda = (r - t) / gc;
         let n = a / r;
-        *sigma = s_tr - n * (g2 * lambda) + identity() * p;
+        *out.sigma = s_tr - n * (g2 * lambda) + identity() * p;
         let x = Self::coordinates(&(chi + n * (self.c * lambda)));
-        q[1..6].copy_from_slice(&x);
-        q[0] = if self.h > 0.0 || apex { t - self.k0 } else { q_n[0] };
-        if let Some(c) = tangent {
-            // t moves with r only on the cone with h > 0: dλ = dr/(2G + c + h_eff)
-            let h_eff = if apex { 0.0 } else { self.h };
-            *c = radial_tangent(kb, &n, g2 * (1.0 - g2 * lambda / r), g2 * (h_eff + self.c) / (gc + h_eff));
-        }
+        out.q[1..6].copy_from_slice(&x);
+        out.q[0] = if self.h > 0.0 || apex { t - self.k0 } else { q_n[0] };
+        // t moves with r only on the cone with h > 0: dλ = dr/(2G + c + h_eff)
+        let h_eff = if apex { 0.0 } else { self.h };
+        out.set_tangent(|| radial_tangent(kb, &n, g2 * (1.0 - g2 * lambda / r), g2 * (h_eff + self.c) / (gc + h_eff)));
         true
     }
 
@@ -260,15 +242,8 @@ mod tests {
     use super::*;
     use crate::conformance::{self, KitConfig, KitFailure, names};
     use crate::mutant::Mutant;
-    use saddle_core::problem::tensor::{deviatoric_projector, volumetric_projector};
-
-    fn law() -> Elasticity {
-        Elasticity::new(100.0, 0.3).unwrap()
-    }
-
-    fn close(a: f64, b: f64, tol: f64) -> bool {
-        (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
-    }
+    use crate::testing::{assert_tangent_by_differences, close, law};
+    use saddle_core::problem::tensor::{SymOp, deviatoric_projector, volumetric_projector};
 
     #[test]
     fn kinematic_kit_passes_for_several_parameter_sets() {
@@ -312,7 +287,7 @@ mod tests {
         let tol = 1e-13;
         let near = |a: f64, b: f64| (a - b).abs() <= tol;
         let (mut s, mut q, mut ct) = (Sym::zeros(), [0.0; 6], SymOp::zeros());
-        assert!(p.local_law(&law, &eps, &mut s, &mut q, Some(&mut ct)), "r = 4 > k0 = 1: plastic");
+        assert!(p.local_law(&law, &eps, StepOutput::new(&mut s, &mut q, Some(&mut ct))), "r = 4 > k0 = 1: plastic");
         let expected = Matrix3::new(2.8, 0.0, 0.0, 0.0, 1.2, 0.8, 0.0, 0.8, 2.0);
         assert!((to_matrix(&s) - expected).abs().max() <= tol, "σ = {}, by hand {expected}", to_matrix(&s));
         assert!(near(q[0], 0.24), "ξ = {}, by hand 0.24", q[0]);
@@ -339,7 +314,7 @@ mod tests {
         assert!((s2 - s).norm() <= tol && q2.iter().zip(&q).all(|(a, b)| near(*a, *b)), "{s2} {q2:?}");
         // below yield: elastic, no hardening, tangent C
         let small = from_matrix(&(Matrix3::identity() * 0.01 + mm * 0.005));
-        assert!(!p.local_law(&law, &small, &mut s, &mut q, Some(&mut ct)));
+        assert!(!p.local_law(&law, &small, StepOutput::new(&mut s, &mut q, Some(&mut ct))));
         assert!(q == [0.0; 6] && ct == law.stiffness_matrix() && s == law.stress(&small));
     }
 
@@ -362,7 +337,6 @@ mod tests {
     #[test]
     fn kinematic_step_law_reverse_yields_at_the_bauschinger_point() {
         use nalgebra::Matrix3;
-        use saddle_core::problem::stresses::step_law_by_differences;
         use saddle_core::problem::tensor::from_matrix;
         let law = Elasticity::new(100.0, 0.25).unwrap();
         let p = VonMisesKinematic::new(1.0, 8.0, 12.0).unwrap();
@@ -373,7 +347,11 @@ mod tests {
         // the forward step from the virgin state
         let (mut s, mut qn) = (Sym::zeros(), [0.0; 6]);
         let eps1 = i3 * 0.01 + m * 0.025;
-        assert!(p.step_law(&law, &eps1, &Sym::zeros(), &[0.0; 6], &mut s, &mut qn, None));
+        assert!(p.step_law(
+            &law,
+            StepInput::new(&eps1, &Sym::zeros(), &[0.0; 6]),
+            StepOutput::new(&mut s, &mut qn, None)
+        ));
         let ep = eps1 - law.compliance(&s);
         assert!((ep - m * 0.015).norm() <= tol && near(qn[0], 0.24));
         assert!((VonMisesKinematic::back_stress(&qn) - m * 0.18).norm() <= tol);
@@ -382,20 +360,36 @@ mod tests {
         // the Bauschinger point: elastic just before, plastic just beyond
         let (mut q, mut c) = ([0.0; 6], SymOp::zeros());
         let before = reverse(-0.44 * (1.0 - 1e-9));
-        assert!(!p.step_law(&law, &before, &ep, &qn, &mut s, &mut q, Some(&mut c)));
+        assert!(!p.step_law(&law, StepInput::new(&before, &ep, &qn), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!(s == law.stress(&(before - ep)) && q == qn && c == law.stiffness_matrix());
-        assert!(p.step_law(&law, &reverse(-0.44 * (1.0 + 1e-9)), &ep, &qn, &mut s, &mut q, None));
+        assert!(p.step_law(
+            &law,
+            StepInput::new(&reverse(-0.44 * (1.0 + 1e-9)), &ep, &qn),
+            StepOutput::new(&mut s, &mut q, None)
+        ));
         // isotropic hardening to the same size: elastic until |s_tr| = 1.6
         let iso = VonMises::new(1.0, 20.0).unwrap();
         let mut qi = [0.0];
-        assert!(!iso.step_law(&law, &reverse(-0.44 * (1.0 + 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
-        assert!(!iso.step_law(&law, &reverse(-0.8 * (1.0 - 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
-        assert!(iso.step_law(&law, &reverse(-0.8 * (1.0 + 1e-9)), &ep, &[0.6], &mut s, &mut qi, None));
+        assert!(!iso.step_law(
+            &law,
+            StepInput::new(&reverse(-0.44 * (1.0 + 1e-9)), &ep, &[0.6]),
+            StepOutput::new(&mut s, &mut qi, None)
+        ));
+        assert!(!iso.step_law(
+            &law,
+            StepInput::new(&reverse(-0.8 * (1.0 - 1e-9)), &ep, &[0.6]),
+            StepOutput::new(&mut s, &mut qi, None)
+        ));
+        assert!(iso.step_law(
+            &law,
+            StepInput::new(&reverse(-0.8 * (1.0 + 1e-9)), &ep, &[0.6]),
+            StepOutput::new(&mut s, &mut qi, None)
+        ));
 
         // β = −0.82
         let eps = reverse(-0.82);
         assert!((eps - (i3 * 0.01 + m * 0.00475)).norm() <= 1e-16);
-        assert!(p.step_law(&law, &eps, &ep, &qn, &mut s, &mut q, Some(&mut c)));
+        assert!(p.step_law(&law, StepInput::new(&eps, &ep, &qn), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!((s - (m * -0.516 + i3 * 2.0)).norm() <= tol, "σ = {s}");
         let chi = VonMisesKinematic::back_stress(&q);
         assert!((chi - m * 0.1344).norm() <= tol && near(q[0], 0.3008), "χ = {chi}, ξ = {}", q[0]);
@@ -410,25 +404,22 @@ mod tests {
         let (mut s2, mut q2) = (law.stress(&(eps - ep)), qn);
         assert!(p.project(&law, &mut s2, &mut q2));
         assert!((s2 - s).norm() <= tol && q2.iter().zip(&q).all(|(a, b)| near(*a, *b)));
-        let (mut s3, mut q3, mut c3) = (Sym::zeros(), [0.0; 6], SymOp::zeros());
-        step_law_by_differences(&p, &law, &eps, &ep, &qn, &mut s3, &mut q3, Some(&mut c3));
-        assert!((c3 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c3}");
+        assert_tangent_by_differences(&p, &law, StepInput::new(&eps, &ep, &qn), &c);
 
         // h = 0 freezes ξ; from ξ_n = −1.5 (t₀ < 0, not admissible) the apex
         // s' = χ' = (c s_tr + 2Gχ_n)/(2G + c) with the deviatoric tangent 2G c/(2G + c)
         let pk = VonMisesKinematic::new(1.0, 0.0, 12.0).unwrap();
-        assert!(pk.step_law(&law, &eps, &ep, &qn, &mut s, &mut q, Some(&mut c)));
+        assert!(pk.step_law(&law, StepInput::new(&eps, &ep, &qn), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         assert!(q[0] == 0.24 && near((deviator(&s) - VonMisesKinematic::back_stress(&q)).norm(), 1.24));
         let mut q_apex = qn;
         q_apex[0] = -1.5;
-        assert!(pk.step_law(&law, &eps, &ep, &q_apex, &mut s, &mut q, Some(&mut c)));
+        assert!(pk.step_law(&law, StepInput::new(&eps, &ep, &q_apex), StepOutput::new(&mut s, &mut q, Some(&mut c))));
         let apex = m * ((12.0 * -0.82 + 80.0 * 0.18) / 92.0);
         assert!((s - (apex + i3 * 2.0)).norm() <= tol && (VonMisesKinematic::back_stress(&q) - apex).norm() <= tol);
         assert_eq!(q[0], -1.0);
         let want = volumetric_projector() * 200.0 + deviatoric_projector() * (80.0 * 12.0 / 92.0);
         assert!((c - want).norm() <= 1e-12, "{c}");
-        step_law_by_differences(&pk, &law, &eps, &ep, &q_apex, &mut s3, &mut q3, Some(&mut c3));
-        assert!((c3 - c).norm() <= 1e-6 * c.norm(), "closed form {c}, by differences {c3}");
+        assert_tangent_by_differences(&pk, &law, StepInput::new(&eps, &ep, &q_apex), &c);
     }
 
     /// Theory §9.3: from the zero state the local law with (h, c) is the isotropic law with
@@ -457,8 +448,8 @@ mod tests {
                     );
                 let (mut sk, mut qk, mut ck) = (Sym::zeros(), [0.0; 6], SymOp::zeros());
                 let (mut si, mut qi, mut ci) = (Sym::zeros(), [0.0], SymOp::zeros());
-                let pk = kin.local_law(&law, &eps, &mut sk, &mut qk, Some(&mut ck));
-                let pi = iso.local_law(&law, &eps, &mut si, &mut qi, Some(&mut ci));
+                let pk = kin.local_law(&law, &eps, StepOutput::new(&mut sk, &mut qk, Some(&mut ck)));
+                let pi = iso.local_law(&law, &eps, StepOutput::new(&mut si, &mut qi, Some(&mut ci)));
                 assert_eq!(pk, pi);
                 plastic += pk as usize;
                 assert!((sk - si).norm() <= 1e-14 * si.norm(), "σ: {sk} vs {si}");
@@ -631,8 +622,9 @@ mod tests {
                     }
                     out
                 })
-                .with_local_law(move |m, law, eps, sigma, q, tangent| {
-                    let plastic = p.local_law(law, eps, sigma, q, tangent);
+                .with_local_law(move |m, law, eps, out| {
+                    let StepOutput { sigma, q, tangent } = out;
+                    let plastic = p.local_law(law, eps, StepOutput::new(sigma, q, tangent));
                     *sigma = law.stress(eps);
                     q.fill(0.0);
                     m.project(law, sigma, q);
@@ -644,11 +636,11 @@ mod tests {
             }),
             Breakage::LocalLawWithoutC => {
                 let iso = VonMises { k0: p.k0, h: p.h };
-                m.with_local_law(move |_, law, eps, sigma, q, tangent| {
+                m.with_local_law(move |_, law, eps, out| {
                     let mut xi = [0.0];
-                    let plastic = iso.local_law(law, eps, sigma, &mut xi, tangent);
-                    q.fill(0.0);
-                    q[0] = xi[0];
+                    let plastic = iso.local_law(law, eps, StepOutput::new(out.sigma, &mut xi, out.tangent));
+                    out.q.fill(0.0);
+                    out.q[0] = xi[0];
                     plastic
                 })
                 .with_energy(move |_, law, eps| iso.energy(law, eps))

@@ -6,6 +6,8 @@
 
 pub mod discrete_problem;
 pub mod loads;
+#[cfg(test)]
+mod operator_checks;
 pub mod p1p0;
 pub mod p2;
 pub mod topology;

@@ -332,6 +332,7 @@ impl ElementOperators for P2Element {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::operator_checks;
     use crate::mesh::box_mesh::BoxMesh;
     use crate::mesh::region::Region;
     use nalgebra::Matrix3;
@@ -414,47 +415,15 @@ mod tests {
     #[test]
     fn divergence_is_the_transpose_of_strain_and_entries_reproduce_it() {
         for md in [false, true] {
-            let l = problem(md);
-            let mut rng = StdRng::seed_from_u64(7);
-            let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
-            let sigma: Vec<Sym> = (0..l.n_points()).map(|_| Sym::from_fn(|_, _| rng.random_range(-1.0..1.0))).collect();
-            let mut eps = vec![Sym::zeros(); l.n_points()];
-            l.strain(&u, &mut eps);
-            let lhs: f64 = eps.iter().zip(&sigma).zip(&l.weights).map(|((e, s), w)| w * e.dot(s)).sum();
-            let mut f = vec![0.0; l.n_dofs()];
-            l.divergence(&sigma, &mut f);
-            let rhs: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
-            assert!((lhs - rhs).abs() < 1e-12 * lhs.abs().max(1.0), "{lhs} vs {rhs}");
-            let mut from_entries = vec![Sym::zeros(); l.n_points()];
-            for (p, c, j, v) in l.strain_entries() {
-                from_entries[p][c] += v * u[j];
-            }
-            let err = eps.iter().zip(&from_entries).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-            assert!(err < 1e-12, "{err}");
+            operator_checks::divergence_is_the_transpose_of_strain(&problem(md));
+            operator_checks::strain_entries_reproduce_the_strain(&problem(md), 1e-12);
         }
     }
 
     #[test]
     fn assembled_stiffness_matches_the_operator_and_the_energy() {
         for md in [false, true] {
-            let l = problem(md);
-            let c = crate::problem::elasticity::Elasticity::new(10.0, 0.3).unwrap().stiffness_matrix();
-            let values = l.stiffness(Material::Uniform(&c));
-            let mut rng = StdRng::seed_from_u64(3);
-            let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
-            let mut ku = vec![0.0; l.n_dofs()];
-            l.parts.pattern.matvec(&values, &u, &mut ku);
-            let mut eps = vec![Sym::zeros(); l.n_points()];
-            l.strain(&u, &mut eps);
-            let sigma: Vec<Sym> = eps.iter().map(|e| c * e).collect();
-            let mut f = vec![0.0; l.n_dofs()];
-            l.divergence(&sigma, &mut f);
-            let err = ku.iter().zip(&f).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            let scale = f.iter().map(|a| a.abs()).fold(0.0, f64::max);
-            assert!(err < 1e-12 * scale, "{err} vs {scale}");
-            let e1: f64 = 0.5 * ku.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
-            let e2: f64 = eps.iter().zip(&l.weights).map(|(e, w)| 0.5 * w * e.dot(&(c * e))).sum();
-            assert!((e1 - e2).abs() < 1e-12 * e1);
+            operator_checks::assembled_stiffness_matches_the_operator(&problem(md));
         }
     }
 

@@ -28,10 +28,9 @@ fn local_energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
                 0.5 * w * x.dot(&law.stress(&x))
             })
             .sum(),
-        (Some(p), Some(st)) => (0..eps.len())
-            .into_par_iter()
-            .map(|i| w[i] * p.step_energy(&law, &eps[i], &st.plastic_strain[i], st.q(i)))
-            .sum(),
+        (Some(p), Some(st)) => {
+            (0..eps.len()).into_par_iter().map(|i| w[i] * p.step_energy(&law, st.step(i, &eps[i]))).sum()
+        }
     }
 }
 

@@ -3,6 +3,7 @@
 //! hardening variables per point, stored the same way ([`Hardening`]).
 
 use crate::problem::elasticity::Elasticity;
+use crate::problem::stresses::StepInput;
 use crate::problem::tensor::Sym;
 use std::ops::{Deref, DerefMut};
 
@@ -132,6 +133,12 @@ impl PlasticState {
     #[inline]
     pub fn q(&self, i: usize) -> &[f64] {
         self.q.at(i)
+    }
+
+    /// The step law's input at point i for the strain `eps` (theory §11.1).
+    #[inline]
+    pub fn step<'a>(&'a self, i: usize, eps: &'a Sym) -> StepInput<'a> {
+        StepInput::new(eps, &self.plastic_strain[i], self.q(i))
     }
 
     /// Number of points.

@@ -12,7 +12,7 @@ use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::fields::{PlasticState, StressField};
 use crate::problem::operators::ElementOperators;
-use crate::problem::stresses::AdmissibleStresses;
+use crate::problem::stresses::{AdmissibleStresses, StepOutput};
 use crate::problem::tensor::{Sym, SymOp};
 use rayon::prelude::*;
 use std::ops::Deref;
@@ -106,21 +106,21 @@ impl<'a> Data<'a> {
             .zip(eps.par_iter())
             .enumerate();
         // each point counts its own return mapping, where it runs
-        let law_at = |i: usize, e: &Sym, s: &mut Sym, q: &mut [f64], t: Option<&mut SymOp>| match state {
-            None => p.local_law(&law, e, s, q, t),
-            Some(st) => p.step_law(&law, e, &st.plastic_strain[i], st.q(i), s, q, t),
+        let law_at = |i: usize, e: &Sym, out: StepOutput<'_>| match state {
+            None => p.local_law(&law, e, out),
+            Some(st) => p.step_law(&law, st.step(i, e), out),
         };
         let (plastic, projected) = match tangents {
             None => points
                 .map(|(i, (((s, q), pl), e))| {
-                    *pl = law_at(i, e, s, &mut q[..m], None);
+                    *pl = law_at(i, e, StepOutput::new(s, &mut q[..m], None));
                     (*pl as usize, 1)
                 })
                 .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
             Some(t) => points
                 .zip(t.par_iter_mut())
                 .map(|((i, (((s, q), pl), e)), t)| {
-                    *pl = law_at(i, e, s, &mut q[..m], Some(t));
+                    *pl = law_at(i, e, StepOutput::new(s, &mut q[..m], Some(t)));
                     (*pl as usize, 1)
                 })
                 .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),

@@ -4,6 +4,7 @@
 //! [`crate::AdmissibleStresses::step_law`] is its own correction between them.
 
 use crate::problem::elasticity::Elasticity;
+use crate::problem::stresses::{StepInput, StepOutput};
 use crate::problem::tensor::{Sym, SymOp, deviator, deviatoric_projector, identity, trace, volumetric_projector};
 
 /// The elastic predictor of a step (theory §11.1) split by the isotropy of C: for
@@ -24,12 +25,12 @@ pub struct DeviatoricTrial {
 }
 
 impl DeviatoricTrial {
-    /// The trial of strain `eps` from the plastic strain `plastic_strain`.
+    /// The trial of the step `step`.
     #[inline]
-    pub fn new(law: &Elasticity, eps: &Sym, plastic_strain: &Sym) -> Self {
+    pub fn new(law: &Elasticity, step: &StepInput<'_>) -> Self {
         let g2 = 2.0 * law.shear_modulus();
         let kb = law.bulk_modulus();
-        let e = eps - plastic_strain;
+        let e = step.elastic_strain();
         let s = deviator(&e) * g2;
         Self { g2, kb, s, r: s.norm(), p: kb * trace(&e) }
     }
@@ -44,19 +45,11 @@ impl DeviatoricTrial {
 /// The elastic step (theory §11.1): the trial is admissible, so σ = `trial`, q = q_n and the
 /// tangent is C. Returns false (not plastic), for `return elastic_step(…)`.
 #[inline]
-pub fn elastic_step(
-    law: &Elasticity,
-    trial: Sym,
-    q_n: &[f64],
-    sigma: &mut Sym,
-    q: &mut [f64],
-    tangent: Option<&mut SymOp>,
-) -> bool {
-    *sigma = trial;
-    q.copy_from_slice(&q_n[..q.len()]);
-    if let Some(c) = tangent {
-        *c = law.stiffness_matrix();
-    }
+pub fn elastic_step(law: &Elasticity, trial: Sym, q_n: &[f64], mut out: StepOutput<'_>) -> bool {
+    *out.sigma = trial;
+    let m = out.q.len();
+    out.q.copy_from_slice(&q_n[..m]);
+    out.set_tangent(|| law.stiffness_matrix());
     false
 }
 

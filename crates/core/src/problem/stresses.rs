@@ -15,10 +15,80 @@
 use crate::error::ParameterError;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::tensor::{Sym, SymOp};
+use nalgebra::ArrayStorage;
 use std::fmt::Debug;
 
 /// Upper bound on `hardening_dim()`, so that hot loops keep q on the stack.
 pub const MAX_HARDENING_DIM: usize = 8;
+
+/// ε_p = 0 of the zero state.
+static ZERO_STRAIN: Sym = Sym::from_array_storage(ArrayStorage([[0.0; 6]; 1]));
+/// q_n = 0 of the zero state.
+static ZERO_HARDENING: [f64; MAX_HARDENING_DIM] = [0.0; MAX_HARDENING_DIM];
+
+/// What the law of a load step reads at one point (theory §11.1): the strain ε, and the
+/// previous step's plastic strain ε_p and hardening variables q_n, whose trial is
+/// (C(ε − ε_p), q_n).
+#[derive(Clone, Copy, Debug)]
+pub struct StepInput<'a> {
+    /// ε.
+    pub eps: &'a Sym,
+    /// ε_p.
+    pub plastic_strain: &'a Sym,
+    /// q_n, `hardening_dim()` entries.
+    pub q_n: &'a [f64],
+}
+
+impl<'a> StepInput<'a> {
+    /// The strain `eps` from the state (`plastic_strain`, `q_n`).
+    pub fn new(eps: &'a Sym, plastic_strain: &'a Sym, q_n: &'a [f64]) -> Self {
+        Self { eps, plastic_strain, q_n }
+    }
+
+    /// The strain `eps` from the zero state ε_p = 0, q_n = 0 (`hardening_dim` zeros): the
+    /// stationary problem's local law (theory §2).
+    pub fn from_zero_state(eps: &'a Sym, hardening_dim: usize) -> Self {
+        Self::new(eps, &ZERO_STRAIN, &ZERO_HARDENING[..hardening_dim])
+    }
+
+    /// True when ε_p = 0 and q_n = 0.
+    pub fn is_zero_state(&self) -> bool {
+        self.q_n.iter().all(|x| *x == 0.0) && self.plastic_strain.iter().all(|x| *x == 0.0)
+    }
+
+    /// ε − ε_p, the strain of the elastic trial.
+    #[inline]
+    pub fn elastic_strain(&self) -> Sym {
+        self.eps - self.plastic_strain
+    }
+}
+
+/// What a law writes at one point (theory §2, §11.1): the generalised stress σ̂ = (σ, q) and,
+/// when asked, the consistent tangent dσ/dε.
+#[derive(Debug)]
+pub struct StepOutput<'a> {
+    /// σ.
+    pub sigma: &'a mut Sym,
+    /// q, `hardening_dim()` entries.
+    pub q: &'a mut [f64],
+    /// dσ/dε, where asked.
+    pub tangent: Option<&'a mut SymOp>,
+}
+
+impl<'a> StepOutput<'a> {
+    /// σ into `sigma`, q into `q`, the tangent into `tangent` if given.
+    pub fn new(sigma: &'a mut Sym, q: &'a mut [f64], tangent: Option<&'a mut SymOp>) -> Self {
+        Self { sigma, q, tangent }
+    }
+
+    /// The tangent `f()`, computed only where it is asked for.
+    #[inline]
+    pub fn set_tangent(&mut self, f: impl FnOnce() -> SymOp) {
+        if let Some(t) = self.tangent.as_deref_mut() {
+            *t = f();
+        }
+    }
+}
 
 /// One second-order-cone block of a cone description: the affine image
 /// `offset + map · (σ, q)` lies in the cone `{(t, x) ∈ R × R^{dim−1} : |x| ≤ t}`.
@@ -86,45 +156,27 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
     /// asked. Returns true when the trial was outside D. A plugin without a closed form may
     /// call [`step_law_by_differences`]; the return-mapping helpers of
     /// [`crate::problem::return_mapping`] hold the steps plugins share.
-    #[allow(clippy::too_many_arguments)]
-    fn step_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        plastic_strain: &Sym,
-        q_n: &[f64],
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool;
+    fn step_law(&self, law: &Elasticity, step: StepInput<'_>, out: StepOutput<'_>) -> bool;
 
     /// The local law (theory §2): σ̂ = P_D(Cε, 0), and its consistent tangent dσ/dε when asked
     /// — the step law from the zero state. Returns true when the point is plastic.
-    fn local_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        sigma: &mut Sym,
-        q: &mut [f64],
-        tangent: Option<&mut SymOp>,
-    ) -> bool {
-        let zero = [0.0; MAX_HARDENING_DIM];
-        self.step_law(law, eps, &Sym::zeros(), &zero[..self.hardening_dim()], sigma, q, tangent)
+    fn local_law(&self, law: &Elasticity, eps: &Sym, out: StepOutput<'_>) -> bool {
+        self.step_law(law, StepInput::from_zero_state(eps, self.hardening_dim()), out)
     }
 
     /// The reduced energy density of a load step (theory §11.1),
     /// `ψ_n(ε) = (ε − ε_p):σ − ½Aσ:σ − ½(q − q_n)·H⁻¹(q − q_n)` at σ̂ = the step law's stresses.
     /// With ε_p = 0 and q_n = 0 it is [`AdmissibleStresses::energy`] (and calls it).
-    fn step_energy(&self, law: &Elasticity, eps: &Sym, plastic_strain: &Sym, q_n: &[f64]) -> f64 {
-        if q_n.iter().all(|x| *x == 0.0) && plastic_strain.iter().all(|x| *x == 0.0) {
-            return self.energy(law, eps);
+    fn step_energy(&self, law: &Elasticity, step: StepInput<'_>) -> f64 {
+        if step.is_zero_state() {
+            return self.energy(law, step.eps);
         }
         let mut sigma = Sym::zeros();
         let mut q = [0.0; MAX_HARDENING_DIM];
         let m = self.hardening_dim();
-        self.step_law(law, eps, plastic_strain, q_n, &mut sigma, &mut q[..m], None);
-        let dq: [f64; MAX_HARDENING_DIM] = std::array::from_fn(|k| if k < m { q[k] - q_n[k] } else { 0.0 });
-        (eps - plastic_strain).dot(&sigma)
+        self.step_law(law, step, StepOutput::new(&mut sigma, &mut q[..m], None));
+        let dq: [f64; MAX_HARDENING_DIM] = std::array::from_fn(|k| if k < m { q[k] - step.q_n[k] } else { 0.0 });
+        step.elastic_strain().dot(&sigma)
             - 0.5 * (law.compliance(&sigma).dot(&sigma) + self.hardening_inner(&dq[..m], &dq[..m]))
     }
 
@@ -134,7 +186,7 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
         let mut sigma = Sym::zeros();
         let mut q = [0.0; MAX_HARDENING_DIM];
         let q = &mut q[..self.hardening_dim()];
-        self.local_law(law, eps, &mut sigma, q, None);
+        self.local_law(law, eps, StepOutput::new(&mut sigma, q, None));
         eps.dot(&sigma) - 0.5 * (law.compliance(&sigma).dot(&sigma) + self.hardening_inner(q, q))
     }
 
@@ -166,24 +218,20 @@ dyn_clone::clone_trait_object!(AdmissibleStresses);
 /// size of the projected stress. It is exact where the projection is smooth up to O(δ²) and
 /// round-off ε_mach/δ, about 1e-8 relative: Newton then converges fast but not quadratically
 /// below that. Plugins should give the step law's closed form where they know it.
-#[allow(clippy::too_many_arguments)]
 pub fn step_law_by_differences(
     p: &(impl AdmissibleStresses + ?Sized),
     law: &Elasticity,
-    eps: &Sym,
-    plastic_strain: &Sym,
-    q_n: &[f64],
-    sigma: &mut Sym,
-    q: &mut [f64],
-    tangent: Option<&mut SymOp>,
+    step: StepInput<'_>,
+    out: StepOutput<'_>,
 ) -> bool {
     let m = p.hardening_dim();
-    let e = eps - plastic_strain;
+    let e = step.elastic_strain();
     let project = |e: &Sym, s: &mut Sym, q: &mut [f64]| {
         *s = law.stress(e);
-        q[..m].copy_from_slice(&q_n[..m]);
+        q[..m].copy_from_slice(&step.q_n[..m]);
         p.project(law, s, &mut q[..m])
     };
+    let StepOutput { sigma, q, tangent } = out;
     let plastic = project(&e, sigma, q);
     if let Some(t) = tangent {
         if !plastic {

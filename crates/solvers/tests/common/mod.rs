@@ -8,7 +8,7 @@ use saddle_core::P1P0Element;
 use saddle_core::error::ParameterError;
 use saddle_core::{
     AdmissibleDisplacements, AdmissibleStresses, BoxMesh, Component, ConeDescription, Dirichlet, DiscreteProblem,
-    Elasticity, Region, Sym, SymOp,
+    Elasticity, Region, StepInput, StepOutput, Sym,
 };
 use saddle_yield::VonMises;
 use serde::{Deserialize, Serialize};
@@ -145,18 +145,9 @@ impl AdmissibleStresses for Counting {
         self.count();
         self.inner.project(law, sigma, q)
     }
-    fn step_law(
-        &self,
-        law: &Elasticity,
-        eps: &Sym,
-        ep: &Sym,
-        q_n: &[f64],
-        sigma: &mut Sym,
-        q: &mut [f64],
-        t: Option<&mut SymOp>,
-    ) -> bool {
+    fn step_law(&self, law: &Elasticity, step: StepInput<'_>, out: StepOutput<'_>) -> bool {
         self.count();
-        self.inner.step_law(law, eps, ep, q_n, sigma, q, t)
+        self.inner.step_law(law, step, out)
     }
     /// The wrapped P's energy (for von Mises a closed form, no return mapping).
     fn energy(&self, law: &Elasticity, eps: &Sym) -> f64 {
