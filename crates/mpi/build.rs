@@ -73,6 +73,7 @@ mod petsc {
         "MatGetSize",
         "MatMult",
         "MatNullSpaceCreateRigidBody",
+        "MatNullSpaceCreate",
         "MatNullSpaceDestroy",
         "MatSetNearNullSpace",
         // KSP and PC
