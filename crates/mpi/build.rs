@@ -87,6 +87,7 @@ mod petsc {
         "KSPSetTolerances",
         "KSPSetReusePreconditioner",
         "KSPSetInitialGuessNonzero",
+        "PCGAMGSetUseSAEstEig",
         "KSPSolve",
         "KSPGetIterationNumber",
         "KSPGetResidualNorm",

@@ -11,7 +11,7 @@ use crate::error::{Result, check, check_len, discard};
 use crate::ffi;
 use crate::matrix::Matrix;
 use crate::session::{Petsc, petsc_comm_world};
-use crate::vector::DECIDE;
+use crate::vector::{DECIDE, GhostVector};
 use std::ptr;
 
 /// The dimension of the displacement field (and the block size of its matrix).
@@ -71,43 +71,26 @@ impl Matrix {
                 basis.push(v);
             }
         }
+        // PETSc's own vectors: the space keeps references to them, not copies
         let mut vecs = Vec::with_capacity(basis.len());
-        let mut made = Ok(());
         for v in &basis {
-            let mut raw = ptr::null_mut();
-            // SAFETY: wraps `v` (not copied, not written), alive until destroyed below.
-            made = check("VecCreateMPIWithArray", unsafe {
-                ffi::VecCreateMPIWithArray(
-                    petsc_comm_world(session),
-                    DIM as ffi::PetscInt,
-                    rows as ffi::PetscInt,
-                    DECIDE,
-                    v.as_ptr(),
-                    &mut raw,
-                )
-            });
-            if made.is_err() {
-                break;
-            }
-            vecs.push(raw);
+            let mut vec = GhostVector::new(session, rows, &[])?;
+            vec.local_mut()?.copy_from_slice(v);
+            vecs.push(vec);
         }
+        let raws: Vec<ffi::Vec> = vecs.iter().map(|v| v.raw).collect();
         let mut space = ptr::null_mut();
-        let created = made.and_then(|()| {
-            // SAFETY: the vectors are live and orthonormal; the space takes its own references.
-            check("MatNullSpaceCreate", unsafe {
-                ffi::MatNullSpaceCreate(
-                    petsc_comm_world(session),
-                    ffi::PetscBool::PETSC_FALSE,
-                    vecs.len() as ffi::PetscInt,
-                    vecs.as_ptr(),
-                    &mut space,
-                )
-            })
+        // SAFETY: the vectors are live and orthonormal; the space takes its own references.
+        let created = check("MatNullSpaceCreate", unsafe {
+            ffi::MatNullSpaceCreate(
+                petsc_comm_world(session),
+                ffi::PetscBool::PETSC_FALSE,
+                raws.len() as ffi::PetscInt,
+                raws.as_ptr(),
+                &mut space,
+            )
         });
-        for raw in &mut vecs {
-            // SAFETY: this function's reference to the vector is no longer used.
-            discard(unsafe { ffi::VecDestroy(raw) });
-        }
+        drop(vecs);
         created?;
         // SAFETY: the matrix takes its own reference to the space.
         let set = check("MatSetNearNullSpace", unsafe { ffi::MatSetNearNullSpace(self.raw, space) });

@@ -14,7 +14,7 @@
 //! rows), and a rank holds every free dof of its ghost nodes. Rows whose blocks span nodes owned
 //! by different ranks, or reach a ghost dof of their own rank, are refused.
 
-use crate::row_basis::RowBasis;
+use crate::row_basis::{DenseBlock, RowBasis};
 use saddle_core::linalg::{DistributedError, DistributedSpd};
 use saddle_core::problem::comm::Comm;
 use std::collections::BTreeMap;
@@ -53,7 +53,7 @@ pub fn ghost_blocks(
     comm: &dyn Comm,
     n_owned: usize,
     n_local: usize,
-) -> Result<Vec<(Vec<usize>, Vec<f64>)>, GhostBlockError> {
+) -> Result<Vec<DenseBlock>, GhostBlockError> {
     // what this rank sends: per owned dof, its block's identity, size and position, row of T_D
     let width = comm.max(basis.blocks().map(|(dofs, _)| dofs.len()).max().unwrap_or(0) as f64) as usize;
     let (rank, size) = (comm.rank() as f64, comm.size() as f64);

@@ -28,7 +28,7 @@ pub struct DistributedSystem {
     basis: RowBasis,
     /// The coordinates at the local dofs, the ghost nodes' blocks too (the stiffness'); `None`
     /// when T = I on every rank.
-    local: Option<RowBasis>,
+    local: Option<Box<RowBasis>>,
     /// The largest cond(T) over the ranks (theory §8.1).
     condition: f64,
     solver: String,
@@ -90,7 +90,7 @@ impl DistributedSystem {
             // the multigrid's near-null space in the same coordinates: y = T⁻¹ x of rigid motions
             spd.change_coordinates(&|x: &mut [f64]| basis.displacement_to_coordinates(x))
                 .map_err(|e| error(solver, e))?;
-            Some(local)
+            Some(Box::new(local))
         } else {
             None
         };
@@ -121,7 +121,7 @@ impl DistributedSystem {
 
     /// This rank's values of `TᵀKT` on its local pattern from those of K, `k`, into `kt`
     /// (`k` itself when T = I everywhere).
-    fn transformed<'s>(local: &Option<RowBasis>, k: &'s [f64], kt: &'s mut [f64]) -> &'s [f64] {
+    fn transformed<'s>(local: &Option<Box<RowBasis>>, k: &'s [f64], kt: &'s mut [f64]) -> &'s [f64] {
         match local {
             None => k,
             Some(local) => {
@@ -194,8 +194,9 @@ impl DistributedSystem {
         for c in 0..nc {
             let dcol = &delta[c * n..(c + 1) * n];
             self.tangent_times(l, material, dcol, &mut b);
-            for j in 0..n {
-                b[j] = -b[j] - if c == 0 { self.grad_t[j] } else { 0.0 };
+            b.iter_mut().for_each(|v| *v = -*v);
+            if c == 0 {
+                b.iter_mut().zip(&self.grad_t).for_each(|(v, g)| *v -= g);
             }
             for &s in &fixed {
                 b[s] = dcol[s];

@@ -41,6 +41,9 @@ pub const MAX_BLOCK_DOFS: usize = 48;
 /// (1e-8 rad).
 pub const DEPENDENCE_TOL: f64 = 1e-8;
 
+/// A block's dofs (sorted) and its T_D (row-major, x_D = T_D y_D).
+pub type DenseBlock = (Vec<usize>, Vec<f64>);
+
 /// A block of dofs with a dense change of basis.
 #[derive(Clone, Debug)]
 struct Block {
@@ -251,7 +254,7 @@ impl RowBasis {
     /// dofs of no block of this one), and the recipe of TᵀKT on `p`: a rank's change of basis
     /// on its local dofs, its ghost nodes' blocks received from their owners (theory §12.2).
     /// An error when a T_D is singular.
-    pub fn with_blocks(&self, more: Vec<(Vec<usize>, Vec<f64>)>, p: &SymmetricPattern) -> Result<Self, String> {
+    pub fn with_blocks(&self, more: Vec<DenseBlock>, p: &SymmetricPattern) -> Result<Self, String> {
         let mut basis = self.clone();
         for (dofs, t) in more {
             let d = dofs.len();
