@@ -109,3 +109,73 @@ pub fn ghost_blocks(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use saddle_core::linalg::DistributedSolve;
+    use saddle_core::problem::comm::SERIAL;
+    use saddle_core::{ConstraintRows, SymmetricPattern};
+
+    /// One rank whose ghost dofs 3.. copy the owned dofs `copies` (the exchange of a ghosted
+    /// vector, with the rank standing in for the owner).
+    struct Mirror {
+        copies: Vec<usize>,
+    }
+
+    impl DistributedSpd for Mirror {
+        fn assemble(&mut self, _: &[f64], _: &[usize]) -> Result<(), DistributedError> {
+            unreachable!()
+        }
+        fn diagonal(&mut self, _: &[f64], _: &mut [f64]) -> Result<(), DistributedError> {
+            unreachable!()
+        }
+        fn ghosted(&mut self, owned: &[f64], local: &mut [f64]) -> Result<(), DistributedError> {
+            local[..owned.len()].copy_from_slice(owned);
+            for (g, &j) in self.copies.iter().enumerate() {
+                local[owned.len() + g] = owned[j];
+            }
+            Ok(())
+        }
+        fn change_coordinates(&mut self, _: &dyn Fn(&mut [f64])) -> Result<(), DistributedError> {
+            unreachable!()
+        }
+        fn solve(&mut self, _: &[f64], _: &mut [f64], _: f64) -> Result<DistributedSolve, DistributedError> {
+            unreachable!()
+        }
+    }
+
+    /// Three owned dofs (one node) with a row along a general normal; dofs 3.. ghosts.
+    fn basis(n_local: usize) -> RowBasis {
+        let mut rows = ConstraintRows::new(0);
+        rows.push(&[(0, 0.36), (1, 0.48), (2, 0.8)], &[], 0.0, 0);
+        let diagonal = SymmetricPattern::new(n_local, (0..=n_local).collect(), (0..n_local).collect());
+        RowBasis::new(&rows, n_local, &diagonal, "newton").unwrap()
+    }
+
+    #[test]
+    fn a_ghost_block_is_the_owners_t_in_the_ghosts_numbering() {
+        // the ghosts of owned dofs 2, 0, 1 at local dofs 3, 4, 5: x_g = x_{copy(g)} must hold for
+        // x = T y and x' = T' y' with y'_g = y_{copy(g)}, T' the received block
+        let copies = vec![2, 0, 1];
+        let owned = basis(6);
+        let blocks = ghost_blocks(&owned, &mut Mirror { copies: copies.clone() }, &SERIAL, 3, 6).unwrap();
+        assert_eq!(blocks.len(), 1);
+        let (dofs, t) = &blocks[0];
+        assert_eq!(dofs, &[3, 4, 5]);
+        let y = [0.3, -1.1, 0.7];
+        let mut x = y.to_vec();
+        owned.displacement_from_coordinates(&mut x);
+        for (a, &g) in dofs.iter().enumerate() {
+            let xg: f64 = (0..3).map(|b| t[3 * a + b] * y[copies[dofs[b] - 3]]).sum();
+            assert!((xg - x[copies[g - 3]]).abs() < 1e-15, "ghost {g}: {xg} vs {}", x[copies[g - 3]]);
+        }
+    }
+
+    #[test]
+    fn a_block_that_reaches_a_rank_in_part_is_refused() {
+        let owned = basis(5);
+        let e = ghost_blocks(&owned, &mut Mirror { copies: vec![0, 2] }, &SERIAL, 3, 5).unwrap_err();
+        assert!(matches!(e, GhostBlockError::Partial { size: 3, received: 2 }), "{e}");
+    }
+}
