@@ -73,6 +73,7 @@ mod petsc {
         "MatGetSize",
         "MatMult",
         "MatNullSpaceCreateRigidBody",
+        "MatNullSpaceCreate",
         "MatNullSpaceDestroy",
         "MatSetNearNullSpace",
         // KSP and PC
@@ -87,6 +88,7 @@ mod petsc {
         "KSPSetTolerances",
         "KSPSetReusePreconditioner",
         "KSPSetInitialGuessNonzero",
+        "PCGAMGSetUseSAEstEig",
         "KSPSolve",
         "KSPGetIterationNumber",
         "KSPGetResidualNorm",

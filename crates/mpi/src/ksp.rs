@@ -122,6 +122,18 @@ impl Ksp {
         check("KSPSetTolerances", unsafe { ffi::KSPSetTolerances(self.raw, rtol, -2.0, -2.0, -2) })
     }
 
+    /// GAMG's smoothers estimate their own largest eigenvalue (`false`) instead of reusing the
+    /// estimate made for smoothing the prolongator (`true`, PETSc's default;
+    /// `-pc_gamg_use_sa_esteig`). No effect with another preconditioner.
+    pub fn gamg_reuse_prolongator_estimate(&mut self, reuse: bool) -> Result<()> {
+        let flag = if reuse { ffi::PetscBool::PETSC_TRUE } else { ffi::PetscBool::PETSC_FALSE };
+        let mut pc = ptr::null_mut();
+        // SAFETY: the KSP owns its PC.
+        check("KSPGetPC", unsafe { ffi::KSPGetPC(self.raw, &mut pc) })?;
+        // SAFETY: `pc` is live; PETSc ignores the call for a PC that is not GAMG.
+        check("PCGAMGSetUseSAEstEig", unsafe { ffi::PCGAMGSetUseSAEstEig(pc, flag) })
+    }
+
     /// Starts from the values in `x` (`true`) instead of zero (`false`, the default).
     pub fn initial_guess_nonzero(&mut self, nonzero: bool) -> Result<()> {
         // a direct solve (`preonly`, as MUMPS runs) takes no guess: PETSc refuses one

@@ -2,10 +2,11 @@
 //! size 3 (three rows per node, [`crate::Layout`]), assembled by adding every rank's lower-triangle
 //! values on its local pattern at global rows (and their transposes), the Dirichlet-fixed and the
 //! caller's fixed rows and columns replaced by the identity, the rigid-body modes of the owned
-//! nodes as GAMG's near-null space. The solver is CG with GAMG unless PETSc's options say
+//! nodes as GAMG's near-null space (in the coordinates of general contact rows once they are
+//! changed, [`DistributedSpd::change_coordinates`]). The solver is CG with GAMG unless PETSc's options say
 //! otherwise (`-ksp_type`, `-pc_type hypre`, `-pc_type lu -pc_factor_mat_solver_type mumps`, …).
 
-use crate::funneled::Funneled;
+use crate::funneled::{Funneled, Session};
 use crate::layout::Layout;
 use saddle_core::linalg::{DistributedError, DistributedSolve, DistributedSpd};
 use saddle_core::problem::pattern::SymmetricPattern;
@@ -23,13 +24,14 @@ pub const DEFAULT_OPTIONS: &str = "-mg_levels_ksp_chebyshev_esteig 0,0.2,0,1.2";
 
 /// A distributed SPD matrix and its solver (module docs).
 pub struct PetscSpd {
+    session: Session,
     layout: Arc<Layout>,
     pattern: SymmetricPattern,
     matrix: Funneled<Matrix>,
     ksp: Funneled<Ksp>,
     b: Funneled<GhostVector>,
     x: Funneled<GhostVector>,
-    /// A ghosted vector for the diagonal's sums.
+    /// A ghosted vector for the diagonal's sums and the ghost exchange.
     sums: Funneled<GhostVector>,
 }
 
@@ -72,6 +74,7 @@ impl PetscSpd {
         let x = b.duplicate()?;
         let sums = layout.vector(session)?;
         Ok(Self {
+            session: Session(session),
             layout,
             pattern: pattern.clone(),
             matrix: Funneled(matrix),
@@ -137,6 +140,43 @@ impl DistributedSpd for PetscSpd {
         Ok(())
     }
 
+    fn ghosted(&mut self, owned: &[f64], local: &mut [f64]) -> Result<(), DistributedError> {
+        let v = &mut self.sums.0;
+        {
+            let mut form = v.local_mut().map_err(boxed)?;
+            form.iter_mut().for_each(|x| *x = 0.0);
+            for (&x, &s) in owned.iter().zip(&self.layout.dof_slot) {
+                form[s] = x;
+            }
+        }
+        v.update_ghosts().map_err(boxed)?;
+        let form = v.local().map_err(boxed)?;
+        for (x, &s) in local.iter_mut().zip(&self.layout.dof_slot) {
+            *x = form[s];
+        }
+        Ok(())
+    }
+
+    fn change_coordinates(&mut self, to_coordinates: &dyn Fn(&mut [f64])) -> Result<(), DistributedError> {
+        let layout = &self.layout;
+        let mut modes = rigid_body_modes(&layout.owned_coordinates);
+        let mut owned = vec![0.0; layout.n_owned_dofs];
+        for mode in &mut modes {
+            for (x, &s) in owned.iter_mut().zip(&layout.dof_slot) {
+                *x = mode[s];
+            }
+            to_coordinates(&mut owned);
+            for (&x, &s) in owned.iter().zip(&layout.dof_slot) {
+                mode[s] = x;
+            }
+        }
+        self.matrix.0.set_near_null_space(self.session.get(), &modes).map_err(boxed)?;
+        // measured on the rigid cone (tests/mpi_cone.rs, 1–3 ranks): with the estimate made for
+        // the prolongator GAMG's Chebyshev smoothers see too small a largest eigenvalue in these
+        // coordinates and CG stops at DIVERGED_INDEFINITE_PC; their own estimates converge
+        self.ksp.0.gamg_reuse_prolongator_estimate(false).map_err(boxed)
+    }
+
     fn solve(&mut self, b: &[f64], x: &mut [f64], rtol: f64) -> Result<DistributedSolve, DistributedError> {
         let slots = &self.layout.dof_slot;
         for (vector, values) in [(&mut self.b.0, b), (&mut self.x.0, &*x)] {
@@ -162,4 +202,21 @@ impl DistributedSpd for PetscSpd {
         }
         Ok(result)
     }
+}
+
+/// The six rigid-body motions at the owned rows (three per node): the translations e_x, e_y,
+/// e_z and the rotations ω × x about the axes, from the nodes' `coordinates` (x, y, z per node).
+fn rigid_body_modes(coordinates: &[f64]) -> Vec<Vec<f64>> {
+    let mut modes = vec![vec![0.0; coordinates.len()]; 6];
+    for (node, x) in coordinates.chunks_exact(3).enumerate() {
+        let r = 3 * node;
+        for c in 0..3 {
+            modes[c][r + c] = 1.0;
+        }
+        // ω × x for ω = e_x, e_y, e_z: (0, −z, y), (z, 0, −x), (−y, x, 0)
+        for (mode, w) in modes[3..].iter_mut().zip([[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]]) {
+            mode[r..r + 3].copy_from_slice(&w);
+        }
+    }
+    modes
 }

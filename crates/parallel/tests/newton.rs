@@ -2,10 +2,11 @@
 //! serial solve every rank also runs: every extra and J to 1e-8 relative, the force Σλ to 1e-8,
 //! the contact and plastic counts exactly, the KKT residual (recomputed globally) within the
 //! tolerance. The scenes (issue 24's list): the small default scene (theory §6), the same with
-//! P2 elements, a tilting punch loaded off centre, two named punches, Drucker–Prager, and a
-//! three-step load path (load, hold, unload; theory §11).
+//! P2 elements, a tilting punch loaded off centre, two named punches, Drucker–Prager, a
+//! three-step load path (load, hold, unload; theory §11), and a rigid sphere pushed 15° off the
+//! axis, whose rows act on all three dofs of their nodes (general rows: theory §8.1, §12.2).
 
-use saddle_contact::{Paraboloid, RigidPunch, TiltingPunch};
+use saddle_contact::{Paraboloid, RigidPunch, RigidSphere, TiltingPunch};
 use saddle_core::fem::FiniteElement;
 use saddle_core::problem::comm::{Comm, SERIAL};
 use saddle_core::{
@@ -68,6 +69,8 @@ fn scenes() -> Vec<Scene> {
         let gap = Paraboloid { R: 5.0, center: [x, 0.0] };
         NamedObstacle::new(name, Box::new(RigidPunch::new(f, disc(x, 0.3), Box::new(gap)).unwrap()))
     };
+    let tilt = 15f64.to_radians();
+    let sphere = RigidSphere::pushed([0.0, 0.0, -5.0], 5.0, [tilt.sin(), 0.0, tilt.cos()], 0.3, disc(0.0, 0.5));
     vec![
         Scene {
             name: "default (p1)",
@@ -116,6 +119,14 @@ fn scenes() -> Vec<Scene> {
             stresses: von_mises(),
             obstacles: punch(0.3),
             path: vec![1.0, 1.0, 0.0],
+        },
+        Scene {
+            name: "rigid sphere 15° off the axis",
+            cells: [12, 12, 6],
+            element: Box::new(P1::default()),
+            stresses: von_mises(),
+            obstacles: Obstacles::one(Box::new(sphere)),
+            path: vec![],
         },
     ]
 }

@@ -1,17 +1,21 @@
-//! The active-set systems of Newton on a distributed problem (theory §4.2, §12): the same
+//! The active-set systems of Newton on a distributed problem (theory §4.2, §12.2): the same
 //! linearised problem as [`crate::active_set`], solved by the distributed solver the operators
 //! bring ([`saddle_core::linalg::DistributedSpd`]: PETSc's CG with GAMG by default).
 //!
-//! Each rank holds its owned dofs and the rows of its owned nodes. The tangent is assembled from
-//! every rank's elements with the active rows' dofs fixed (identity rows and columns); the
-//! prescribed values δ of the fixed dofs enter the right-hand sides through K δ, and the contact
-//! forces are the reactions (∇E + K dy)_s — both products of the *unfixed* tangent, computed
-//! from the operators, K x = Bᵀ(C_t B x), so that no second matrix is stored. The extras' small
-//! system is reduced over the ranks and solved the same on every one. Rows must act on one dof
-//! each (T = I in the notation of theory §8.1: the punches, the tilting punch); general rows
-//! (a sphere's normals) are refused with a clear error.
+//! Each rank holds its owned dofs and the rows of its owned nodes. The system is solved in the
+//! coordinates y of [`RowBasis`] (theory §8.1, x = T y), in which each row acts on one
+//! coordinate of its own; for rows on one dof each (the punches, the tilting punch) T = I and
+//! nothing is transformed. The tangent `TᵀKT` is assembled from every rank's elements, each
+//! rank's values re-weighted with T at its local dofs — its owned blocks and its ghost nodes'
+//! ([`crate::distributed_basis`]) — with the active rows' coordinates fixed (identity rows and
+//! columns), the multigrid's near-null space the rigid-body modes in the same coordinates; the prescribed values δ of the fixed coordinates enter the right-hand sides through
+//! `TᵀKT δ`, and the contact forces are the reactions `(Tᵀ∇E + TᵀKT dy)_s` — both products of
+//! the *unfixed* tangent, computed from the operators, `TᵀKT y = Tᵀ Bᵀ(C_t B T y)` with T
+//! applied at the owned dofs, so that no second matrix is stored. The extras' small system is
+//! reduced over the ranks and solved the same on every one; `du = T dy`.
 
-use crate::active_set::{Step, step_from_reactions};
+use crate::active_set::{CG_TOL_MIN, Step, step_from_reactions};
+use crate::distributed_basis::ghost_blocks;
 use crate::row_basis::RowBasis;
 use nalgebra::DMatrix;
 use saddle_core::linalg::DistributedSpd;
@@ -20,7 +24,13 @@ use saddle_core::{Lagrangian, Material, SolveError, Sym};
 /// Newton's linearised systems on a distributed problem (module docs).
 pub struct DistributedSystem {
     spd: Box<dyn DistributedSpd>,
+    /// The rows' coordinates at the owned dofs (the vectors').
     basis: RowBasis,
+    /// The coordinates at the local dofs, the ghost nodes' blocks too (the stiffness'); `None`
+    /// when T = I on every rank.
+    local: Option<Box<RowBasis>>,
+    /// The largest cond(T) over the ranks (theory §8.1).
+    condition: f64,
     solver: String,
     /// Tangent assemblies so far.
     pub assemblies: usize,
@@ -32,67 +42,121 @@ pub struct DistributedSystem {
     pub unconverged: usize,
     eps: Vec<Sym>,
     sigma: Vec<Sym>,
+    /// `TᵀKT` on the local pattern (empty when T = I everywhere).
+    kt: Vec<f64>,
+    /// Tᵀ∇E, T y and K T y at the owned dofs.
+    grad_t: Vec<f64>,
+    ty: Vec<f64>,
+    kty: Vec<f64>,
+}
+
+/// `result` of every rank, agreed: an error on any rank is an error on every one (the others'
+/// naming no rows of theirs), so that every rank takes the same path (theory §12.1).
+fn agreed<T>(l: &Lagrangian<'_>, solver: &str, result: Result<T, SolveError>) -> Result<T, SolveError> {
+    match (l.comm().any(result.is_err()), result) {
+        (false, r) | (true, r @ Err(_)) => r,
+        (true, Ok(_)) => Err(SolveError::Unsupported {
+            solver: solver.into(),
+            message: "another rank's contact rows cannot be given coordinates of their own (its error says why)".into(),
+        }),
+    }
 }
 
 impl DistributedSystem {
     /// The system of `l`, whose operators are distributed, for `solver` (errors name it).
+    /// Collective.
     pub fn new(l: &Lagrangian<'_>, solver: &str) -> Result<Self, SolveError> {
-        let spd = l
+        let comm = l.comm();
+        let mut spd = l
             .distributed_solver()
             .expect("a distributed L")
             .map_err(|e| SolveError::LinearAlgebra { solver: solver.into(), source: e })?;
-        let basis = RowBasis::new(l.data.rows, l.pattern().n(), l.pattern(), solver)?;
-        if !l.comm().any(!basis.is_identity()) {
-            let np = l.n_points();
-            return Ok(Self {
-                spd,
-                basis,
-                solver: solver.into(),
-                assemblies: 0,
-                solves: 0,
-                iterations: 0,
-                unconverged: 0,
-                eps: vec![Sym::zeros(); np],
-                sigma: vec![Sym::zeros(); np],
-            });
-        }
-        Err(SolveError::Unsupported {
+        let p = l.pattern();
+        let basis = agreed(l, solver, RowBasis::new(l.data.rows, p.n(), p, solver))?;
+        let local = if comm.any(!basis.is_identity()) {
+            let unsupported = |message: String| SolveError::Unsupported { solver: solver.into(), message };
+            let local = ghost_blocks(&basis, spd.as_mut(), comm, l.n_dofs(), p.n())
+                .map_err(|e| e.to_string())
+                .and_then(|more| basis.with_blocks(more, p))
+                // node blocks keep K's pattern (theory §8.1): the distributed matrix's
+                .and_then(|local| match local.pattern(p) == p {
+                    true => Ok(local),
+                    false => Err("contact rows whose change of basis widens the stiffness' pattern (rows coupling \
+                                  several nodes) need one process"
+                        .into()),
+                })
+                .map_err(unsupported);
+            let local = agreed(l, solver, local)?;
+            // the multigrid's near-null space in the same coordinates: y = T⁻¹ x of rigid motions
+            spd.change_coordinates(&|x: &mut [f64]| basis.displacement_to_coordinates(x))
+                .map_err(|e| error(solver, e))?;
+            Some(Box::new(local))
+        } else {
+            None
+        };
+        let (n, np) = (l.n_dofs(), l.n_points());
+        Ok(Self {
+            spd,
+            condition: comm.max(basis.condition()),
+            kt: vec![0.0; if local.is_some() { p.nnz() } else { 0 }],
+            basis,
+            local,
             solver: solver.into(),
-            message: "on several ranks, contact rows must act on one displacement component each (the punches, the \
-                      tilting punch); rows along general normals (a rigid sphere) need one process"
-                .into(),
+            assemblies: 0,
+            solves: 0,
+            iterations: 0,
+            unconverged: 0,
+            eps: vec![Sym::zeros(); np],
+            sigma: vec![Sym::zeros(); np],
+            grad_t: vec![0.0; n],
+            ty: vec![0.0; n],
+            kty: vec![0.0; n],
         })
     }
 
-    /// The rows' coordinates (the identity: every row on a dof of its own).
+    /// The rows' coordinates at the owned dofs (theory §8.1).
     pub fn basis(&self) -> &RowBasis {
         &self.basis
     }
 
-    /// c_i of the active-set test: the elastic stiffness at row i's dof, K_ss / a_i², from the
-    /// matrix `k_elastic` (this rank's values) summed over the ranks.
+    /// This rank's values of `TᵀKT` on its local pattern from those of K, `k`, into `kt`
+    /// (`k` itself when T = I everywhere).
+    fn transformed<'s>(local: &Option<Box<RowBasis>>, k: &'s [f64], kt: &'s mut [f64]) -> &'s [f64] {
+        match local {
+            None => k,
+            Some(local) => {
+                local.stiffness(k, kt);
+                kt
+            }
+        }
+    }
+
+    /// c_i of the active-set test: the elastic stiffness in row i's coordinate, (TᵀKT)_ss / a_i²,
+    /// from the matrix `k_elastic` (this rank's values) summed over the ranks.
     pub fn row_stiffness(&mut self, l: &Lagrangian<'_>, k_elastic: &[f64]) -> Result<Vec<f64>, SolveError> {
         let mut diag = vec![0.0; l.n_dofs()];
-        self.spd.diagonal(k_elastic, &mut diag).map_err(|e| self.error(e))?;
+        let values = Self::transformed(&self.local, k_elastic, &mut self.kt);
+        self.spd.diagonal(values, &mut diag).map_err(|e| error(&self.solver, e))?;
         Ok(self.basis.dof.iter().zip(&self.basis.coef).map(|(&s, a)| diag[s] / (a * a)).collect())
     }
 
-    fn error(&self, e: saddle_core::linalg::DistributedError) -> SolveError {
-        SolveError::LinearAlgebra { solver: self.solver.clone(), source: e }
-    }
-
-    /// y = K x with the unfixed tangent `material` from the operators: Bᵀ(C B x).
-    fn tangent_times(&mut self, l: &Lagrangian<'_>, material: Material<'_>, x: &[f64], y: &mut [f64]) {
-        l.strain(x, &mut self.eps);
+    /// `out` = TᵀKT y with the unfixed tangent `material` from the operators: Tᵀ Bᵀ(C B T y),
+    /// T at the owned dofs.
+    fn tangent_times(&mut self, l: &Lagrangian<'_>, material: Material<'_>, y: &[f64], out: &mut [f64]) {
+        self.ty.copy_from_slice(y);
+        self.basis.displacement_from_coordinates(&mut self.ty);
+        l.strain(&self.ty, &mut self.eps);
         for (i, (s, e)) in self.sigma.iter_mut().zip(&self.eps).enumerate() {
             *s = material.at(i) * e;
         }
-        l.divergence(&self.sigma, y);
+        l.divergence(&self.sigma, &mut self.kty);
+        self.basis.force_to_coordinates(&self.kty, out);
     }
 
     /// The step for active set `active` with tangent `material` (its values `k` on this rank's
     /// pattern), ∇E(u) `grad` and gaps `gap`, each Krylov solve to the relative residual
-    /// `rtol` (module docs; the same step as [`crate::active_set::ActiveSetSystem::step`]).
+    /// `rtol` divided by cond(T) (theory §8.1; module docs; the same step as
+    /// [`crate::active_set::ActiveSetSystem::step`]).
     #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
@@ -107,9 +171,13 @@ impl DistributedSystem {
         let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let fixed: Vec<usize> = (0..nr).filter(|&i| active[i]).map(|i| self.basis.dof[i]).collect();
-        self.spd.assemble(k, &fixed).map_err(|e| self.error(e))?;
+        let values = Self::transformed(&self.local, k, &mut self.kt);
+        self.spd.assemble(values, &fixed).map_err(|e| error(&self.solver, e))?;
         self.assemblies += 1;
-        // the prescribed values δ at the fixed dofs: column 0 for the gaps, 1 + k for dV_k
+        self.basis.force_to_coordinates(grad, &mut self.grad_t);
+        // the reactions come through T⁻ᵀ, which amplifies the residual by up to cond(T)
+        let rtol = (rtol / self.condition).max(CG_TOL_MIN.min(rtol));
+        // the prescribed values δ at the fixed coordinates: column 0 for the gaps, 1 + k for dV_k
         let nc = 1 + ne;
         let mut delta = vec![0.0; n * nc];
         for i in (0..nr).filter(|&i| active[i]) {
@@ -119,42 +187,49 @@ impl DistributedSystem {
                 delta[(1 + kx) * n + s] = -h / a;
             }
         }
-        // right-hand sides −∇E − K δ (column 0), −K δ (the others), δ at the fixed dofs (the
-        // identity rows); then the solves
+        // right-hand sides −Tᵀ∇E − TᵀKT δ (column 0), −TᵀKT δ (the others), δ at the fixed
+        // coordinates (the identity rows); then the solves
         let mut x = vec![0.0; n * nc];
         let mut b = vec![0.0; n];
         for c in 0..nc {
             let dcol = &delta[c * n..(c + 1) * n];
             self.tangent_times(l, material, dcol, &mut b);
-            for j in 0..n {
-                b[j] = -b[j] - if c == 0 { grad[j] } else { 0.0 };
+            b.iter_mut().for_each(|v| *v = -*v);
+            if c == 0 {
+                b.iter_mut().zip(&self.grad_t).for_each(|(v, g)| *v -= g);
             }
             for &s in &fixed {
                 b[s] = dcol[s];
             }
             let xcol = &mut x[c * n..(c + 1) * n];
             xcol.copy_from_slice(dcol);
-            let report = self.spd.solve(&b, xcol, rtol).map_err(|e| self.error(e))?;
+            let report = self.spd.solve(&b, xcol, rtol).map_err(|e| error(&self.solver, e))?;
             self.iterations += report.iterations;
             self.unconverged += !report.converged as usize;
             self.solves += 1;
         }
-        // the reactions at the fixed dofs: λ = (∇E + K dy)_s / a, affine in dV
-        let mut kx = vec![0.0; n];
+        // the reactions at the fixed coordinates: λ = (Tᵀ∇E + TᵀKT dy)_s / a, affine in dV
+        let mut ky = vec![0.0; n];
         let mut lam0 = vec![0.0; nr];
         let mut lam_v = DMatrix::zeros(nr, ne);
         for c in 0..nc {
-            let xc = x[c * n..(c + 1) * n].to_vec();
-            self.tangent_times(l, material, &xc, &mut kx);
+            self.tangent_times(l, material, &x[c * n..(c + 1) * n], &mut ky);
             for i in (0..nr).filter(|&i| active[i]) {
                 let (s, a) = (self.basis.dof[i], self.basis.coef[i]);
                 if c == 0 {
-                    lam0[i] = (grad[s] + kx[s]) / a;
+                    lam0[i] = (self.grad_t[s] + ky[s]) / a;
                 } else {
-                    lam_v[(i, c - 1)] = kx[s] / a;
+                    lam_v[(i, c - 1)] = ky[s] / a;
                 }
             }
         }
-        step_from_reactions(l, active, &x, &lam0, &lam_v, &self.solver)
+        let mut step = step_from_reactions(l, active, &x, &lam0, &lam_v, &self.solver)?;
+        self.basis.displacement_from_coordinates(&mut step.du);
+        Ok(step)
     }
+}
+
+/// A failure of the distributed solver inside `solver`.
+fn error(solver: &str, e: saddle_core::linalg::DistributedError) -> SolveError {
+    SolveError::LinearAlgebra { solver: solver.into(), source: e }
 }

@@ -11,6 +11,7 @@
 
 pub mod active_set;
 pub mod conformance;
+pub mod distributed_basis;
 pub mod distributed_system;
 pub mod kh_projection;
 pub mod linear;

@@ -41,6 +41,9 @@ pub const MAX_BLOCK_DOFS: usize = 48;
 /// (1e-8 rad).
 pub const DEPENDENCE_TOL: f64 = 1e-8;
 
+/// A block's dofs (sorted) and its T_D (row-major, x_D = T_D y_D).
+pub type DenseBlock = (Vec<usize>, Vec<f64>);
+
 /// A block of dofs with a dense change of basis.
 #[derive(Clone, Debug)]
 struct Block {
@@ -242,6 +245,33 @@ impl RowBasis {
         Ok(Block { dofs: dofs.to_vec(), t, t_inv })
     }
 
+    /// Each block's dofs (sorted) and T_D (row-major, x_D = T_D y_D).
+    pub fn blocks(&self) -> impl Iterator<Item = (&[usize], &[f64])> {
+        self.blocks.iter().map(|b| (&b.dofs[..], &b.t[..]))
+    }
+
+    /// This basis with the further blocks `more` (their dofs, sorted, and T_D row-major, on
+    /// dofs of no block of this one), and the recipe of TᵀKT on `p`: a rank's change of basis
+    /// on its local dofs, its ghost nodes' blocks received from their owners (theory §12.2).
+    /// An error when a T_D is singular.
+    pub fn with_blocks(&self, more: Vec<DenseBlock>, p: &SymmetricPattern) -> Result<Self, String> {
+        let mut basis = self.clone();
+        for (dofs, t) in more {
+            let d = dofs.len();
+            let t_inv = nalgebra::DMatrix::from_row_slice(d, d, &t)
+                .try_inverse()
+                .ok_or_else(|| format!("the change of basis received for dofs {dofs:?} is singular"))?;
+            let t_inv = (0..d).flat_map(|a| (0..d).map(move |b| (a, b))).map(|(a, b)| t_inv[(a, b)]).collect();
+            for &j in &dofs {
+                debug_assert_eq!(basis.block_of[j], usize::MAX, "dof {j} is in two blocks");
+                basis.block_of[j] = basis.blocks.len();
+            }
+            basis.blocks.push(Block { dofs, t, t_inv });
+        }
+        basis.transformed = (!basis.blocks.is_empty()).then(|| basis.recipe(p));
+        Ok(basis)
+    }
+
     /// The pattern of TᵀKT and the recipe of its values from K's (module docs).
     fn recipe(&self, p: &SymmetricPattern) -> (SymmetricPattern, Recipe) {
         let (cp, ri) = (p.col_ptr(), p.row_idx());
@@ -392,9 +422,10 @@ impl RowBasis {
         }
     }
 
-    /// v_D ← M v_D for every block, with M = `m(block)` row-major.
+    /// v_D ← M v_D for every block, with M = `m(block)` row-major. `v` may stop after the
+    /// blocks' dofs (a rank's owned dofs, theory §12.2).
     fn apply_blocks(&self, v: &mut [f64], m: impl Fn(&Block) -> &Vec<f64>) {
-        debug_assert_eq!(v.len(), self.n);
+        debug_assert!(v.len() <= self.n && self.blocks.iter().all(|b| b.dofs.iter().all(|&j| j < v.len())));
         let mut tmp = [0.0; MAX_BLOCK_DOFS];
         for b in &self.blocks {
             let (d, m) = (b.dofs.len(), m(b));

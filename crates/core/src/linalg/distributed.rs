@@ -19,7 +19,8 @@ pub struct DistributedSolve {
 
 /// A symmetric positive definite matrix over the dofs of all ranks, assembled from each rank's
 /// lower-triangle values on the operators' local pattern (its owned and ghost dofs), and its
-/// solver. Vectors are a rank's owned dofs. Every method is collective.
+/// solver. Vectors are a rank's owned dofs, or its local dofs (owned, then ghosts: the local
+/// pattern's numbering) where said. Every method is collective.
 pub trait DistributedSpd {
     /// The matrix from this rank's `values` on the local pattern, summed over the ranks, with
     /// the rows and columns of the owned dofs `fixed` (every rank its own) replaced by those of
@@ -29,6 +30,17 @@ pub trait DistributedSpd {
     /// The diagonal of the matrix `values` would assemble (summed over the ranks, nothing
     /// fixed), at the owned dofs.
     fn diagonal(&mut self, values: &[f64], out: &mut [f64]) -> Result<(), DistributedError>;
+
+    /// `local` = the vector `owned` (at the owned dofs) at every local dof, the ghosts' values
+    /// from their owners: what a rank needs to know of data other ranks hold at its ghost dofs
+    /// (the change of basis of general contact rows, theory §12.2).
+    fn ghosted(&mut self, owned: &[f64], local: &mut [f64]) -> Result<(), DistributedError>;
+
+    /// From now on the matrices are assembled in the coordinates y = T⁻¹ x of the owned dofs
+    /// (those of general contact rows, theory §8.1, §12.2; T block diagonal over the owned
+    /// dofs), `to_coordinates` mapping a vector over the owned dofs to them: the
+    /// preconditioner's near-null space (the rigid-body modes) is mapped with it.
+    fn change_coordinates(&mut self, to_coordinates: &dyn Fn(&mut [f64])) -> Result<(), DistributedError>;
 
     /// Solves A x = b with the last assembled matrix, from `x`, to the relative residual `rtol`;
     /// `b` and `x` over the owned dofs.
