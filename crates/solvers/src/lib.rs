@@ -12,6 +12,7 @@
 pub mod active_set;
 pub mod conformance;
 pub mod distributed_system;
+mod fallback;
 pub mod kh_projection;
 pub mod linear;
 mod local_law;

@@ -31,14 +31,22 @@
 //!    Once the active rows touch, it is a line search on J alone;
 //! 7. **update** (`Run::advance`).
 //!
+//! **Globalisation** (theory §4.2.1): when the KKT residual has not halved for `stall_window`
+//! iterations (an active set that cycles), or a step fails for its active set (no active row
+//! holds a loaded extra, a singular tangent), a bounded run of the penalty method
+//! (`Run::fall_back`, at most `max_fallbacks` times) gives the next iterate, and Newton goes on
+//! from it.
+//!
 //! Once the active set and the plastic set settle, convergence is quadratic.
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper};
 use crate::distributed_system::DistributedSystem;
+use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
+use crate::penalty::Penalty;
 use crate::residual::History;
 use crate::row_basis::RowBasis;
 use crate::vector::{axpy, axpy_into};
@@ -92,6 +100,15 @@ pub struct Newton {
     /// `strength_threshold`, `smoother_degree`, `smoother_range`, `eigen_steps`, `coarse_size`,
     /// `max_levels`; defaults those of [`AmgParams`]).
     pub amg: AmgParams,
+    /// Iterations without the KKT residual falling below half its best before Newton is
+    /// declared stalled and falls back on the penalty method (theory §4.2.1; 0: never).
+    /// Newton near the solution gains orders of magnitude per step: 8 steps without halving
+    /// the residual mean an active set that cycles.
+    pub stall_window: usize,
+    /// Fallbacks on the penalty method per solve (theory §4.2.1; 0: none).
+    pub max_fallbacks: usize,
+    /// Penalty iterations per fallback (the penalty method's own default budget).
+    pub fallback_max_iter: usize,
     /// The linear system's set-up kept between the warm-started solves of a load path
     /// ([`SetupCache`]); not a setting.
     #[serde(skip)]
@@ -184,6 +201,9 @@ impl Default for Newton {
             cg_forcing: 1e-2,
             cg_max_iter: 2000,
             amg: AmgParams::default(),
+            stall_window: 8,
+            max_fallbacks: 2,
+            fallback_max_iter: 50,
             setup_cache: SetupCache::default(),
         }
     }
@@ -232,6 +252,7 @@ impl Solver for Newton {
         check::at_least_one(path, "max_iter", self.max_iter)?;
         check::open_interval(path, "cg_forcing", self.cg_forcing, 0.0, 1.0)?;
         check::at_least_one(path, "cg_max_iter", self.cg_max_iter)?;
+        check::at_least_one(path, "fallback_max_iter", self.fallback_max_iter)?;
         // AmgParams names its fields `amg.<field>`: under this table's path
         self.amg.validate().map_err(|e| ParameterError { field: join(path, &e.field), ..e })?;
         Ok(())
@@ -279,7 +300,9 @@ impl Newton {
         timer: &mut PhaseTimer,
         name: &str,
     ) -> Result<Solution, SolveError> {
+        let robust_start = start.clone();
         let mut run = Run::set_up(self, l, start, reuse, name, monitor, timer)?;
+        let mut guard = StallGuard::new(self.stall_window);
         monitor.phase("iterations");
         let (stop, kkt) = loop {
             let kkt = run.local_law(timer);
@@ -288,9 +311,24 @@ impl Newton {
             if let Some(stop) = self.stop(r, run.state.it) {
                 break (stop, kkt);
             }
+            if run.state.elastic_phase {
+                guard.reset();
+            } else if guard.stalled(r, run.state.it) && run.can_fall_back() {
+                run.fall_back(robust_start.as_ref(), monitor, timer)?;
+                guard.reset();
+                continue;
+            }
             run.update_active_set();
             run.assemble(timer);
-            let step = run.solve(r, timer)?;
+            let step = match run.solve(r, timer) {
+                Ok(step) => step,
+                Err(e) if caused_by_the_active_set(&e) && run.can_fall_back() => {
+                    run.fall_back(robust_start.as_ref(), monitor, timer)?;
+                    guard.reset();
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
             let alpha = run.line_search(&step, timer);
             run.advance(&step, alpha);
         };
@@ -358,6 +396,10 @@ struct Counts {
     elastic_contact_solves: usize,
     /// The set-up was the previous warm solve's (a load path).
     setup_reused: bool,
+    /// Fallbacks on the penalty method (theory §4.2.1).
+    fallbacks: usize,
+    /// The penalty method's iterations in them.
+    fallback_iterations: usize,
 }
 
 /// Scratch of the stages, allocated once per solve.
@@ -754,6 +796,36 @@ impl<'a> Run<'a> {
         })
     }
 
+    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (the penalty
+    /// method is serial).
+    fn can_fall_back(&self) -> bool {
+        self.count.fallbacks < self.settings.max_fallbacks && matches!(self.system, Systems::Serial(_))
+    }
+
+    /// The globalisation (theory §4.2.1): a bounded run of the penalty method from the solve's
+    /// `start` gives the next iterate (u, V, λ), converged or not; Newton goes on from it with
+    /// the active set its λ and gaps give. Counts as one iteration.
+    fn fall_back(
+        &mut self,
+        start: Option<&Start>,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+    ) -> Result<(), SolveError> {
+        let settings = self.settings;
+        let tol = settings.tol.max(Penalty::default().tol);
+        let robust = robust_steps(self.l, start, tol, settings.fallback_max_iter, monitor, timer)?;
+        self.count.fallbacks += 1;
+        self.count.fallback_iterations += robust.report.iterations;
+        let s = &mut self.state;
+        s.u = robust.u;
+        s.v = robust.extras;
+        s.lambda = robust.lambda;
+        s.elastic_phase = false;
+        s.it += 1;
+        self.cold = false;
+        Ok(())
+    }
+
     /// Stage 7: (u, V) += α (du, dV), λ from the step.
     fn advance(&mut self, step: &Step, alpha: f64) {
         let s = &mut self.state;
@@ -789,6 +861,8 @@ impl<'a> Run<'a> {
             }
         }
         put("line_search_backtracks", c.backtracks);
+        put("fallbacks", c.fallbacks);
+        put("fallback_iterations", c.fallback_iterations);
         put("active_set_changes", c.active_changes);
         put("return_mappings", c.return_mappings);
         put("elastic_phase_steps", c.elastic_phase_steps);
