@@ -143,3 +143,43 @@ fn a_tilting_punch_unloaded_to_a_small_load_converges_for_every_solver() {
         }
     }
 }
+
+/// Homogeneous compression with perfect plasticity (h = 0): the body carries at most
+/// F_lim = √(3/2) k₀ (|s| = √(2/3) F reaches k₀, theory §7.1). Newton on F = 2 reports that the
+/// load exceeds what the body can carry (before issue 25: "the tangent stiffness matrix is not
+/// positive definite"); a load path to F = 1.5 cuts its steps up to the limit and stops with the
+/// same error, naming the last factor carried, which lies within the smallest step tried below
+/// F_lim / 1.5.
+#[test]
+fn force_beyond_the_collapse_load_is_reported_as_such() {
+    let mut t = example("homogeneous.toml");
+    set(&mut t, "yield.h", toml::Value::Float(0.0));
+    set(&mut t, "obstacle.F", toml::Value::Float(2.0));
+    let (l, _) = build(&t);
+    match solver("type = \"newton\"").solve(&l.lagrangian(), &mut Silent) {
+        Err(e @ saddle::core::SolveError::BeyondCollapse { .. }) => {
+            assert!(e.to_string().contains("exceeds what the body can carry"), "{e}")
+        }
+        other => panic!("expected BeyondCollapse, got {:?}", other.map(|s| s.report.stop_reason)),
+    }
+    set(&mut t, "obstacle.F", toml::Value::Float(1.5));
+    set(&mut t, "solver.type", toml::Value::String("newton".into()));
+    let mut path = toml::Table::new();
+    path.insert("factors".into(), toml::Value::try_from([0.4, 1.0]).unwrap());
+    t.insert("load_path".into(), toml::Value::Table(path));
+    let (code, stderr, dir) = run_scene_kept(&toml::to_string(&t).unwrap());
+    assert_eq!(code, 2, "{stderr}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    let p = &s["load_path"];
+    let error = p["error"].as_str().unwrap();
+    assert!(error.contains("exceeds what the body can carry"), "{error}");
+    let steps = s["steps"].as_array().unwrap();
+    let carried = steps.iter().filter(|st| st["converged"].as_bool() == Some(true)).last().unwrap();
+    let carried = carried["factor"].as_f64().unwrap();
+    assert!(error.contains(&format!("the last load factor carried is {carried}")), "{error}");
+    let limit = 1.5f64.sqrt() / 1.5;
+    let smallest = p["smallest_step"].as_f64().unwrap();
+    println!("carried factor {carried}, limit {limit}, smallest step {smallest}");
+    assert!(carried <= limit && carried >= limit - smallest, "carried {carried}, limit {limit}, step {smallest}");
+}

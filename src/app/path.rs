@@ -106,10 +106,13 @@ pub fn solve_and_write(
             let step = match attempt {
                 Ok(step) => step,
                 Err(e) => {
-                    let why = match &e {
+                    let mut why = match &e {
                         PathError::Solve { source, .. } => source.to_string(),
                         PathError::Scene { source, .. } => source.to_string(),
                     };
+                    if let PathError::Solve { source: SolveError::BeyondCollapse { .. }, .. } = &e {
+                        let _ = write!(why, "; the last load factor carried is {solved}");
+                    }
                     progress(&format!("step {k} (factor {factor}): failed: {why}"));
                     if last.is_none() {
                         // nothing was written: the folder is left as it was (as a failed one-step run)

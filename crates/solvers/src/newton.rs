@@ -52,6 +52,7 @@ use crate::row_basis::RowBasis;
 use crate::vector::{axpy, axpy_into};
 use crate::warm_start::warm_solve;
 use saddle_core::error::{ParameterError, check, join};
+use saddle_core::linalg::error::LinalgError;
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::fields::StressField;
@@ -327,7 +328,7 @@ impl Newton {
                     guard.reset();
                     continue;
                 }
-                Err(e) => return Err(e),
+                Err(e) => return Err(run.collapse_or(e)),
             };
             let alpha = run.line_search(&step, timer);
             run.advance(&step, alpha);
@@ -824,6 +825,28 @@ impl<'a> Run<'a> {
         s.it += 1;
         self.cold = false;
         Ok(())
+    }
+
+    /// The error `e` of a step, or the collapse it shows (theory §4.2.1): a plastic tangent that
+    /// is not positive definite under prescribed forces (on the extras or the body) means the
+    /// plastic body offers no stiffness against them — a mechanism, the load beyond the limit.
+    fn collapse_or(&self, e: SolveError) -> SolveError {
+        let l = self.l;
+        let forced = l.comm().any(l.data.load.iter().chain(l.data.nodal_load).any(|f| *f != 0.0));
+        let singular = matches!(&e, SolveError::LinearAlgebra { source, .. }
+            if matches!(source.downcast_ref::<LinalgError>(), Some(LinalgError::NotPositiveDefinite { .. })));
+        if singular && forced && !self.state.elastic_phase && l.data.plasticity().is_some() {
+            SolveError::BeyondCollapse {
+                solver: self.name.into(),
+                evidence: format!(
+                    "at iteration {} the tangent stiffness of the plastic body is singular under the prescribed \
+                     forces (a collapse mechanism; {} fallbacks on the penalty method did not find a solution either)",
+                    self.state.it, self.count.fallbacks
+                ),
+            }
+        } else {
+            e
+        }
     }
 
     /// Stage 7: (u, V) += α (du, dV), λ from the step.
