@@ -175,7 +175,7 @@ fn force_beyond_the_collapse_load_is_reported_as_such() {
     let error = p["error"].as_str().unwrap();
     assert!(error.contains("exceeds what the body can carry"), "{error}");
     let steps = s["steps"].as_array().unwrap();
-    let carried = steps.iter().filter(|st| st["converged"].as_bool() == Some(true)).last().unwrap();
+    let carried = steps.iter().rfind(|st| st["converged"].as_bool() == Some(true)).unwrap();
     let carried = carried["factor"].as_f64().unwrap();
     assert!(error.contains(&format!("the last load factor carried is {carried}")), "{error}");
     let limit = 1.5f64.sqrt() / 1.5;
