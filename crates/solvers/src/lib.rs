@@ -10,6 +10,7 @@
 //!   Clarabel, polished by active-set Newton.
 
 pub mod active_set;
+mod armijo;
 pub mod conformance;
 pub mod distributed_system;
 mod fallback;

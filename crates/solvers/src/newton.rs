@@ -210,10 +210,7 @@ impl Default for Newton {
     }
 }
 
-/// The Armijo constant of the line search (theory §4.2 step 4): a step is accepted when it
-/// achieves this fraction of the decrease predicted by the slope. 1e-4 is the textbook value
-/// (Nocedal & Wright): it rejects only steps that barely decrease the merit function.
-pub const ARMIJO: f64 = 1e-4;
+pub use crate::armijo::{ARMIJO, SLOPE_ROUND_OFF};
 /// Steps of the elastic phase (full steps with the elastic tangent while the contact set
 /// settles) before it ends anyway and the line search takes over. The punch settles in 2–4;
 /// with several obstacles at the same nodes (theory §8) undamped active-set steps can cycle,
@@ -228,10 +225,6 @@ pub const MAX_HALVINGS: usize = 40;
 /// step 4): an exact penalty of the active rows' violation needs ν > max|λ|; the factor 2 is
 /// the margin.
 pub const NU_FACTOR: f64 = 2.0;
-
-/// A slope below this fraction of |J| is round-off: the line search takes the full step
-/// instead of testing decreases it cannot measure.
-pub const SLOPE_ROUND_OFF: f64 = 1e-13;
 
 /// The floor of the inexact-Newton CG tolerance (theory §4.2): the forcing term would ask for
 /// ever smaller residuals near the solution, but CG's relative residual stalls near the
@@ -314,8 +307,10 @@ impl Newton {
             }
             if run.state.elastic_phase {
                 guard.reset();
-            } else if guard.stalled(r, run.state.it) && run.can_fall_back() {
-                run.fall_back(robust_start.as_ref(), monitor, timer)?;
+            } else if guard.stalled(r, run.state.it)
+                && run.can_fall_back()
+                && run.fall_back(robust_start.as_ref(), monitor, timer)
+            {
                 guard.reset();
                 continue;
             }
@@ -324,7 +319,9 @@ impl Newton {
             let step = match run.solve(r, timer) {
                 Ok(step) => step,
                 Err(e) if caused_by_the_active_set(&e) && run.can_fall_back() => {
-                    run.fall_back(robust_start.as_ref(), monitor, timer)?;
+                    if !run.fall_back(robust_start.as_ref(), monitor, timer) {
+                        return Err(run.collapse_or(e));
+                    }
                     guard.reset();
                     continue;
                 }
@@ -805,17 +802,16 @@ impl<'a> Run<'a> {
 
     /// The globalisation (theory §4.2.1): a bounded run of the penalty method from the solve's
     /// `start` gives the next iterate (u, V, λ), converged or not; Newton goes on from it with
-    /// the active set its λ and gaps give. Counts as one iteration.
-    fn fall_back(
-        &mut self,
-        start: Option<&Start>,
-        monitor: &mut dyn Monitor,
-        timer: &mut PhaseTimer,
-    ) -> Result<(), SolveError> {
+    /// the active set its λ and gaps give. Counts as one iteration. False when the penalty
+    /// method failed with an error (nothing to go on from; the fallback is counted all the same).
+    fn fall_back(&mut self, start: Option<&Start>, monitor: &mut dyn Monitor, timer: &mut PhaseTimer) -> bool {
         let settings = self.settings;
         let tol = settings.tol.max(Penalty::default().tol);
-        let robust = robust_steps(self.l, start, tol, settings.fallback_max_iter, monitor, timer)?;
+        let robust = robust_steps(self.l, start, tol, settings.fallback_max_iter, monitor, timer);
         self.count.fallbacks += 1;
+        let Ok(robust) = robust else {
+            return false;
+        };
         self.count.fallback_iterations += robust.report.iterations;
         let s = &mut self.state;
         s.u = robust.u;
@@ -824,18 +820,20 @@ impl<'a> Run<'a> {
         s.elastic_phase = false;
         s.it += 1;
         self.cold = false;
-        Ok(())
+        true
     }
 
     /// The error `e` of a step, or the collapse it shows (theory §4.2.1): a plastic tangent that
-    /// is not positive definite under prescribed forces (on the extras or the body) means the
-    /// plastic body offers no stiffness against them — a mechanism, the load beyond the limit.
-    fn collapse_or(&self, e: SolveError) -> SolveError {
+    /// is not positive definite under prescribed forces (on the extras or the body), where the
+    /// elastic tangent with the same active set is, means the plastic body offers no stiffness
+    /// against them — a mechanism, the load beyond the limit.
+    fn collapse_or(&mut self, e: SolveError) -> SolveError {
         let l = self.l;
         let forced = l.comm().any(l.data.load.iter().chain(l.data.nodal_load).any(|f| *f != 0.0));
         let singular = matches!(&e, SolveError::LinearAlgebra { source, .. }
             if matches!(source.downcast_ref::<LinalgError>(), Some(LinalgError::NotPositiveDefinite { .. })));
-        if singular && forced && !self.state.elastic_phase && l.data.plasticity().is_some() {
+        let plastic = !self.state.elastic_phase && l.data.plasticity().is_some();
+        if singular && forced && plastic && self.elastic_tangent_is_regular() {
             SolveError::BeyondCollapse {
                 solver: self.name.into(),
                 evidence: format!(
@@ -846,6 +844,19 @@ impl<'a> Run<'a> {
             }
         } else {
             e
+        }
+    }
+
+    /// The Newton system with the elastic tangent and the current active set can be solved: the
+    /// body is held (an unrestrained body's stiffness is singular already; theory §4.2.1).
+    fn elastic_tangent_is_regular(&mut self) -> bool {
+        let (l, c, s, w) = (self.l, &self.c_elastic, &self.state, &mut self.work);
+        l.assemble(Material::Uniform(c), &mut w.k);
+        match &mut self.system {
+            Systems::Serial(system) => system.step(l, &w.k, &s.active, &w.grad, &w.gap, CG_TOL_MIN).is_ok(),
+            Systems::Distributed(system) => {
+                system.step(l, Material::Uniform(c), &w.k, &s.active, &w.grad, &w.gap, CG_TOL_MIN).is_ok()
+            }
         }
     }
 
