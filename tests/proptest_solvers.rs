@@ -202,6 +202,7 @@ fn kind(e: &SolveError) -> &'static str {
         SolveError::NonFinite { .. } => "NonFinite",
         SolveError::Parameter(_) => "Parameter",
         SolveError::Unsupported { .. } => "Unsupported",
+        SolveError::BeyondCollapse { .. } => "BeyondCollapse",
     }
 }
 
@@ -236,9 +237,10 @@ fn check(solver: &dyn Solver, case: &Case, tally: &mut Tally) -> Result<(), Test
             let message = e.to_string();
             prop_assert!(!message.is_empty());
             let legitimate = match &e {
-                SolveError::LinearAlgebra { .. } | SolveError::Diverged { .. } | SolveError::NonFinite { .. } => {
-                    case.extreme().is_some()
-                }
+                SolveError::LinearAlgebra { .. }
+                | SolveError::Diverged { .. }
+                | SolveError::NonFinite { .. }
+                | SolveError::BeyondCollapse { .. } => case.extreme().is_some(),
                 // the solvers' parameters are fixed and valid, and every solver handles these
                 // problems (one contact row per x₃ dof, a von Mises cone)
                 SolveError::Parameter(_) | SolveError::Unsupported { .. } => false,

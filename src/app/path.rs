@@ -25,8 +25,10 @@
 use super::setup::{Loaded, Outcome, RunError};
 use crate::io::outdir::OutDir;
 use crate::io::scene::LoadPath;
-use crate::io::summary::{PathSummary, ResidualState, StepSummary, Summary, check_quantity, reported_quantities};
-use saddle_core::{Evolution, Monitor, PathError, SceneError, StepSolution};
+use crate::io::summary::{
+    CutAttempt, PathSummary, ResidualState, StepSummary, Summary, check_quantity, reported_quantities,
+};
+use saddle_core::{Evolution, Increment, Monitor, PathError, SceneError, SolveError, StepSolution};
 use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write as _};
@@ -76,63 +78,103 @@ pub fn solve_and_write(
     let mut steps: Vec<StepSummary> = Vec::new();
     let mut last: Option<(Summary, StepSolution)> = None;
     let mut failure: Option<(usize, String)> = None;
-    for (k, &factor) in factors.iter().enumerate() {
-        let started = Instant::now();
-        let step = timer.time("solve", || evolution.step(factor, loaded.solver.as_ref(), monitor));
-        let shared = ranks.agree(step.as_ref().map(|_| ()).map_err(|e| e.to_string()));
-        let step = match (step, shared) {
-            (Ok(step), Ok(())) => step,
-            (Ok(_), Err(message)) => {
+    let cutting = path.cutting();
+    let mut cuts: Vec<CutAttempt> = Vec::new();
+    let mut smallest_step: Option<f64> = None;
+    // the zero state is the state at factor 0
+    let mut solved = 0.0;
+    'planned: for &target in &factors {
+        let mut increment = Increment::new(solved, target);
+        while let Some(factor) = increment.next() {
+            let k = steps.len();
+            let started = Instant::now();
+            let attempt = timer.time("solve", || evolution.step(factor, loaded.solver.as_ref(), monitor));
+            // a step failed on one rank only ends every rank (a distributed solver's failures are
+            // every rank's: the cuts below are taken alike everywhere)
+            if let (Ok(_), Err(message)) =
+                (&attempt, ranks.agree(attempt.as_ref().map(|_| ()).map_err(|e| e.to_string())))
+            {
                 out.abandon();
                 return Err(RunError::Ranks(message));
             }
-            (Err(e), _) => {
-                let why = match &e {
-                    PathError::Solve { source, .. } => source.to_string(),
-                    PathError::Scene { source, .. } => source.to_string(),
-                };
-                progress(&format!("step {k} (factor {factor}): failed: {why}"));
-                if last.is_none() {
-                    // nothing was written: the folder is left as it was (as a failed one-step run)
-                    out.abandon();
-                    return Err(RunError::Path(e));
+            if let Some(why) = cuttable_failure(&attempt) {
+                let from = increment.from();
+                if increment.cut(&cutting) {
+                    let retry = increment.next().expect("a cut step has somewhere to go");
+                    progress(&format!(
+                        "step {k} (factor {factor}): failed: {why}; cut {}: retrying at factor {retry} (step {:e})",
+                        increment.cuts(),
+                        increment.step()
+                    ));
+                    smallest_step = Some(increment.step());
+                    cuts.push(CutAttempt { step: k, factor, from, retry, reason: why });
+                    continue;
                 }
-                steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
-                if ranks.is_root() {
-                    timer.time("write", || series.append(&mut out, &steps))?;
+            }
+            let step = match attempt {
+                Ok(step) => step,
+                Err(e) => {
+                    let mut why = match &e {
+                        PathError::Solve { source, .. } => source.to_string(),
+                        PathError::Scene { source, .. } => source.to_string(),
+                    };
+                    if let PathError::Solve { source: SolveError::BeyondCollapse { .. }, .. } = &e {
+                        let _ = write!(why, "; the last load factor carried is {solved}");
+                    }
+                    progress(&format!("step {k} (factor {factor}): failed: {why}"));
+                    if last.is_none() {
+                        // nothing was written: the folder is left as it was (as a failed one-step run)
+                        out.abandon();
+                        return Err(RunError::Path(e));
+                    }
+                    steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
+                    if ranks.is_root() {
+                        timer.time("write", || series.append(&mut out, &steps))?;
+                    }
+                    failure = Some((k, why));
+                    break 'planned;
                 }
-                failure = Some((k, why));
-                break;
+            };
+            let mut s =
+                timer.time("summary", || ranks.summary(step.problem.view(), &step.solution, loaded.title.clone()));
+            s.warnings.extend(step.warnings.iter().cloned());
+            let converged = step.converged();
+            let mut file = None;
+            if writes_step_file(k, factors.len()) || !converged {
+                let stem = format!("solution_{k:04}");
+                let view = step.problem.view();
+                let files = timer.time("write", || ranks.write_solution(out.dir(), &stem, view, &step.solution));
+                let files = RunError::agree(ranks, files.map_err(io(&out.path(&stem))))?;
+                for f in &files {
+                    out.wrote(f)?;
+                }
+                file = files.into_iter().next();
             }
-        };
-        let mut s = timer.time("summary", || ranks.summary(step.problem.view(), &step.solution, loaded.title.clone()));
-        s.warnings.extend(step.warnings.iter().cloned());
-        let converged = step.converged();
-        let mut file = None;
-        if writes_step_file(k, factors.len()) || !converged {
-            let stem = format!("solution_{k:04}");
-            let files =
-                timer.time("write", || ranks.write_solution(out.dir(), &stem, step.problem.view(), &step.solution));
-            let files = RunError::agree(ranks, files.map_err(io(&out.path(&stem))))?;
-            for f in &files {
-                out.wrote(f)?;
+            let mut entry = StepSummary::new(k, factor, &s, file, started.elapsed().as_secs_f64());
+            entry.cuts = increment.cuts();
+            progress(&step_line(&entry, path));
+            steps.push(entry);
+            // the series and the table so far, so that an interrupted path leaves them readable
+            if ranks.is_root() {
+                timer.time("write", || series.append(&mut out, &steps))?;
             }
-            file = files.into_iter().next();
+            if !converged {
+                failure = Some((k, format!("the solver stopped without converging ({:?})", s.stop_reason)));
+            }
+            last = Some((s, step));
+            if !converged {
+                break 'planned;
+            }
+            increment.solved(factor);
+            solved = factor;
         }
-        let entry = StepSummary::new(k, factor, &s, file, started.elapsed().as_secs_f64());
-        progress(&step_line(&entry, path));
-        steps.push(entry);
-        // the series and the table so far, so that an interrupted path leaves them readable
-        if ranks.is_root() {
-            timer.time("write", || series.append(&mut out, &steps))?;
-        }
-        if !converged {
-            failure = Some((k, format!("the solver stopped without converging ({:?})", s.stop_reason)));
-        }
-        last = Some((s, step));
-        if !converged {
+        if failure.is_some() {
             break;
         }
+    }
+    // a path that cannot go on names the smallest step it tried
+    if let Some((_, why)) = failure.as_mut().filter(|_| !cuts.is_empty()) {
+        let _ = write!(why, " (smallest step tried {:e})", smallest_step.unwrap_or(f64::NAN));
     }
     let (mut summary, step) = last.expect("a first step that fails returns above");
     let completed = failure.is_none();
@@ -140,7 +182,7 @@ pub fn solve_and_write(
         summary.converged = false;
         summary.warnings.push(format!(
             "the load path stopped at step {k} (load factor {}): {why}; the steps before it are written ({} of {} steps)",
-            factors[*k],
+            steps[*k].factor,
             steps.len(),
             factors.len()
         ));
@@ -161,6 +203,10 @@ pub fn solve_and_write(
         total_iterations: steps.iter().map(|s| s.iterations).sum(),
         total_wall_s: steps.iter().map(|s| s.wall_s).sum(),
         residual,
+        max_cuts: cutting.max_cuts,
+        min_step: cutting.min_step,
+        cuts,
+        smallest_step,
     });
     summary.steps = steps;
     // solution.vtu: the last step solved, as a one-step run writes it
@@ -177,6 +223,21 @@ pub fn solve_and_write(
     ranks.describe(&mut summary);
     let written = super::run::finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
+}
+
+/// Why an attempted step failed, when halving it may help (theory §11.5): it did not converge,
+/// or the solver failed on it — not for a parameter, a problem outside what the solver handles,
+/// or a step that cannot be set up, which no smaller step changes.
+fn cuttable_failure(attempt: &Result<StepSolution<'_>, PathError>) -> Option<String> {
+    match attempt {
+        Ok(step) if !step.converged() => {
+            Some(format!("the solver stopped without converging ({:?})", step.solution.report.stop_reason))
+        }
+        Ok(_) => None,
+        Err(PathError::Solve { source: SolveError::Parameter(_) | SolveError::Unsupported { .. }, .. }) => None,
+        Err(PathError::Solve { source, .. }) => Some(source.to_string()),
+        Err(PathError::Scene { .. }) => None,
+    }
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
@@ -292,7 +353,8 @@ impl Columns {
         for n in self.extras.iter().chain(&self.quantities) {
             let _ = write!(out, ",{n}");
         }
-        out.push('\n');
+        // after the columns of the first version of the table (theory §11.5)
+        out.push_str(",cuts\n");
         out
     }
 
@@ -320,7 +382,7 @@ impl Columns {
         for n in &self.quantities {
             let _ = write!(out, ",{}", num(s.contact.get(n).copied()));
         }
-        out.push('\n');
+        let _ = writeln!(out, ",{}", s.cuts);
         out
     }
 }

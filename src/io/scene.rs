@@ -56,6 +56,7 @@
 //! ```
 
 use super::scene_de::TypeFirst;
+use saddle_core::StepCutting;
 use saddle_core::error::ParameterError;
 use saddle_core::{
     AdmissibleStresses, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P1,
@@ -290,6 +291,8 @@ pub const MAX_STEPS: usize = 100_000;
 /// factors = [0.0, 0.5, 1.0, 0.5, 0.0]   # load, then unload
 /// substeps = 4                          # optional: equal steps between factors (default 1)
 /// plot = ["imprint", "force"]           # optional: the load_path.png axes (the default)
+/// max_cuts = 5                          # optional: halvings of a failed step (theory §11.5)
+/// min_step = 1e-6                       # optional: the smallest increment tried
 /// ```
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -306,6 +309,21 @@ pub struct LoadPath {
     /// indentation, drawn when the obstacles report both ([`LoadPath::axes`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plot: Option<[String; 2]>,
+    /// A step that fails is retried with half the increment, up to this many times per planned
+    /// step (theory §11.5; default [`StepCutting::default`]); 0: the path stops at it.
+    #[serde(default = "default_max_cuts")]
+    pub max_cuts: usize,
+    /// No increment of the load factor below this is tried (theory §11.5).
+    #[serde(default = "default_min_step")]
+    pub min_step: f64,
+}
+
+fn default_max_cuts() -> usize {
+    StepCutting::default().max_cuts
+}
+
+fn default_min_step() -> f64 {
+    StepCutting::default().min_step
 }
 
 fn one() -> usize {
@@ -316,6 +334,11 @@ impl LoadPath {
     /// The plotted quantities (x, y): `plot`, or imprint and force when absent.
     pub fn axes(&self) -> [String; 2] {
         self.plot.clone().unwrap_or_else(|| ["imprint".to_string(), "force".to_string()])
+    }
+
+    /// The step cutting settings (theory §11.5).
+    pub fn cutting(&self) -> StepCutting {
+        StepCutting { max_cuts: self.max_cuts, min_step: self.min_step }
     }
 
     /// The factors of the steps, sub-steps included.
@@ -333,6 +356,9 @@ impl LoadPath {
         }
         if self.substeps == 0 {
             return Err(ParameterError::new("load_path.substeps", 0, "must be >= 1").into());
+        }
+        if !(self.min_step.is_finite() && self.min_step > 0.0) {
+            return Err(ParameterError::new("load_path.min_step", self.min_step, "must be a positive number").into());
         }
         let steps = (self.factors.len() as f64 - 1.0) * self.substeps as f64 + 1.0;
         if steps > MAX_STEPS as f64 {

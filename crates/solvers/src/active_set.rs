@@ -236,13 +236,12 @@ pub(crate) fn step_from_reactions(
         comm.sum_in_place(s.as_mut_slice());
         comm.sum_in_place(hl.as_mut_slice());
         let rhs = -DVector::from_column_slice(l.data.load) - hl;
-        let sol =
-            s.lu().solve(&rhs).filter(|v| v.iter().all(|x| x.is_finite())).ok_or_else(|| SolveError::Unsupported {
-                solver: solver.into(),
-                message: "an extra unknown with a load has no active contact row that determines it (the obstacle \
+        let sol = extras_step(&s, &rhs).ok_or_else(|| SolveError::Unsupported {
+            solver: solver.into(),
+            message: "an extra unknown with a load has no active contact row that determines it (the obstacle \
                           does not touch, or touches where it cannot hold that extra)"
-                    .into(),
-            })?;
+                .into(),
+        })?;
         dv.copy_from_slice(sol.as_slice());
     }
     let mut du = x[..n].to_vec();
@@ -256,6 +255,27 @@ pub(crate) fn step_from_reactions(
         lambda[i] = lam0[i] + (0..ne).map(|kx| lam_v[(i, kx)] * dv[kx]).sum::<f64>();
     }
     Ok(Step { du, dv, lambda })
+}
+
+/// Below this fraction of the largest singular value of H_AᵀΛ a singular value is zero: the
+/// active rows leave that combination of extras undetermined (a punch touching along a line
+/// cannot tilt about it), measured in round-off of the n_extras × n_extras system.
+pub const EXTRAS_RANK_TOL: f64 = 1e-10;
+
+/// dV from S dV = b (theory §4.2.1): the solution when S = H_AᵀΛ is regular; when the active
+/// rows leave a combination of extras undetermined and b has no component along it (the load
+/// does not push that way), the minimum-norm solution — the undetermined extras keep their
+/// values; `None` when b has such a component (no active row can hold the load).
+fn extras_step(s: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
+    let svd = s.clone().svd(true, true);
+    let largest = svd.singular_values.max();
+    if !largest.is_finite() {
+        return None;
+    }
+    let dv = svd.solve(b, EXTRAS_RANK_TOL * largest).ok()?;
+    let defect = (s * &dv - b).norm();
+    (dv.iter().all(|x| x.is_finite()) && defect <= EXTRAS_RANK_TOL.sqrt() * b.norm().max(f64::MIN_POSITIVE))
+        .then_some(dv)
 }
 
 /// The linearised problem for one active set, and the solver of its systems.

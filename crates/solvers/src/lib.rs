@@ -10,9 +10,11 @@
 //!   Clarabel, polished by active-set Newton.
 
 pub mod active_set;
+mod armijo;
 pub mod conformance;
 pub mod distributed_basis;
 pub mod distributed_system;
+mod fallback;
 pub mod kh_projection;
 pub mod linear;
 mod local_law;

@@ -31,19 +31,28 @@
 //!    Once the active rows touch, it is a line search on J alone;
 //! 7. **update** (`Run::advance`).
 //!
+//! **Globalisation** (theory §4.2.1): when the KKT residual has not halved for `stall_window`
+//! iterations (an active set that cycles), or a step fails for its active set (no active row
+//! holds a loaded extra, a singular tangent), a bounded run of the penalty method
+//! (`Run::fall_back`, at most `max_fallbacks` times) gives the next iterate, and Newton goes on
+//! from it.
+//!
 //! Once the active set and the plastic set settle, convergence is quadratic.
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper};
 use crate::distributed_system::DistributedSystem;
+use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
+use crate::penalty::Penalty;
 use crate::residual::History;
 use crate::row_basis::RowBasis;
 use crate::vector::{axpy, axpy_into};
 use crate::warm_start::warm_solve;
 use saddle_core::error::{ParameterError, check, join};
+use saddle_core::linalg::error::LinalgError;
 use saddle_core::linalg::{AmgParams, SparseCholesky};
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::fields::StressField;
@@ -92,6 +101,15 @@ pub struct Newton {
     /// `strength_threshold`, `smoother_degree`, `smoother_range`, `eigen_steps`, `coarse_size`,
     /// `max_levels`; defaults those of [`AmgParams`]).
     pub amg: AmgParams,
+    /// Iterations without the KKT residual falling below half its best before Newton is
+    /// declared stalled and falls back on the penalty method (theory §4.2.1; 0: never).
+    /// Newton near the solution gains orders of magnitude per step: 8 steps without halving
+    /// the residual mean an active set that cycles.
+    pub stall_window: usize,
+    /// Fallbacks on the penalty method per solve (theory §4.2.1; 0: none).
+    pub max_fallbacks: usize,
+    /// Penalty iterations per fallback (the penalty method's own default budget).
+    pub fallback_max_iter: usize,
     /// The linear system's set-up kept between the warm-started solves of a load path
     /// ([`SetupCache`]); not a setting.
     #[serde(skip)]
@@ -184,15 +202,15 @@ impl Default for Newton {
             cg_forcing: 1e-2,
             cg_max_iter: 2000,
             amg: AmgParams::default(),
+            stall_window: 8,
+            max_fallbacks: 2,
+            fallback_max_iter: 50,
             setup_cache: SetupCache::default(),
         }
     }
 }
 
-/// The Armijo constant of the line search (theory §4.2 step 4): a step is accepted when it
-/// achieves this fraction of the decrease predicted by the slope. 1e-4 is the textbook value
-/// (Nocedal & Wright): it rejects only steps that barely decrease the merit function.
-pub const ARMIJO: f64 = 1e-4;
+pub use crate::armijo::{ARMIJO, SLOPE_ROUND_OFF};
 /// Steps of the elastic phase (full steps with the elastic tangent while the contact set
 /// settles) before it ends anyway and the line search takes over. The punch settles in 2–4;
 /// with several obstacles at the same nodes (theory §8) undamped active-set steps can cycle,
@@ -207,10 +225,6 @@ pub const MAX_HALVINGS: usize = 40;
 /// step 4): an exact penalty of the active rows' violation needs ν > max|λ|; the factor 2 is
 /// the margin.
 pub const NU_FACTOR: f64 = 2.0;
-
-/// A slope below this fraction of |J| is round-off: the line search takes the full step
-/// instead of testing decreases it cannot measure.
-pub const SLOPE_ROUND_OFF: f64 = 1e-13;
 
 /// The floor of the inexact-Newton CG tolerance (theory §4.2): the forcing term would ask for
 /// ever smaller residuals near the solution, but CG's relative residual stalls near the
@@ -232,6 +246,7 @@ impl Solver for Newton {
         check::at_least_one(path, "max_iter", self.max_iter)?;
         check::open_interval(path, "cg_forcing", self.cg_forcing, 0.0, 1.0)?;
         check::at_least_one(path, "cg_max_iter", self.cg_max_iter)?;
+        check::at_least_one(path, "fallback_max_iter", self.fallback_max_iter)?;
         // AmgParams names its fields `amg.<field>`: under this table's path
         self.amg.validate().map_err(|e| ParameterError { field: join(path, &e.field), ..e })?;
         Ok(())
@@ -284,7 +299,9 @@ impl Newton {
         timer: &mut PhaseTimer,
         name: &str,
     ) -> Result<Solution, SolveError> {
+        let robust_start = start.clone();
         let mut run = Run::set_up(self, l, start, reuse, name, monitor, timer)?;
+        let mut guard = StallGuard::new(self.stall_window);
         monitor.phase("iterations");
         let (stop, kkt) = loop {
             let kkt = run.local_law(timer);
@@ -293,9 +310,28 @@ impl Newton {
             if let Some(stop) = self.stop(r, run.state.it) {
                 break (stop, kkt);
             }
+            if run.state.elastic_phase {
+                guard.reset();
+            } else if guard.stalled(r, run.state.it)
+                && run.can_fall_back()
+                && run.fall_back(robust_start.as_ref(), monitor, timer)
+            {
+                guard.reset();
+                continue;
+            }
             run.update_active_set();
             run.assemble(timer);
-            let step = run.solve(r, timer)?;
+            let step = match run.solve(r, timer) {
+                Ok(step) => step,
+                Err(e) if caused_by_the_active_set(&e) && run.can_fall_back() => {
+                    if !run.fall_back(robust_start.as_ref(), monitor, timer) {
+                        return Err(run.collapse_or(e));
+                    }
+                    guard.reset();
+                    continue;
+                }
+                Err(e) => return Err(run.collapse_or(e)),
+            };
             let alpha = run.line_search(&step, timer);
             run.advance(&step, alpha);
         };
@@ -363,6 +399,10 @@ struct Counts {
     elastic_contact_solves: usize,
     /// The set-up was the previous warm solve's (a load path).
     setup_reused: bool,
+    /// Fallbacks on the penalty method (theory §4.2.1).
+    fallbacks: usize,
+    /// The penalty method's iterations in them.
+    fallback_iterations: usize,
 }
 
 /// Scratch of the stages, allocated once per solve.
@@ -759,6 +799,72 @@ impl<'a> Run<'a> {
         })
     }
 
+    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (the penalty
+    /// method is serial).
+    fn can_fall_back(&self) -> bool {
+        self.count.fallbacks < self.settings.max_fallbacks && matches!(self.system, Systems::Serial(_))
+    }
+
+    /// The globalisation (theory §4.2.1): a bounded run of the penalty method from the solve's
+    /// `start` gives the next iterate (u, V, λ), converged or not; Newton goes on from it with
+    /// the active set its λ and gaps give. Counts as one iteration. False when the penalty
+    /// method failed with an error (nothing to go on from; the fallback is counted all the same).
+    fn fall_back(&mut self, start: Option<&Start>, monitor: &mut dyn Monitor, timer: &mut PhaseTimer) -> bool {
+        let settings = self.settings;
+        let tol = settings.tol.max(Penalty::default().tol);
+        let robust = robust_steps(self.l, start, tol, settings.fallback_max_iter, monitor, timer);
+        self.count.fallbacks += 1;
+        let Ok(robust) = robust else {
+            return false;
+        };
+        self.count.fallback_iterations += robust.report.iterations;
+        let s = &mut self.state;
+        s.u = robust.u;
+        s.v = robust.extras;
+        s.lambda = robust.lambda;
+        s.elastic_phase = false;
+        s.it += 1;
+        self.cold = false;
+        true
+    }
+
+    /// The error `e` of a step, or the collapse it shows (theory §4.2.1): a plastic tangent that
+    /// is not positive definite under prescribed forces (on the extras or the body), where the
+    /// elastic tangent with the same active set is, means the plastic body offers no stiffness
+    /// against them — a mechanism, the load beyond the limit.
+    fn collapse_or(&mut self, e: SolveError) -> SolveError {
+        let l = self.l;
+        let forced = l.comm().any(l.data.load.iter().chain(l.data.nodal_load).any(|f| *f != 0.0));
+        let singular = matches!(&e, SolveError::LinearAlgebra { source, .. }
+            if matches!(source.downcast_ref::<LinalgError>(), Some(LinalgError::NotPositiveDefinite { .. })));
+        let plastic = !self.state.elastic_phase && l.data.plasticity().is_some();
+        if singular && forced && plastic && self.elastic_tangent_is_regular() {
+            SolveError::BeyondCollapse {
+                solver: self.name.into(),
+                evidence: format!(
+                    "at iteration {} the tangent stiffness of the plastic body is singular under the prescribed \
+                     forces (a collapse mechanism; {} fallbacks on the penalty method did not find a solution either)",
+                    self.state.it, self.count.fallbacks
+                ),
+            }
+        } else {
+            e
+        }
+    }
+
+    /// The Newton system with the elastic tangent and the current active set can be solved: the
+    /// body is held (an unrestrained body's stiffness is singular already; theory §4.2.1).
+    fn elastic_tangent_is_regular(&mut self) -> bool {
+        let (l, c, s, w) = (self.l, &self.c_elastic, &self.state, &mut self.work);
+        l.assemble(Material::Uniform(c), &mut w.k);
+        match &mut self.system {
+            Systems::Serial(system) => system.step(l, &w.k, &s.active, &w.grad, &w.gap, CG_TOL_MIN).is_ok(),
+            Systems::Distributed(system) => {
+                system.step(l, Material::Uniform(c), &w.k, &s.active, &w.grad, &w.gap, CG_TOL_MIN).is_ok()
+            }
+        }
+    }
+
     /// Stage 7: (u, V) += α (du, dV), λ from the step.
     fn advance(&mut self, step: &Step, alpha: f64) {
         let s = &mut self.state;
@@ -794,6 +900,8 @@ impl<'a> Run<'a> {
             }
         }
         put("line_search_backtracks", c.backtracks);
+        put("fallbacks", c.fallbacks);
+        put("fallback_iterations", c.fallback_iterations);
         put("active_set_changes", c.active_changes);
         put("return_mappings", c.return_mappings);
         put("elastic_phase_steps", c.elastic_phase_steps);

@@ -195,6 +195,9 @@ pub struct StepSummary {
     pub file: Option<String>,
     /// Warnings of the step.
     pub warnings: Vec<String>,
+    /// Halvings of the planned increment before this step was solved (theory §11.5; 0: as
+    /// planned); the attempts that failed are in `load_path.cuts`.
+    pub cuts: usize,
 }
 
 impl StepSummary {
@@ -224,6 +227,7 @@ impl StepSummary {
             wall_s,
             file,
             warnings: s.warnings.clone(),
+            cuts: 0,
         }
     }
 
@@ -250,6 +254,7 @@ impl StepSummary {
             wall_s,
             file: None,
             warnings: Vec::new(),
+            cuts: 0,
         }
     }
 
@@ -285,6 +290,29 @@ pub struct PathSummary {
     pub total_wall_s: f64,
     /// The residual state, when the path ends converged at load factor 0 (theory §11.4).
     pub residual: Option<ResidualState>,
+    /// The step cutting settings (theory §11.5).
+    pub max_cuts: usize,
+    /// The smallest increment step cutting may try.
+    pub min_step: f64,
+    /// Every attempt that failed and was retried with half the increment, in order.
+    pub cuts: Vec<CutAttempt>,
+    /// The smallest increment of the load factor tried (null without cuts).
+    pub smallest_step: Option<f64>,
+}
+
+/// A step that failed and was retried with half the increment (theory §11.5).
+#[derive(Clone, Debug, Serialize)]
+pub struct CutAttempt {
+    /// The index the retried step has in `steps`.
+    pub step: usize,
+    /// The factor the failed attempt was at ...
+    pub factor: f64,
+    /// ... from this one (the last solved) ...
+    pub from: f64,
+    /// ... and the factor retried.
+    pub retry: f64,
+    /// Why the attempt failed.
+    pub reason: String,
 }
 
 /// What unloading leaves (theory §11.4), summarised.

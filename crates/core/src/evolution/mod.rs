@@ -10,14 +10,17 @@
 //! * [`step`] — [`LoadStep`]: L at a load factor with a state;
 //! * [`reduced`] — [`Reduced`]: L without the rows and extras of obstacles that carry no load
 //!   (a force-controlled obstacle at zero force leaves its extras undetermined, theory §11.3);
-//! * [`path`] — [`Evolution`]: the steps of a load path one after another, the state carried.
+//! * [`path`] — [`Evolution`]: the steps of a load path one after another, the state carried;
+//! * [`cutting`] — [`Increment`]: a failed step halved and retried (theory §11.5).
 //!
 //! [`PlasticState`]: crate::PlasticState
 
+pub mod cutting;
 pub mod path;
 pub mod reduced;
 pub mod step;
 
+pub use cutting::{Increment, StepCutting};
 pub use path::{Evolution, PathError, StepSolution, step_factors};
 pub use reduced::Reduced;
 pub use step::LoadStep;

@@ -105,6 +105,10 @@ pub enum SolveError {
     /// The problem is outside what this solver handles.
     #[error("{solver}: {message}")]
     Unsupported { solver: String, message: String },
+    /// The prescribed forces exceed what the body can carry (plastic collapse, theory §10.3): the
+    /// problem has no solution; `evidence` says what the solver met.
+    #[error("{solver}: the load exceeds what the body can carry (plastic collapse): {evidence}")]
+    BeyondCollapse { solver: String, evidence: String },
 }
 
 impl SolveError {

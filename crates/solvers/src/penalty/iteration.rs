@@ -4,7 +4,7 @@
 
 use super::system::{Direction, PenaltySystem, Point};
 use super::{MAX_BACKTRACKS, Penalty, SHRINK_MAX, SHRINK_MIN, STUCK_STEP, non_finite};
-use crate::newton::{ARMIJO, SLOPE_ROUND_OFF};
+use crate::armijo::{ARMIJO, SLOPE_ROUND_OFF};
 use crate::residual::History;
 use crate::vector::{axpy, axpy_into, blend, dot};
 use rayon::prelude::*;
