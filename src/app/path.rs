@@ -221,7 +221,7 @@ pub fn solve_and_write(
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
     ranks.describe(&mut summary);
-    let written = super::run::finish(ranks, out, &summary, &files, out_dir)?;
+    let written = super::setup::finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
 }
 

@@ -3,10 +3,7 @@
 //! the solve returns a solution.
 
 use super::path;
-use super::ranks::{Ranks, write_in_place};
-use super::setup::{Loaded, Outcome, RunError};
-use crate::io::outdir::OutDir;
-use crate::io::summary::Summary;
+use super::setup::{Loaded, Outcome, RunError, finish};
 use saddle_core::{Evolution, Monitor, PathError};
 use std::path::Path;
 
@@ -61,32 +58,6 @@ pub fn solve_and_write_with(
     ranks.describe(&mut summary);
     let written = finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
-}
-
-/// The end of a run on the root: the solution's files and `summary.json` (under a temporary
-/// name first) entered in the manifest, the folder cleaned of the earlier run's files; every
-/// rank learns whether it worked. Collective.
-pub(crate) fn finish(
-    ranks: &dyn Ranks,
-    mut out: OutDir,
-    summary: &Summary,
-    files: &[String],
-    out_dir: &Path,
-) -> Result<Vec<String>, RunError> {
-    let written = if ranks.is_root() {
-        (|| {
-            for f in files {
-                out.wrote(f)?;
-            }
-            let json = out_dir.join("summary.json");
-            write_in_place(out_dir, "summary.json", |p| summary.write(p)).map_err(io_error(&json))?;
-            out.wrote("summary.json")?;
-            Ok(out.finish()?)
-        })()
-    } else {
-        Ok(out.finish()?)
-    };
-    RunError::agree(ranks, written)
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {

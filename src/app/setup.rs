@@ -2,8 +2,8 @@
 //! a [`Loaded`] problem with its solver; and what a run returns ([`Outcome`], [`RunError`]) —
 //! shared by a one-step run ([`super::run`]) and a load path ([`super::path`]).
 
-use super::ranks::{OneMachine, Ranks};
-use crate::io::outdir::OutError;
+use super::ranks::{OneMachine, Ranks, write_in_place};
+use crate::io::outdir::{OutDir, OutError};
 use crate::io::scene::{LoadPath, Scene};
 use crate::io::summary::Summary;
 use saddle_core::{DiscreteProblem, PhaseTimer, SceneError, Solution, SolveError, Solver};
@@ -118,4 +118,30 @@ pub struct Outcome {
     pub out_dir: PathBuf,
     /// The files written into it, in order (the folder's manifest, [`crate::io::outdir`]).
     pub written: Vec<String>,
+}
+
+/// The end of a run on the root: the solution's files and `summary.json` (under a temporary
+/// name first) entered in the manifest, the folder cleaned of the earlier run's files; every
+/// rank learns whether it worked. Collective.
+pub fn finish(
+    ranks: &dyn Ranks,
+    mut out: OutDir,
+    summary: &Summary,
+    files: &[String],
+    out_dir: &Path,
+) -> Result<Vec<String>, RunError> {
+    let written = if ranks.is_root() {
+        (|| {
+            for f in files {
+                out.wrote(f)?;
+            }
+            let json = out_dir.join("summary.json");
+            write_in_place(out_dir, "summary.json", |p| summary.write(p)).map_err(|source| RunError::Io { path: json.clone(), source })?;
+            out.wrote("summary.json")?;
+            Ok(out.finish()?)
+        })()
+    } else {
+        Ok(out.finish()?)
+    };
+    RunError::agree(ranks, written)
 }
