@@ -46,6 +46,7 @@
 //! start [`Newton::solve_from`], which converges in a few iterations to `tol`.
 
 use crate::newton::{Newton, Start};
+use crate::triplets::Triplets;
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT,
@@ -763,39 +764,6 @@ impl ConeMap {
             rows += blk.dim;
         }
         Self { entries, rows }
-    }
-}
-
-/// A sparse matrix as (row, column, value) triplets in the order pushed.
-struct Triplets {
-    rows: Vec<usize>,
-    cols: Vec<usize>,
-    vals: Vec<f64>,
-}
-
-impl Triplets {
-    /// Room for `nnz` entries.
-    fn with_capacity(nnz: usize) -> Self {
-        Self { rows: Vec::with_capacity(nnz), cols: Vec::with_capacity(nnz), vals: Vec::with_capacity(nnz) }
-    }
-
-    /// Entry (i, j) = v.
-    fn push(&mut self, i: usize, j: usize, v: f64) {
-        self.rows.push(i);
-        self.cols.push(j);
-        self.vals.push(v);
-    }
-
-    /// Entry (i, j) = v unless v = 0.
-    fn push_nonzero(&mut self, i: usize, j: usize, v: f64) {
-        if v != 0.0 {
-            self.push(i, j, v);
-        }
-    }
-
-    /// The m × n matrix in compressed columns.
-    fn into_csc(self, m: usize, n: usize) -> CscMatrix<f64> {
-        CscMatrix::new_from_triplets(m, n, self.rows, self.cols, self.vals)
     }
 }
 

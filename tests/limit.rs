@@ -1,0 +1,101 @@
+//! Limit analysis (issue 26, theory §13): the collapse multiplier as one conic solve, against
+//! closed forms, the incremental sweep's plateau, and bad input.
+
+mod common;
+use common::*;
+use saddle::solvers::{LimitAnalysis, LimitError};
+
+/// The collapse of a scene table with the default settings.
+fn collapse(t: &toml::Table) -> Result<saddle::solvers::Collapse, LimitError> {
+    let (problem, _) = build(t);
+    LimitAnalysis::default().solve(&problem)
+}
+
+/// The homogeneous compression of `examples/homogeneous.toml` (unit cube on rollers, flat
+/// punch over the whole bottom face) with yield surface `yield_table`, element `element`, punch
+/// force F.
+fn compression(yield_table: &str, element: &str, force: f64) -> toml::Table {
+    let mut t = example("homogeneous.toml");
+    t.insert("yield".into(), toml::Value::Table(toml::from_str(yield_table).unwrap()));
+    set(&mut t, "obstacle.F", toml::Value::Float(force));
+    t.insert("discretisation".into(), toml::Value::Table(toml::from_str(&format!("type = {element:?}")).unwrap()));
+    t
+}
+
+/// Relative difference.
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+#[test]
+fn homogeneous_compression_collapses_at_the_closed_form_for_von_mises_and_drucker_prager() {
+    // von Mises: σ₃₃ = −λF, |s| = √(2/3) λF = k₀ ⇒ λ* = √(3/2) k₀ / F (theory §7.1). The
+    // homogeneous flow (ε₃₃ = −1, ε₁₁ = ε₂₂ = ½) fits the rollers, so both bounds are exact and
+    // P1 and P2 represent it: the answer is exact up to Clarabel's tolerance (1e-8; measured
+    // relative errors below 1e-8).
+    let k0 = 1.5;
+    let f = 2.0;
+    for element in ["p1", "p2"] {
+        let c = collapse(&compression(&format!("type = \"von_mises\"\nk0 = {k0}\nh = 0.0"), element, f)).unwrap();
+        let exact = (1.5f64).sqrt() * k0 / f;
+        println!("von Mises {element}: {} {} (exact {exact})", c.multiplier, c.dual_multiplier);
+        assert!(rel(c.multiplier, exact) < 1e-6 && rel(c.dual_multiplier, exact) < 1e-6, "{element}");
+        assert!(c.relative_gap().abs() < 1e-6);
+        // the punch's collapse force is λ*·F
+        let force = c.obstacles[0].report.get("force").unwrap();
+        assert!(rel(force, exact * f) < 1e-6, "force {force}");
+    }
+    // Drucker–Prager |s| + α tr σ ≤ k₀ under σ₃₃ = −p: √(2/3) p − α p = k₀ ⇒ p = k₀/(√(2/3) − α);
+    // the homogeneous mechanism is the associated flow (dilatant), which the rollers allow.
+    let alpha = 0.2;
+    let exact = k0 / ((2.0f64 / 3.0).sqrt() - alpha) / f;
+    let dp = format!("type = \"drucker_prager\"\nk0 = {k0}\nalpha = {alpha}\nh = 0.0");
+    let c = collapse(&compression(&dp, "p1", f)).unwrap();
+    println!("Drucker–Prager p1: {} {} (exact {exact})", c.multiplier, c.dual_multiplier);
+    assert!(rel(c.multiplier, exact) < 1e-6 && rel(c.dual_multiplier, exact) < 1e-6);
+    // with P2 the pointwise pressure is invisible to B̄'s equilibrium rows and only bounded above
+    // by the cone: the static optimum is not unique, the interior point stalls and reruns
+    // regularised (theory §13.3). λ⁻ stays a static bound and exact (measured 1.2e-10); λ⁺ is
+    // then off by O(δ) = 1e-4 (measured −1.6e-4), and the warning says so.
+    let c = collapse(&compression(&dp, "p2", f)).unwrap();
+    println!("Drucker–Prager p2: {} {} (exact {exact}) {:?}", c.multiplier, c.dual_multiplier, c.warnings);
+    assert!(rel(c.dual_multiplier, exact) < 1e-6 && rel(c.multiplier, exact) < 1e-3);
+    assert!(c.warnings.iter().any(|w| w.contains("regularisation")), "{:?}", c.warnings);
+}
+
+#[test]
+fn drucker_prager_steeper_than_the_compression_meridian_never_collapses() {
+    // α ≥ √(2/3): uniaxial compression stays inside the cone for every p, so no multiplier
+    // collapses the cube: the programme is unbounded and the error says so
+    let t = compression("type = \"drucker_prager\"\nk0 = 1.0\nalpha = 0.9\nh = 0.0", "p1", 1.0);
+    let e = collapse(&t).unwrap_err();
+    assert!(matches!(e, LimitError::Unbounded { .. }), "{e}");
+    assert!(e.to_string().contains("cannot cause collapse"), "{e}");
+}
+
+#[test]
+fn hardening_is_ignored_with_a_warning_and_p1_is_warned_as_locking() {
+    // h = 5: the limit load of the initial yield set, the same closed form √(3/2) k₀/F
+    let c = collapse(&compression("type = \"von_mises\"\nk0 = 1.0\nh = 5.0", "p1", 1.0)).unwrap();
+    assert!(rel(c.multiplier, 1.5f64.sqrt()) < 1e-6, "{}", c.multiplier);
+    assert!(c.warnings.iter().any(|w| w.contains("hardening is ignored") && w.contains("xi")), "{:?}", c.warnings);
+    assert!(c.warnings.iter().any(|w| w.contains("\"p1\" locks")), "{:?}", c.warnings);
+    let c = collapse(&compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p2", 1.0)).unwrap();
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+}
+
+#[test]
+fn bad_input_gives_typed_errors_naming_the_cause() {
+    // an elastic scene: no yield surface, no collapse
+    let mut t = compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 1.0);
+    t.remove("yield");
+    let e = collapse(&t).unwrap_err();
+    assert!(matches!(e, LimitError::Elastic { .. }) && e.to_string().contains("elastic"), "{e}");
+    // Tresca has no second-order-cone form (theory §13.1): named, with the plugin's reason
+    let e = collapse(&compression("type = \"tresca\"\nsigma0 = 2.0\nh = 0.0", "p1", 1.0)).unwrap_err();
+    assert!(matches!(e, LimitError::NoConicForm { .. }), "{e}");
+    assert!(e.to_string().contains("\"tresca\"") && e.to_string().contains("semidefinite"), "{e}");
+    // no load
+    let e = collapse(&compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 0.0)).unwrap_err();
+    assert!(matches!(e, LimitError::NoLoad), "{e}");
+}
