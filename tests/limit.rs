@@ -99,3 +99,48 @@ fn bad_input_gives_typed_errors_naming_the_cause() {
     let e = collapse(&compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 0.0)).unwrap_err();
     assert!(matches!(e, LimitError::NoLoad), "{e}");
 }
+
+/// `saddle limit` on a scene table written to a temporary folder: (exit code, stderr, the
+/// folder with `out/` in it).
+fn limit_cli(t: &toml::Table, extra: &[&str]) -> (i32, String, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, toml::to_string(t).unwrap()).unwrap();
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["limit", scene.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap();
+    (o.status.code().unwrap(), String::from_utf8_lossy(&o.stderr).into_owned(), dir)
+}
+
+#[test]
+fn saddle_limit_writes_limit_json_and_mechanism_vtu() {
+    // the homogeneous compression with F = 2: λ* = √(3/2)/2, the punch's collapse force √(3/2)
+    let t = compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 2.0);
+    let (code, err, dir) = limit_cli(&t, &["--discretisation", "p2"]);
+    assert_eq!(code, 0, "{err}");
+    let out = dir.path().join("out");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("limit.json")).unwrap()).unwrap();
+    for key in ["multiplier", "dual_multiplier", "gap", "wall_s", "dofs", "cones", "obstacles"] {
+        assert!(json.get(key).is_some(), "limit.json lacks {key}: {json}");
+    }
+    let exact = 1.5f64.sqrt();
+    assert!(rel(json["multiplier"].as_f64().unwrap(), exact / 2.0) < 1e-6, "{json}");
+    assert!(rel(json["obstacles"]["obstacle"]["force"].as_f64().unwrap(), exact) < 1e-6, "{json}");
+    assert_eq!(json["discretisation"], "p2");
+    let bytes = std::fs::read(out.join("mechanism.vtu")).unwrap();
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(2000)]);
+    for field in ["\"velocity\"", "\"dissipation\"", "\"stress\""] {
+        assert!(head.contains(field), "mechanism.vtu lacks {field}");
+    }
+    // an elastic scene: exit 1, the reason, nothing written
+    let mut t = t;
+    t.remove("yield");
+    let (code, err, dir) = limit_cli(&t, &[]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("elastic"), "{err}");
+    assert!(!dir.path().join("out").join("limit.json").exists());
+}
