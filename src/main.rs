@@ -108,7 +108,7 @@ enum Command {
         #[arg(long)]
         discretisation: Option<String>,
         /// Clarabel's gap and feasibility tolerance.
-        #[arg(long, default_value_t = 1e-8)]
+        #[arg(long, default_value_t = 1e-5)]
         tol: f64,
     },
     /// Cost against problem size: the scene's box mesh scaled to each size; per-phase times,

@@ -5,10 +5,10 @@ mod common;
 use common::*;
 use saddle::solvers::{LimitAnalysis, LimitError};
 
-/// The collapse of a scene table with the default settings.
+/// The collapse of a scene table at Clarabel's tolerance 1e-8.
 fn collapse(t: &toml::Table) -> Result<saddle::solvers::Collapse, LimitError> {
     let (problem, _) = build(t);
-    LimitAnalysis::default().solve(&problem)
+    LimitAnalysis { tol: 1e-8, ..LimitAnalysis::default() }.solve(&problem)
 }
 
 /// The homogeneous compression of `examples/homogeneous.toml` (unit cube on rollers, flat
@@ -127,9 +127,10 @@ fn saddle_limit_writes_limit_json_and_mechanism_vtu() {
     for key in ["multiplier", "dual_multiplier", "gap", "wall_s", "dofs", "cones", "obstacles"] {
         assert!(json.get(key).is_some(), "limit.json lacks {key}: {json}");
     }
+    // the default tolerance is 1e-5 (measured relative errors below 1e-6 here)
     let exact = 1.5f64.sqrt();
-    assert!(rel(json["multiplier"].as_f64().unwrap(), exact / 2.0) < 1e-6, "{json}");
-    assert!(rel(json["obstacles"]["obstacle"]["force"].as_f64().unwrap(), exact) < 1e-6, "{json}");
+    assert!(rel(json["multiplier"].as_f64().unwrap(), exact / 2.0) < 1e-5, "{json}");
+    assert!(rel(json["obstacles"]["obstacle"]["force"].as_f64().unwrap(), exact) < 1e-5, "{json}");
     assert_eq!(json["discretisation"], "p2");
     let bytes = std::fs::read(out.join("mechanism.vtu")).unwrap();
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(2000)]);
@@ -143,4 +144,40 @@ fn saddle_limit_writes_limit_json_and_mechanism_vtu() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("elastic"), "{err}");
     assert!(!dir.path().join("out").join("limit.json").exists());
+}
+
+/// The strip punch of `examples/strip_punch.toml` (P2, plane strain, displacement-controlled,
+/// h = 0) on `cells`.
+fn strip(cells: [usize; 3]) -> toml::Table {
+    let mut t = example("strip_punch.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from(cells).unwrap());
+    t
+}
+
+#[test]
+fn strip_punch_collapses_at_prandtls_force_and_at_the_sweeps_plateau() {
+    // Prandtl's limit force on the strip: (2 + π) k B t, k = k₀/√2, B = 1, t = 0.25 (theory §10)
+    let prandtl = (2.0 + std::f64::consts::PI) / 2f64.sqrt() * 0.25;
+    let t = strip([32, 1, 16]);
+    let (problem, solver) = build(&t);
+    let c = LimitAnalysis::default().solve(&problem).unwrap();
+    // the displacement-controlled punch: the multiplier is its collapse force (theory §13.1)
+    let force = c.obstacles[0].report.get("force").unwrap();
+    println!("limit {} {} force {force} gap {:e}; Prandtl {prandtl}", c.multiplier, c.dual_multiplier, c.gap);
+    assert!(rel(force, c.dual_multiplier) < 1e-12);
+    // the default tolerance 1e-5: measured relative gap 1.6e-5
+    assert!(c.relative_gap() >= 0.0 && c.relative_gap() < 1e-4, "{}", c.relative_gap());
+    // 14k dofs: measured +1.25 % above Prandtl (+0.50 % on the 57k-dof example mesh,
+    // docs/limit_analysis.md)
+    assert!(rel(c.multiplier, prandtl) < 0.015 && c.multiplier > prandtl, "{}", c.multiplier);
+    // the incremental solve's plateau on the same mesh: Newton at U = 0.2 (twenty times the
+    // scene's U) is on it (tests/p2.rs: doubling U changes the force by < 0.1 %); measured
+    // agreement 0.01 %
+    let mut t2 = t.clone();
+    set(&mut t2, "obstacle.U", toml::Value::Float(0.2));
+    let (p2, _) = build(&t2);
+    let sol = solver.unwrap().solve(&p2.lagrangian(), &mut saddle::core::Silent).unwrap();
+    let plateau: f64 = sol.lambda.iter().sum();
+    println!("plateau {plateau}");
+    assert!(rel(c.multiplier, plateau) < 0.005, "limit {} against the plateau {plateau}", c.multiplier);
 }

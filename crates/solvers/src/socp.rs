@@ -46,7 +46,7 @@
 //! start [`Newton::solve_from`], which converges in a few iterations to `tol`.
 
 use crate::newton::{Newton, Start};
-use crate::triplets::Triplets;
+use crate::triplets::{Triplets, programme_json};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT,
@@ -469,21 +469,7 @@ struct ConeProgramme {
 /// minimise ½xᵀPx + qᵀx subject to Ax + s = b, s in the cones (rows in order), non-dimensional.
 pub fn cone_programme_json(l: &Lagrangian<'_>) -> Result<String, SolveError> {
     let prog = ConeProgramme::build(l)?;
-    let csc = |m: &CscMatrix<f64>| serde_json::json!({ "m": m.m, "n": m.n, "colptr": m.colptr, "rowval": m.rowval, "nzval": m.nzval });
-    let cones: Vec<(&str, usize)> = prog
-        .cones
-        .iter()
-        .map(|c| match c {
-            SupportedConeT::ZeroConeT(d) => ("zero", *d),
-            SupportedConeT::NonnegativeConeT(d) => ("nonneg", *d),
-            SupportedConeT::SecondOrderConeT(d) => ("soc", *d),
-            _ => ("other", 0),
-        })
-        .collect();
-    let json = serde_json::json!({
-        "n": prog.a.n, "m": prog.a.m, "P": csc(&prog.p), "q": prog.q, "A": csc(&prog.a), "b": prog.b, "cones": cones,
-    });
-    Ok(json.to_string())
+    Ok(programme_json(&prog.p, &prog.q, &prog.a, &prog.b, &prog.cones))
 }
 
 /// What Clarabel returned, still non-dimensional.

@@ -17,7 +17,7 @@
 //! `G v + H V + ċ τ = z₃ ≥ 0`, and the dissipation Σ_T offset·z₄,T.
 
 use super::{LimitAnalysis, LimitError, ReferenceLoads};
-use crate::triplets::Triplets;
+use crate::triplets::{Triplets, programme_json};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT,
@@ -193,10 +193,7 @@ impl StaticProgramme {
             .max_iter(s.max_iter as u32)
             .build()
             .map_err(|e| LimitError::Rejected { what: "the settings", message: e.to_string() })?;
-        let n = self.layout.mu_col() + 1;
-        let p = self.regularisation(delta);
-        let mut q = vec![0.0; n];
-        q[self.layout.mu_col()] = -1.0;
+        let (p, q) = (self.regularisation(delta), self.objective());
         let mut solver = DefaultSolver::new(&p, &q, &self.a, &self.b, &self.cones, settings)
             .map_err(|e| LimitError::Rejected { what: "the programme", message: e.to_string() })?;
         solver.solve();
@@ -225,6 +222,19 @@ impl StaticProgramme {
             r_prim: sol.r_prim,
             r_dual: sol.r_dual,
         })
+    }
+
+    /// The objective's linear term: −1 on μ (maximise λ).
+    fn objective(&self) -> Vec<f64> {
+        let mut q = vec![0.0; self.n_variables()];
+        q[self.layout.mu_col()] = -1.0;
+        q
+    }
+
+    /// The programme as JSON for other conic solvers (without regularisation; the format of
+    /// `socp::cone_programme_json`), for the cvxpy comparison of `examples/peers/`.
+    pub fn json(&self) -> String {
+        programme_json(&self.regularisation(0.0), &self.objective(), &self.a, &self.b, &self.cones)
     }
 
     /// The objective's quadratic term: `δ (w_T/L³)` on every stress entry (module docs,
