@@ -181,3 +181,33 @@ fn strip_punch_collapses_at_prandtls_force_and_at_the_sweeps_plateau() {
     println!("plateau {plateau}");
     assert!(rel(c.multiplier, plateau) < 0.005, "limit {} against the plateau {plateau}", c.multiplier);
 }
+
+#[test]
+fn two_named_punches_each_report_their_collapse_force() {
+    // the homogeneous compression with the bottom face split between two force-controlled
+    // punches, `left` (x ≤ 0.4: the nodes x = 0, 1/3) and `right` (x ≥ 0.6: x = 2/3, 1), F = 1
+    // each: each carries half of the face (its nodes' tributary area is 1/2), the homogeneous
+    // stress σ₃₃ = −2λ is admissible and the homogeneous flow a mechanism, so
+    // λ* = √(3/2) k₀ / 2 exactly, and each punch's collapse force is λ*·1
+    let mut t = compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 1.0);
+    let punch = |name: &str, lo: f64, hi: f64| -> toml::Value {
+        toml::from_str(&format!(
+            "name = {name:?}\ntype = \"rigid_punch\"\nF = 1.0\ngap = {{ type = \"flat\" }}\n\
+             zone = {{ all = [ {{ group = \"zmin\" }}, {{ box = {{ min = [{lo}, -1.0, -1.0], max = [{hi}, 2.0, 1e-9] }} }} ] }}"
+        ))
+        .unwrap()
+    };
+    t.insert("obstacle".into(), toml::Value::Array(vec![punch("left", -1.0, 0.4), punch("right", 0.6, 2.0)]));
+    let c = collapse(&t).unwrap();
+    let exact = 1.5f64.sqrt() / 2.0;
+    println!(
+        "two punches: {} {:?}",
+        c.multiplier,
+        c.obstacles.iter().map(|o| o.report.get("force")).collect::<Vec<_>>()
+    );
+    assert!(rel(c.multiplier, exact) < 1e-6, "{}", c.multiplier);
+    for o in &c.obstacles {
+        assert!(rel(o.report.get("force").unwrap(), exact) < 1e-6, "{:?}: {:?}", o.name, o.report);
+    }
+    assert_eq!(c.obstacles.iter().map(|o| o.name.clone().unwrap()).collect::<Vec<_>>(), ["left", "right"]);
+}
