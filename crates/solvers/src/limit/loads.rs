@@ -1,4 +1,4 @@
-//! Stage 1 of a limit analysis (theory §13.2): the reference loads ℓ that the multiplier
+//! Stage 1 of a limit analysis (theory §13.1): the reference loads ℓ that the multiplier
 //! scales, and the obstacle rows that constrain a mechanism.
 
 use super::LimitError;
@@ -9,7 +9,7 @@ use saddle_core::problem::obstacles::OBSTACLE_PATH;
 /// of the body's size (Σ w_T)^{1/3}: the gaps of flat obstacles are 0 up to round-off.
 const CLOSED_GAP: f64 = 1e-9;
 
-/// The reference loads of theory §13.2 and the rows closed in the reference configuration.
+/// The reference loads of theory §13.1 and the rows closed in the reference configuration.
 #[derive(Clone, Debug)]
 pub struct ReferenceLoads {
     /// The consistent nodal forces f_u on the free dofs (tractions, body forces).
@@ -30,7 +30,7 @@ pub struct ReferenceLoads {
 }
 
 impl ReferenceLoads {
-    /// Stage 1 (theory §13.2): ℓ of `problem` — its nodal forces, its obstacles' loads and the
+    /// Stage 1 (theory §13.1): ℓ of `problem` — its nodal forces, its obstacles' loads and the
     /// rates of their prescribed displacements (each obstacle's rows at load factor 2 against
     /// those at 1, [`saddle_core::AdmissibleDisplacements::rows_at_factor`]) — and the rows
     /// closed at load factor 0. Errors: all loads zero; force loads together with a prescribed

@@ -8,13 +8,14 @@
 //!
 //! 1. zero cone, per free dof j: `Σ_T w_T (B_Tᵀσ_T)_j − (Gᵀλ)_j − μ f_u,j = 0`;
 //! 2. zero cone, per extra k: `−(Hᵀλ)_k − μ f_k = 0`, and with prescribed displacements one row
-//!    `−ċᵀλ − μ = 0` (the reaction's power at unit rate is μ);
+//!    `−ĉᵀλ − μ = 0` with the normalised rates ĉ = ċ/max|ċ| (`ReferenceLoads::rate`: μ is the
+//!    reaction per unit of the largest prescribed displacement rate);
 //! 3. nonnegative cone: `λ ≥ 0`;
 //! 4. per point and per block of the yield surface's cone (`AdmissibleStresses::cone`, its
 //!    hardening columns dropped: q = 0): `offset + map·σ_T ∈ SOC`.
 //!
-//! Its dual is the kinematic problem (theory §13.3): `v = −z₁/F`, `V = −z₂/F` with ℓ(v, V) = 1,
-//! `G v + H V + ċ τ = z₃ ≥ 0`, and the dissipation Σ_T offset·z₄,T.
+//! Its dual is the kinematic problem (theory §13.2): `v = −z₁/F`, `V = −z₂/F` with ℓ(v, V) = 1,
+//! `G v + H V + ĉ τ = z₃ ≥ 0`, and the dissipation Σ_T offset·z₄,T.
 
 use super::{LimitAnalysis, LimitError, ReferenceLoads};
 use crate::triplets::{Triplets, programme_json};
