@@ -14,7 +14,7 @@
 //! |---|---|---|
 //! | `main.rs` | | the command line |
 //! | [`studies`] | [`report`](studies::report), [`bench`](studies::bench), `peer`, [`stability`](studies::stability) | measurements |
-//! | [`app`] | [`setup`](app::setup), [`run`](app::run), [`path`](app::path), [`sweep`](app::sweep) | the commands on a scene |
+//! | [`app`] | [`setup`](app::setup), [`run`](app::run), [`path`](app::path), [`sweep`](app::sweep), [`limit`](app::limit) | the commands on a scene |
 //! | [`io`] | [`scene`](io::scene), [`summary`](io::summary), [`vtu`](io::vtu), [`outdir`](io::outdir), `plot`, [`csv`](io::csv) | files in and out |
 //! | crates | [`core`], [`yield_surfaces`], [`contact`], [`solvers`] (with the solvers' conformance kit, [`solvers::conformance`]) | the framework |
 //!

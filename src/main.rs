@@ -93,6 +93,24 @@ enum Command {
         #[arg(long, default_value = "force")]
         y: String,
     },
+    /// Limit analysis (theory §13): the collapse multiplier of the scene's loads for its yield
+    /// surface taken perfectly plastic, as one conic solve with both bounds (kinematic and
+    /// static) and their gap; writes DIR/limit.json and DIR/mechanism.vtu. Exit status: 0 done,
+    /// 1 error (an elastic scene, a yield surface without a conic form, loads that cannot
+    /// cause collapse, …).
+    Limit {
+        /// The scene file (TOML); its [solver] table is ignored.
+        scene: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Use this finite element (`p1`, `p2`) instead of the scene's `[discretisation]`.
+        #[arg(long)]
+        discretisation: Option<String>,
+        /// Clarabel's gap and feasibility tolerance.
+        #[arg(long, default_value_t = 1e-5)]
+        tol: f64,
+    },
     /// Cost against problem size: the scene's box mesh scaled to each size; per-phase times,
     /// one elastic linear solve as the baseline, every solver's total and its ratio to that
     /// solve, iterations, peak memory. Writes DIR/bench.{csv,md,png,svg}.
@@ -378,6 +396,35 @@ fn sweep(
     Ok(if s.points.iter().all(|p| p.converged) { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
 
+#[cfg(feature = "socp")]
+fn limit(scene: PathBuf, out: PathBuf, element: Option<String>, tol: f64) -> Result<ExitCode, String> {
+    use saddle::app::limit;
+    use saddle_solvers::LimitAnalysis;
+    eprintln!("{}: limit analysis into {}", scene.display(), out.display());
+    let settings = LimitAnalysis { tol, ..LimitAnalysis::default() };
+    let o = limit::run(&scene, &out, element.as_deref(), &settings).map_err(|e| e.to_string())?;
+    let s = &o.summary;
+    println!("  multiplier (kinematic)  {:.8e}", s.multiplier);
+    println!("  dual_multiplier (static) {:.8e}", s.dual_multiplier);
+    println!("  gap                     {:.2e} (relative {:.2e})", s.gap, s.relative_gap);
+    for (name, ob) in &s.obstacles {
+        let force = ob.force.map_or("-".to_string(), |f| format!("{f:.8e}"));
+        println!("  {name:<23} collapse force {force} ({} contact nodes)", ob.contact_nodes);
+    }
+    println!("  {:<23} {} / {} cones / {} variables", "dofs", s.dofs, s.cones, s.variables);
+    println!("  {:<23} {} after {} iterations, {:.2} s", "Clarabel", s.status, s.iterations, s.wall_s);
+    for w in &s.warnings {
+        println!("  warning: {w}");
+    }
+    println!("  wrote {}: {}", out.display(), outdir::describe(&o.written));
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(not(feature = "socp"))]
+fn limit(_: PathBuf, _: PathBuf, _: Option<String>, _: f64) -> Result<ExitCode, String> {
+    Err("limit analysis needs the conic solver: build with the `socp` feature".into())
+}
+
 #[cfg(feature = "gmsh")]
 fn bench_meshes(scene: PathBuf, out: PathBuf, meshes: Vec<PathBuf>, peers: Vec<PathBuf>) -> Result<ExitCode, String> {
     eprintln!("{}: end to end on {} meshes into {}", scene.display(), meshes.len(), out.display());
@@ -424,6 +471,7 @@ fn main() -> ExitCode {
         Command::Sweep { scene, out, factors, solver, discretisation, x, y } => {
             sweep(scene, out, factors, (solver, discretisation), (x, y))
         }
+        Command::Limit { scene, out, discretisation, tol } => limit(scene, out, discretisation, tol),
         Command::Bench { scene, out, meshes, peer, .. } if !meshes.is_empty() => bench_meshes(scene, out, meshes, peer),
         Command::Bench { scene, out, sizes, solvers, direct_max_dofs, .. } => {
             bench(scene, out, sizes, solvers, direct_max_dofs)

@@ -8,7 +8,10 @@
 //! | [`path`] | the steps of a `[load_path]` solved and written (theory §11) |
 //! | [`run`] | `saddle run`: one step, or the load path |
 //! | [`sweep`] | `saddle sweep`: the scene at each load factor |
+//! | [`limit`] | `saddle limit`: the collapse multiplier as one conic solve (theory §13) |
 
+#[cfg(feature = "socp")]
+pub mod limit;
 #[cfg(feature = "mpi")]
 pub mod mpi;
 pub mod path;

@@ -136,7 +136,8 @@ pub fn finish(
                 out.wrote(f)?;
             }
             let json = out_dir.join("summary.json");
-            write_in_place(out_dir, "summary.json", |p| summary.write(p)).map_err(|source| RunError::Io { path: json.clone(), source })?;
+            write_in_place(out_dir, "summary.json", |p| summary.write(p))
+                .map_err(|source| RunError::Io { path: json.clone(), source })?;
             out.wrote("summary.json")?;
             Ok(out.finish()?)
         })()

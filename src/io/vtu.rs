@@ -1,9 +1,11 @@
 //! `solution.vtu`: the fields of a solve for ParaView — u, σ, von Mises stress, the hardening
-//! variables, the plastic flag and strain, the contact force — as a VTK XML unstructured grid.
+//! variables, the plastic flag and strain, the contact force — as a VTK XML unstructured grid;
+//! [`write_grid`] writes any point and cell fields on an element's cells (`mechanism.vtu` of
+//! `saddle limit`).
 
 use super::summary::plastic_strains;
 use saddle_core::problem::tensor::{to_vtk, von_mises};
-use saddle_core::{ProblemView, Solution};
+use saddle_core::{Discretisation, ProblemView, Solution};
 use std::io::Write;
 use std::path::Path;
 
@@ -35,12 +37,12 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
     let mut gv = vec![0.0; l.n_extras()];
     l.data.rows.add_transpose(&sol.lambda, &mut gu, &mut gv);
     let force = element.nodal_vectors(&gu);
-    let mut arrays: Vec<(&str, &str, usize, Vec<u8>)> = Vec::new(); // (section, name, components, bytes)
-    let f64s = |it: &mut dyn Iterator<Item = f64>| it.flat_map(f64::to_le_bytes).collect::<Vec<u8>>();
-    arrays.push(("point", "displacement", 3, f64s(&mut disp.iter().flatten().copied())));
-    arrays.push(("point", "contact_force", 3, f64s(&mut force.iter().flatten().copied())));
-    arrays.push(("cell", "stress", 6, f64s(&mut mean_stress.iter().flat_map(to_vtk))));
-    arrays.push(("cell", "von_mises", 1, f64s(&mut mean_stress.iter().map(von_mises))));
+    let mut arrays: Vec<DataArray> = vec![
+        ("point", "displacement", 3, f64_bytes(disp.iter().flatten().copied())),
+        ("point", "contact_force", 3, f64_bytes(force.iter().flatten().copied())),
+        ("cell", "stress", 6, f64_bytes(mean_stress.iter().flat_map(to_vtk))),
+        ("cell", "von_mises", 1, f64_bytes(mean_stress.iter().map(von_mises))),
+    ];
     // the hardening variables, one cell field per name the yield surface gives them
     if let Some(yield_surface) = l.data.plasticity() {
         let mut first = 0;
@@ -48,7 +50,7 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
             let field = (0..mesh.n_elements()).flat_map(|e| {
                 (first..first + comps).map(move |c| (0..k).map(|q| sol.stress.q(e * k + q)[c]).sum::<f64>() / k as f64)
             });
-            arrays.push(("cell", name, comps, f64s(&mut field.into_iter())));
+            arrays.push(("cell", name, comps, f64_bytes(field.into_iter())));
             first += comps;
         }
     }
@@ -60,11 +62,28 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
         l.strain(&sol.u, &mut eps);
         let ep = plastic_strains(l.data.elasticity, &eps, sol);
         let mean: Vec<saddle_core::Sym> = ep.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
-        arrays.push(("cell", "plastic_strain", 6, f64s(&mut mean.iter().flat_map(to_vtk))));
+        arrays.push(("cell", "plastic_strain", 6, f64_bytes(mean.iter().flat_map(to_vtk))));
         let eq = ep.chunks(k).map(|s| s.iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).sum::<f64>() / k as f64);
-        arrays.push(("cell", "equivalent_plastic_strain", 1, f64s(&mut eq.into_iter())));
+        arrays.push(("cell", "equivalent_plastic_strain", 1, f64_bytes(eq.into_iter())));
     }
-    arrays.push(("points", "Points", 3, f64s(&mut mesh.nodes.iter().flatten().copied())));
+    write_grid(path, element, arrays)
+}
+
+/// A named data array of a VTK grid: (section — `point` or `cell` —, name, components, raw
+/// little-endian bytes).
+pub type DataArray = (&'static str, &'static str, usize, Vec<u8>);
+
+/// The little-endian bytes of `values`.
+pub fn f64_bytes(values: impl Iterator<Item = f64>) -> Vec<u8> {
+    values.flat_map(f64::to_le_bytes).collect()
+}
+
+/// Writes a VTK XML unstructured grid of `element`'s mesh and cells (raw appended binary) with
+/// the point and cell `arrays` (Float64, but `plastic` as UInt8). Returns the arrays'
+/// declarations for a `.pvtu` file listing this grid as a piece ([`write_pvtu`]).
+pub fn write_grid(path: &Path, element: &dyn Discretisation, mut arrays: Vec<DataArray>) -> std::io::Result<String> {
+    let mesh = element.mesh();
+    arrays.push(("points", "Points", 3, f64_bytes(mesh.nodes.iter().flatten().copied())));
     // the element's VTK cell, its nodes as the mesh lists them
     let cell = element.vtk_cell();
     let (per_cell, cell_type) = (cell.nodes, cell.type_id);
@@ -81,9 +100,11 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
         _ => "Float64",
     };
     // the declarations of a .pvtu file, the same arrays without data
+    let vectors = arrays.iter().find(|a| a.0 == "point").map_or("", |a| a.1);
+    let point_data = format!("PPointData Vectors=\"{vectors}\"");
     let mut parallel = String::new();
     for (which, tag) in [
-        ("point", "PPointData Vectors=\"displacement\""),
+        ("point", point_data.as_str()),
         ("cell", "PCellData Scalars=\"von_mises\" Tensors=\"stress\""),
         ("points", "PPoints"),
     ] {
@@ -120,7 +141,7 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
         mesh.n_nodes(),
         mesh.n_elements()
     ));
-    xml.push_str("      <PointData Vectors=\"displacement\">\n");
+    xml.push_str(&format!("      <PointData Vectors=\"{vectors}\">\n"));
     section(&mut xml, "point");
     xml.push_str("      </PointData>\n      <CellData Scalars=\"von_mises\" Tensors=\"stress\">\n");
     section(&mut xml, "cell");

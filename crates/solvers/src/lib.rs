@@ -8,6 +8,9 @@
 //! * [`Penalty`] (`type = "penalty"`) — the regularised Lagrangian of the existence proof;
 //! * `Socp` (`type = "socp"`, cargo feature `socp`, on by default) — the cone form handed to
 //!   Clarabel, polished by active-set Newton.
+//!
+//! Beside them, [`limit`] (feature `socp`): limit analysis, the collapse multiplier of the
+//! loads as one conic programme (theory §13).
 
 pub mod active_set;
 mod armijo;
@@ -16,6 +19,8 @@ pub mod distributed_basis;
 pub mod distributed_system;
 mod fallback;
 pub mod kh_projection;
+#[cfg(feature = "socp")]
+pub mod limit;
 pub mod linear;
 mod local_law;
 pub mod newton;
@@ -24,11 +29,15 @@ mod residual;
 pub mod row_basis;
 #[cfg(feature = "socp")]
 pub mod socp;
+#[cfg(feature = "socp")]
+mod triplets;
 pub mod uzawa;
 mod vector;
 mod warm_start;
 
 pub use active_set::LinearSolver;
+#[cfg(feature = "socp")]
+pub use limit::{Collapse, LimitAnalysis, LimitError};
 pub use newton::{Newton, Start};
 pub use penalty::Penalty;
 #[cfg(feature = "socp")]

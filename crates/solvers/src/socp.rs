@@ -46,6 +46,7 @@
 //! start [`Newton::solve_from`], which converges in a few iterations to `tol`.
 
 use crate::newton::{Newton, Start};
+use crate::triplets::{Triplets, programme_json};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT,
@@ -469,21 +470,7 @@ struct ConeProgramme {
 /// minimise ½xᵀPx + qᵀx subject to Ax + s = b, s in the cones (rows in order), non-dimensional.
 pub fn cone_programme_json(l: &Lagrangian<'_>) -> Result<String, SolveError> {
     let prog = ConeProgramme::build(l)?;
-    let csc = |m: &CscMatrix<f64>| serde_json::json!({ "m": m.m, "n": m.n, "colptr": m.colptr, "rowval": m.rowval, "nzval": m.nzval });
-    let cones: Vec<(&str, usize)> = prog
-        .cones
-        .iter()
-        .map(|c| match c {
-            SupportedConeT::ZeroConeT(d) => ("zero", *d),
-            SupportedConeT::NonnegativeConeT(d) => ("nonneg", *d),
-            SupportedConeT::SecondOrderConeT(d) => ("soc", *d),
-            _ => ("other", 0),
-        })
-        .collect();
-    let json = serde_json::json!({
-        "n": prog.a.n, "m": prog.a.m, "P": csc(&prog.p), "q": prog.q, "A": csc(&prog.a), "b": prog.b, "cones": cones,
-    });
-    Ok(json.to_string())
+    Ok(programme_json(&prog.p, &prog.q, &prog.a, &prog.b, &prog.cones))
 }
 
 /// What Clarabel returned, still non-dimensional.
@@ -764,39 +751,6 @@ impl ConeMap {
             rows += blk.dim;
         }
         Self { entries, rows }
-    }
-}
-
-/// A sparse matrix as (row, column, value) triplets in the order pushed.
-struct Triplets {
-    rows: Vec<usize>,
-    cols: Vec<usize>,
-    vals: Vec<f64>,
-}
-
-impl Triplets {
-    /// Room for `nnz` entries.
-    fn with_capacity(nnz: usize) -> Self {
-        Self { rows: Vec::with_capacity(nnz), cols: Vec::with_capacity(nnz), vals: Vec::with_capacity(nnz) }
-    }
-
-    /// Entry (i, j) = v.
-    fn push(&mut self, i: usize, j: usize, v: f64) {
-        self.rows.push(i);
-        self.cols.push(j);
-        self.vals.push(v);
-    }
-
-    /// Entry (i, j) = v unless v = 0.
-    fn push_nonzero(&mut self, i: usize, j: usize, v: f64) {
-        if v != 0.0 {
-            self.push(i, j, v);
-        }
-    }
-
-    /// The m × n matrix in compressed columns.
-    fn into_csc(self, m: usize, n: usize) -> CscMatrix<f64> {
-        CscMatrix::new_from_triplets(m, n, self.rows, self.cols, self.vals)
     }
 }
 
