@@ -903,12 +903,13 @@ impl<'a> Run<'a> {
         put("fallbacks", c.fallbacks);
         put("fallback_iterations", c.fallback_iterations);
         put("active_set_changes", c.active_changes);
-        put("return_mappings", c.return_mappings);
-        put("elastic_phase_steps", c.elastic_phase_steps);
+        // a rank's counts summed over the ranks (theory §12; on one process the count itself)
         let comm = self.l.comm();
+        put("return_mappings", comm.sum_count(c.return_mappings));
+        put("elastic_phase_steps", c.elastic_phase_steps);
         put("contact_rows_active", comm.sum_count(self.state.active.iter().filter(|a| **a).count()));
         put("setup_reused", c.setup_reused as usize);
-        put("stiffness_nonzeros", self.l.pattern().nnz());
+        put("stiffness_nonzeros", comm.sum_count(self.l.pattern().nnz()));
         if let Some(chol) = self.system.serial().and_then(|s| s.direct()) {
             counters.insert("factor_nonzeros".into(), chol.nnz_l() as f64);
             counters.insert("factor_flops".into(), chol.factor_flops());
