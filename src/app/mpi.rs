@@ -14,7 +14,7 @@ use crate::io::summary::{RankSummary, Summary, Whole, complete_reports, imprints
 use crate::io::vtu::{write_piece, write_pvtu};
 use saddle_core::problem::comm::Comm;
 use saddle_core::{P1, ParameterError, PhaseTimer, ProblemView, SceneError, Solution, Solver};
-use saddle_parallel::distribute::{RankProblem, Whole as WholeProblem};
+use saddle_parallel::distribute::{RankProblem, Whole as WholeProblem, whole_rows};
 use saddle_parallel::saddle_mpi::{self, Petsc};
 use saddle_parallel::{MpiComm, distribute};
 use std::path::Path;
@@ -60,6 +60,8 @@ pub fn split_petsc_args(args: Vec<String>) -> (Vec<String>, Vec<String>) {
 pub struct MpiRanks {
     comm: MpiComm,
     global_rows: Vec<usize>,
+    /// The whole problem's rows.
+    n_rows: usize,
     whole: Option<WholeProblem>,
     share: RankSummary,
 }
@@ -84,7 +86,7 @@ impl Ranks for MpiRanks {
     /// load is the step's).
     fn summary(&self, view: ProblemView<'_>, sol: &Solution, title: Option<String>) -> Summary {
         let imprints = imprints(view, &sol.u);
-        let lambda = self.whole_rows(&sol.lambda);
+        let lambda = whole_rows(&self.comm, &self.global_rows, self.n_rows, &sol.lambda);
         let whole = match &self.whole {
             Some(w) => {
                 let mut reports = w.obstacles.reports_of(view.obstacles.obstacles(), &w.mesh, &sol.extras, &lambda);
@@ -160,19 +162,6 @@ impl Ranks for MpiRanks {
     }
 }
 
-impl MpiRanks {
-    /// The whole problem's multipliers from every rank's ([`RankProblem::whole_rows`]). Collective.
-    fn whole_rows(&self, local: &[f64]) -> Vec<f64> {
-        let n = self.comm.sum_count(self.global_rows.len());
-        let mut whole = vec![0.0; n];
-        for (&g, &x) in self.global_rows.iter().zip(local) {
-            whole[g] = x;
-        }
-        self.comm.sum_in_place(&mut whole);
-        whole
-    }
-}
-
 /// This process's peak resident memory in MB (`VmHWM` of `/proc/self/status`; 0 where there is
 /// none).
 pub fn peak_memory_mb() -> f64 {
@@ -214,8 +203,13 @@ pub fn load(
     solver_override: Option<&str>,
     discretisation: Option<&str>,
 ) -> Result<Loaded, RunError> {
-    let mut ranks =
-        MpiRanks { comm: MpiComm::new(session), global_rows: Vec::new(), whole: None, share: RankSummary::default() };
+    let mut ranks = MpiRanks {
+        comm: MpiComm::new(session),
+        global_rows: Vec::new(),
+        n_rows: 0,
+        whole: None,
+        share: RankSummary::default(),
+    };
     let root = ranks.is_root();
     let mut timer = PhaseTimer::default();
     // the scene's text, read by rank 0 and sent to every rank
@@ -260,7 +254,7 @@ pub fn load(
         )
     });
     let rp = RunError::agree(&ranks, rp.map_err(RunError::from))?;
-    let RankProblem { problem, global_rows, elements, owned_nodes, whole, .. } = rp;
+    let RankProblem { problem, global_rows, elements, owned_nodes, whole, totals, .. } = rp;
     ranks.share = RankSummary {
         rank: ranks.comm.rank(),
         elements: elements.len(),
@@ -269,6 +263,7 @@ pub fn load(
         ..RankSummary::default()
     };
     ranks.global_rows = global_rows;
+    ranks.n_rows = totals.rows;
     ranks.whole = whole;
     Ok(Loaded {
         problem,

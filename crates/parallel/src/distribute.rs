@@ -71,13 +71,19 @@ impl RankProblem {
     /// The whole problem's row vector of the values `local` this rank holds at its rows (the
     /// multipliers λ), on every rank: each rank's rows summed into place. Collective.
     pub fn whole_rows(&self, local: &[f64]) -> Vec<f64> {
-        let mut whole = vec![0.0; self.totals.rows];
-        for (&g, &x) in self.global_rows.iter().zip(local) {
-            whole[g] = x;
-        }
-        self.comm.sum_in_place(&mut whole);
-        whole
+        whole_rows(&self.comm, &self.global_rows, self.totals.rows, local)
     }
+}
+
+/// The whole problem's row vector (`n_rows` rows) of the values `local` a rank holds at its rows
+/// `global_rows`, on every rank: each rank's rows summed into place. Collective.
+pub fn whole_rows(comm: &MpiComm, global_rows: &[usize], n_rows: usize, local: &[f64]) -> Vec<f64> {
+    let mut whole = vec![0.0; n_rows];
+    for (&g, &x) in global_rows.iter().zip(local) {
+        whole[g] = x;
+    }
+    comm.sum_in_place(&mut whole);
+    whole
 }
 
 /// Distributes a problem (module docs): `mesh` is rank 0's (`None` on the others), the rest the
