@@ -56,7 +56,7 @@ pub fn split_petsc_args(args: Vec<String>) -> (Vec<String>, Vec<String>) {
 }
 
 /// The problem over the ranks: the reductions, where this rank's rows sit among the whole
-/// problem's, the whole mesh and obstacles on rank 0, and this rank's share.
+/// problem's, what rank 0 keeps of the whole problem for the reports, and this rank's share.
 pub struct MpiRanks {
     comm: MpiComm,
     global_rows: Vec<usize>,
@@ -91,9 +91,9 @@ impl Ranks for MpiRanks {
             Some(w) => {
                 let mut reports = w.obstacles.reports_of(view.obstacles.obstacles(), &w.mesh, &sol.extras, &lambda);
                 complete_reports(view, &mut reports, &imprints, &sol.undetermined);
-                Whole { reports, mesh: &w.mesh }
+                Whole { reports, quality: w.quality, nodes: w.totals.nodes }
             }
-            None => Whole { reports: Vec::new(), mesh: view.element.mesh() },
+            None => Whole { reports: Vec::new(), quality: view.element.mesh().quality(), nodes: 0 },
         };
         Summary::of_whole(view, sol, title, whole)
     }

@@ -1,11 +1,11 @@
 //! Collectives on rsmpi communicators: reductions of numbers and arrays, broadcasts of byte and
-//! number arrays, and [`agree`], the agreement on failure that makes an error on any rank end
+//! number arrays, [`scatter_bytes`] (each rank its own bytes from one), and [`agree`], the agreement on failure that makes an error on any rank end
 //! every rank (never a hang in the next collective).
 
 use crate::error::{Error, Result};
 use mpi::collective::SystemOperation;
 use mpi::datatype::Equivalence;
-use mpi::traits::{Communicator, CommunicatorCollectives, Root};
+use mpi::traits::{Communicator, CommunicatorCollectives, Destination, Root, Source};
 use std::fmt::Display;
 
 /// Σ over ranks of `value` (f64, usize, …).
@@ -47,6 +47,26 @@ pub fn broadcast<T: Equivalence + Copy + Default, C: Communicator>(comm: &C, roo
 /// Broadcasts bytes (a serialised mesh, a message) from rank `root`.
 pub fn broadcast_bytes<C: Communicator>(comm: &C, root: usize, data: &mut Vec<u8>) {
     broadcast(comm, root, data)
+}
+
+/// Every rank's own bytes from rank `root` (a rank's part of a problem): on `root`, `part(r)` is
+/// made for r = 0, 1, … in turn and sent to rank r before the next is made, so that `root` holds
+/// one other rank's part at a time; every rank returns its own (`part` is called on `root` only).
+/// A part must be shorter than 2³¹ bytes (MPI's count).
+pub fn scatter_bytes<C: Communicator>(comm: &C, root: usize, mut part: impl FnMut(usize) -> Vec<u8>) -> Vec<u8> {
+    if comm.rank() as usize != root {
+        return comm.process_at_rank(root as i32).receive_vec::<u8>().0;
+    }
+    let mut own = Vec::new();
+    for r in 0..comm.size() as usize {
+        let bytes = part(r);
+        if r == root {
+            own = bytes;
+        } else {
+            comm.process_at_rank(r as i32).send(&bytes[..]);
+        }
+    }
+    own
 }
 
 /// Agreement on failure, to be called by every rank with its own result: all ranks return `Ok`

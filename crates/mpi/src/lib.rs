@@ -73,7 +73,7 @@ mod session;
 mod vector;
 
 #[cfg(feature = "petsc")]
-pub use collective::{agree, broadcast, broadcast_bytes, max, min, sum, sum_in_place};
+pub use collective::{agree, broadcast, broadcast_bytes, max, min, scatter_bytes, sum, sum_in_place};
 #[cfg(feature = "petsc")]
 pub use error::{Error, PetscError, Result};
 #[cfg(feature = "petsc")]

@@ -27,6 +27,10 @@ pub struct Layout {
     pub dirichlet_rows: Vec<Index>,
     /// The owned nodes' coordinates, x, y, z per node (the rigid-body near-null space).
     pub owned_coordinates: Vec<f64>,
+    /// Per owned row, its nonzeros in the columns of the owned rows and in the others' (the
+    /// matrix's exact preallocation: [`MeshPart::couplings`] at a free row, the diagonal at a
+    /// fixed one).
+    pub row_nonzeros: [Vec<Index>; 2],
 }
 
 impl Layout {
@@ -44,6 +48,14 @@ impl Layout {
             .map(|(l, c)| (3 * part.node_index[l] + c) as Index)
             .collect();
         let owned_coordinates = part.mesh.nodes[..part.n_owned_nodes].iter().flatten().copied().collect();
+        let (mut diagonal, mut off_diagonal) = (Vec::new(), Vec::new());
+        for (l, &[d, o]) in part.couplings.iter().enumerate() {
+            for c in 0..3 {
+                let fixed = part.dofs.dof[l][c] == FIXED;
+                diagonal.push(if fixed { 1 } else { d as Index });
+                off_diagonal.push(if fixed { 0 } else { o as Index });
+            }
+        }
         Self {
             n_owned_nodes: part.n_owned_nodes,
             n_local_nodes,
@@ -53,6 +65,7 @@ impl Layout {
             ghost_rows,
             dirichlet_rows,
             owned_coordinates,
+            row_nonzeros: [diagonal, off_diagonal],
         }
     }
 

@@ -140,14 +140,17 @@ pub struct RankSummary {
 }
 
 /// What a summary takes from the whole problem (theory §12): the obstacles' reports
-/// ([`imprints`] and [`complete_reports`] added) and the mesh. On one machine the problem's
-/// own; under `mpirun`, rank 0's, made from the whole mesh and obstacles (the other ranks' summary
-/// is not written: they pass no reports and their part of the mesh).
-pub struct Whole<'a> {
+/// ([`imprints`] and [`complete_reports`] added), the mesh's quality and its number of nodes. On
+/// one machine the problem's own; under `mpirun`, rank 0's, made from what it kept of the whole
+/// problem (the other ranks' summary is not written: they pass no reports and their part's
+/// quality).
+pub struct Whole {
     /// Each obstacle's report.
     pub reports: Vec<ObstacleReport>,
-    /// The mesh: its nodes, and its quality.
-    pub mesh: &'a saddle_core::TetMesh,
+    /// The mesh's quality.
+    pub quality: saddle_core::mesh::MeshQuality,
+    /// The mesh's nodes.
+    pub nodes: usize,
 }
 
 /// One step of a load path in `summary.json` (theory §11): the keys of a one-step summary.
@@ -468,13 +471,18 @@ impl Summary {
     /// quantities of the same name (`U`).
     pub fn new(p: ProblemView<'_>, sol: &Solution, title: Option<String>) -> Self {
         let reports = reports_with_imprints(p, &sol.u, &sol.extras, &sol.lambda, &sol.undetermined);
-        Self::of_whole(p, sol, title, Whole { reports, mesh: p.element.mesh() })
+        Self::of_whole(
+            p,
+            sol,
+            title,
+            Whole { reports, quality: p.element.mesh().quality(), nodes: p.element.mesh().n_nodes() },
+        )
     }
 
     /// [`Summary::new`] with the obstacles' reports and the mesh given ([`Whole`]): the summary
     /// of a rank's part of a distributed problem, its counts, sums and maxima over the ranks
     /// (theory §12). Collective.
-    pub fn of_whole(p: ProblemView<'_>, sol: &Solution, title: Option<String>, whole: Whole<'_>) -> Self {
+    pub fn of_whole(p: ProblemView<'_>, sol: &Solution, title: Option<String>, whole: Whole) -> Self {
         let l = &p.l;
         let comm = l.comm();
         let mut ws = Workspace::new(l);
@@ -494,7 +502,7 @@ impl Summary {
         // ws.eps holds ε(u), left there by `l.energy` above
         let near_incompressible_fraction = locking::near_incompressible_fraction(l, &ws.eps);
         warnings.extend(locking::locking_warning(p.element, near_incompressible_fraction));
-        let mesh_quality = whole.mesh.quality();
+        let mesh_quality = whole.quality;
         if mesh_quality.max_aspect_ratio > 30.0 {
             warnings.push(format!(
                 "the mesh has elements of aspect ratio up to {:.0} (element {}): expect larger discretisation errors \
@@ -532,7 +540,7 @@ impl Summary {
             elements: comm.sum_count(p.element.mesh().n_elements()),
             stress_points: comm.sum_count(l.n_points()),
             discretisation: p.element.name().to_string(),
-            nodes: whole.mesh.n_nodes(),
+            nodes: whole.nodes,
             near_incompressible_fraction,
             contact_rows: comm.sum_count(l.data.rows.n_rows()),
             contact,

@@ -100,6 +100,44 @@ impl Partition {
     pub fn owned_range(&self, rank: usize) -> std::ops::Range<usize> {
         self.node_offsets[rank]..self.node_offsets[rank + 1]
     }
+
+    /// [`MeshPart::couplings`] of every node of `mesh` with the free dofs `dofs`: the free dofs
+    /// of the nodes sharing an element with it, split by whether they have its owner.
+    pub fn couplings(&self, mesh: &TetMesh, dofs: &DofMap) -> Vec<[u32; 2]> {
+        // the elements around every node (compressed rows)
+        let mut start = vec![0usize; mesh.n_nodes() + 1];
+        for e in 0..mesh.n_elements() {
+            mesh.element_nodes(e).for_each(|n| start[n + 1] += 1);
+        }
+        for n in 0..mesh.n_nodes() {
+            start[n + 1] += start[n];
+        }
+        let mut fill = start.clone();
+        let mut around = vec![0u32; start[mesh.n_nodes()]];
+        for e in 0..mesh.n_elements() {
+            for n in mesh.element_nodes(e) {
+                around[fill[n]] = e as u32;
+                fill[n] += 1;
+            }
+        }
+        drop(fill);
+        let free = |n: usize| dofs.dof[n].iter().filter(|&&d| d != FIXED).count() as u32;
+        let mut seen = vec![usize::MAX; mesh.n_nodes()];
+        (0..mesh.n_nodes())
+            .map(|n| {
+                let mut count = [0u32; 2];
+                for &e in &around[start[n]..start[n + 1]] {
+                    for m in mesh.element_nodes(e as usize) {
+                        if seen[m] != n {
+                            seen[m] = n;
+                            count[usize::from(self.node_rank[m] != self.node_rank[n])] += free(m);
+                        }
+                    }
+                }
+                count
+            })
+            .collect()
+    }
 }
 
 /// One rank's part of a partitioned mesh and its dof numbering (module docs).
@@ -122,11 +160,23 @@ pub struct MeshPart {
     pub dofs: DofMap,
     /// Number of owned free dofs (the first local dofs).
     pub n_owned_dofs: usize,
+    /// Per owned node, the free dofs coupled to it through the elements of every rank (its
+    /// own included): those of nodes this rank owns, then the others' — the nonzeros of each
+    /// of its free rows in the distributed matrix's diagonal and off-diagonal blocks, counted
+    /// before assembly so that no rank's additions fall outside the preallocation.
+    pub couplings: Vec<[u32; 2]>,
 }
 
 impl MeshPart {
-    /// The part of `rank` of `mesh` under `partition`, with the free dofs of `global_dofs`.
-    pub fn new(mesh: &TetMesh, global_dofs: &DofMap, partition: &Partition, rank: usize) -> Self {
+    /// The part of `rank` of `mesh` under `partition`, with the free dofs of `global_dofs` and
+    /// every node's `couplings` ([`Partition::couplings`]).
+    pub fn new(
+        mesh: &TetMesh,
+        global_dofs: &DofMap,
+        partition: &Partition,
+        couplings: &[[u32; 2]],
+        rank: usize,
+    ) -> Self {
         let elements: Vec<usize> = (0..mesh.n_elements()).filter(|&e| partition.element_rank[e] == rank).collect();
         let mut touched = vec![false; mesh.n_nodes()];
         for &e in &elements {
@@ -159,7 +209,8 @@ impl MeshPart {
         let dofs = DofMap::from_fixed(&fixed);
         let n_owned_dofs = fixed[..n_owned_nodes].iter().flatten().filter(|f| !**f).count();
         let node_index = nodes.iter().map(|&n| partition.node_index[n]).collect();
-        Self { rank, mesh: local_mesh, elements, nodes, n_owned_nodes, node_index, dofs, n_owned_dofs }
+        let couplings = nodes[..n_owned_nodes].iter().map(|&n| couplings[n]).collect();
+        Self { rank, mesh: local_mesh, elements, nodes, n_owned_nodes, node_index, dofs, n_owned_dofs, couplings }
     }
 
     /// The global row `3 · partitioned index + component` of every local free dof.
@@ -234,9 +285,35 @@ mod tests {
                 let partition = Partition::new(&mesh, slabs(mesh.n_elements(), ranks), ranks).unwrap();
                 let (mut f_sum, mut diag_sum) = (vec![0.0; whole.n_dofs()], vec![0.0; whole.n_dofs()]);
                 let mut owned = 0;
+                let couplings = partition.couplings(&mesh, &dofs);
                 for rank in 0..ranks {
-                    let part = MeshPart::new(&mesh, &dofs, &partition, rank);
+                    let part = MeshPart::new(&mesh, &dofs, &partition, &couplings, rank);
                     owned += part.n_owned_dofs;
+                    // the couplings of every owned free row are the whole matrix's nonzeros in
+                    // that row, split by the owner of their column's node
+                    let (owner, _) = dofs.owners();
+                    let (cp, ri) = (whole.pattern().col_ptr(), whole.pattern().row_idx());
+                    let mut row_counts = vec![[0u32; 2]; whole.n_dofs()];
+                    for j in 0..whole.n_dofs() {
+                        for &i in &ri[cp[j]..cp[j + 1]] {
+                            let other = |a: usize, b: usize| {
+                                usize::from(
+                                    partition.node_rank[owner[a] as usize] != partition.node_rank[owner[b] as usize],
+                                )
+                            };
+                            row_counts[i][other(i, j)] += 1;
+                            if i != j {
+                                row_counts[j][other(j, i)] += 1;
+                            }
+                        }
+                    }
+                    for (l, &n) in part.nodes[..part.n_owned_nodes].iter().enumerate() {
+                        for c in 0..3 {
+                            if let Some(d) = dofs.free(n, c) {
+                                assert_eq!(part.couplings[l], row_counts[d], "{ranks} ranks: node {n}");
+                            }
+                        }
+                    }
                     let local = element.build_with_dofs(part.mesh.clone(), part.dofs.clone());
                     let map = part.from_global_dofs(&dofs);
                     let mut to_global = vec![usize::MAX; local.n_dofs()];

@@ -423,8 +423,17 @@ impl DiscreteObstacles {
     /// `column` (the rank's dof of a free dof of the whole problem). Each obstacle keeps its
     /// extras, load and parameters; its row range is its rows on this rank.
     pub fn restrict(&self, local_node: impl Fn(usize) -> Option<usize>, column: impl Fn(usize) -> usize) -> Self {
-        let rows = self
-            .parts
+        Self::from_restricted(self.obstacles.clone(), self.restricted_rows(local_node, column))
+    }
+
+    /// Each obstacle's rows of [`Self::restrict`], before they are concatenated: what a rank is
+    /// sent of the whole problem's obstacles (theory §12).
+    pub fn restricted_rows(
+        &self,
+        local_node: impl Fn(usize) -> Option<usize>,
+        column: impl Fn(usize) -> usize,
+    ) -> Vec<ConstraintRows> {
+        self.parts
             .iter()
             .map(|part| {
                 let mut rows = ConstraintRows::new(part.rows.n_extras);
@@ -438,8 +447,12 @@ impl DiscreteObstacles {
                 rows.warnings = part.rows.warnings.clone();
                 rows
             })
-            .collect();
-        Self::concatenate(self.obstacles.clone(), rows, OBSTACLE_PATH)
+            .collect()
+    }
+
+    /// The obstacles `obstacles` on their [`Self::restricted_rows`] `rows` (one entry each).
+    pub fn from_restricted(obstacles: Obstacles, rows: Vec<ConstraintRows>) -> Self {
+        Self::concatenate(obstacles, rows, OBSTACLE_PATH)
     }
 
     /// The obstacles.
