@@ -34,6 +34,11 @@ pub struct DistributedSystem {
     solver: String,
     /// Tangent assemblies so far.
     pub assemblies: usize,
+    /// The tangent's values are the same at every step (a metric, theory §4.1): the matrix is
+    /// assembled again only when the fixed coordinates change on some rank.
+    pub constant_tangent: bool,
+    /// The fixed coordinates of the last assembly.
+    assembled: Option<Vec<usize>>,
     /// Krylov solves so far.
     pub solves: usize,
     /// Krylov iterations so far.
@@ -103,6 +108,8 @@ impl DistributedSystem {
             local,
             solver: solver.into(),
             assemblies: 0,
+            constant_tangent: false,
+            assembled: None,
             solves: 0,
             iterations: 0,
             unconverged: 0,
@@ -171,9 +178,13 @@ impl DistributedSystem {
         let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let fixed: Vec<usize> = (0..nr).filter(|&i| active[i]).map(|i| self.basis.dof[i]).collect();
-        let values = Self::transformed(&self.local, k, &mut self.kt);
-        self.spd.assemble(values, &fixed).map_err(|e| error(&self.solver, e))?;
-        self.assemblies += 1;
+        // collective: assembled on every rank or on none
+        if !self.constant_tangent || l.comm().any(self.assembled.as_ref() != Some(&fixed)) {
+            let values = Self::transformed(&self.local, k, &mut self.kt);
+            self.spd.assemble(values, &fixed).map_err(|e| error(&self.solver, e))?;
+            self.assemblies += 1;
+            self.assembled = Some(fixed.clone());
+        }
         self.basis.force_to_coordinates(grad, &mut self.grad_t);
         // the reactions come through T⁻ᵀ, which amplifies the residual by up to cond(T)
         let rtol = (rtol / self.condition).max(CG_TOL_MIN.min(rtol));
