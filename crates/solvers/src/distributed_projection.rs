@@ -1,4 +1,4 @@
-//! Step 2 of Uzawa (theory §4.1) on a distributed problem (theory §12.3): the projection of
+//! Step 2 of Uzawa (theory §4.1) on a distributed problem (theory §12.4): the projection of
 //! z = uⁿ − ρM⁻¹(Bᵀσ̂ − f_u) onto K_h in the metric M, with V eliminated exactly (m = 0), is
 //! the quadratic programme
 //!

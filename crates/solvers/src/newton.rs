@@ -783,8 +783,9 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (the penalty
-    /// method is serial).
+    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (on a
+    /// distributed problem Newton keeps to its own steps, although the penalty method runs
+    /// there too, theory §12.4).
     fn can_fall_back(&self) -> bool {
         self.count.fallbacks < self.settings.max_fallbacks && matches!(self.system, Systems::Serial(_))
     }

@@ -119,7 +119,7 @@ impl Solver for Uzawa {
     }
 
     /// Step 2's projection by the distributed active set, decisions from sums over the ranks
-    /// (theory §12.3).
+    /// (theory §12.4).
     fn runs_distributed(&self) -> bool {
         true
     }
@@ -241,7 +241,7 @@ impl Scratch {
 
 /// Step (ii)'s linear algebra: on one process M factorised and the exact projection onto K_h in
 /// diag(M, m) (`None` without contact rows, where step (ii) is a plain gradient step); on a
-/// distributed problem the projection by the distributed active set (theory §12.3).
+/// distributed problem the projection by the distributed active set (theory §12.4).
 enum Projector {
     Serial { chol: SparseCholesky, proj: Option<MetricProjection> },
     Distributed(DistributedProjection),
@@ -307,7 +307,7 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// Stage 0 on a distributed problem (theory §12.3): the projection by the distributed active
+    /// Stage 0 on a distributed problem (theory §12.4): the projection by the distributed active
     /// set in the metric M with step `rho`; the extras eliminated exactly (`extra_metric` = 0).
     fn distributed(
         settings: &Uzawa,

@@ -152,6 +152,8 @@ struct Numbers {
     plastic: usize,
     kkt: f64,
     iterations: usize,
+    /// Solves of the distributed linear solver (the counter `distributed_solves`; 0 without).
+    distributed_solves: usize,
     flags: Vec<(bool, bool)>,
 }
 
@@ -184,6 +186,7 @@ fn numbers(l: &Lagrangian<'_>, s: &Solution, global_point: &dyn Fn(usize) -> usi
         plastic: comm.sum_count(s.stress.n_plastic()),
         kkt: kkt(l, &s.iterate(), &mut Workspace::new(l)).max(),
         iterations: s.report.iterations,
+        distributed_solves: s.report.counters.get("distributed_solves").map_or(0, |x| *x as usize),
         flags: plastic.iter().zip(&near).map(|(a, b)| (*a > 0.5, *b > 0.5)).collect(),
     }
 }
@@ -242,6 +245,11 @@ pub fn agree_with_serial(session: &Petsc, solver: &dyn Solver) {
         let k = rp.problem.element.points_per_element();
         let global_point = |i: usize| rp.elements[i / k] * k + i % k;
         let distributed = solve(&rp.problem, &scene.path, solver, &global_point, n_points);
+        assert!(
+            distributed.iter().any(|d| d.distributed_solves > 0),
+            "{}: not solved by the distributed solver",
+            scene.name
+        );
         let size = rp.comm.size();
         for (k, (d, r)) in distributed.iter().zip(&reference).enumerate() {
             if rank == 0 {
