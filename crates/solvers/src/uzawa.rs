@@ -16,6 +16,10 @@
 //! multiple of V's natural stiffness). The iteration stops on the relative KKT residual of the
 //! iterate, never on the step length; divergence and NaN are detected and reported.
 //!
+//! On a distributed problem (theory §12.4) step (ii) is the same projection, solved by Newton's
+//! distributed active set ([`DistributedProjection`]) with V eliminated exactly; stage 3 then
+//! has nothing to do (the projection needs no z).
+//!
 //! The iteration runs in named stages (one method of the private `Run` each):
 //!
 //! 0. **set-up** (`Run::set_up`): M assembled and factorised, the projection onto K_h set up

@@ -290,8 +290,9 @@ impl<'a> Run<'a> {
                 w.grad_v[kx] = -l.data.load[kx] - w.ht_chi[kx] + mu * sys.k_v[kx] * s.v[kx];
             }
         });
-        // norms of vectors over the dofs, over every rank's
-        let owned = |x: &[f64]| l.comm().sum(norm(x).powi(2)).sqrt();
+        // norms of vectors over the dofs, over every rank's (on one process the norm itself)
+        let comm = l.comm();
+        let owned = |x: &[f64]| if comm.size() == 1 { norm(x) } else { comm.sum(norm(x).powi(2)).sqrt() };
         let grad_norm = (owned(&w.grad_u).powi(2) + norm(&w.grad_v).powi(2)).sqrt();
         let grad_scale =
             owned(&w.r).max(owned(&w.gt_chi)).max(norm(l.data.load)).max(norm(&w.ht_chi)).max(owned(l.data.nodal_load));

@@ -103,6 +103,10 @@
 //! the displacement scale), `load_defect` = ‖f + Hᵀχ‖ (|Σχ − F| for the punch; absolute and
 //! relative to ‖f‖), `mu`, and `condition_estimate` (see [`PenaltySystem`]).
 //!
+//! On a distributed problem (theory §12.4) the u-block is solved by the operators' distributed
+//! solver instead of the factorisation, K' applied through the operators, and every sum, norm
+//! and decision above is reduced over the ranks.
+//!
 //! # Files
 //!
 //! This file holds the settings ([`Penalty`], every tuning constant) and the solver's entry

@@ -330,6 +330,14 @@ impl PenaltySystem {
         let (y0, y) = self.kcols.split_at(n);
         let mut s = DMatrix::<f64>::zeros(ne, ne);
         let mut b = DVector::<f64>::zeros(ne);
+        // the extras' own terms once (rank 0's), then every rank's rows
+        let comm = l.comm();
+        if comm.rank() == 0 {
+            for kx in 0..ne {
+                s[(kx, kx)] = self.mu * self.k_v[kx];
+                b[kx] = l.data.load[kx] - self.mu * self.k_v[kx] * at.v[kx];
+            }
+        }
         for i in (0..rows.n_rows()).filter(|&i| active[i]) {
             let (sd, ka) = (self.slaves.dof[i], self.k[i] * self.slaves.coef[i]);
             for (kx, h) in rows.extra_row(i).iter().enumerate() {
@@ -339,12 +347,8 @@ impl PenaltySystem {
                 }
             }
         }
-        l.comm().sum_in_place(s.as_mut_slice());
-        l.comm().sum_in_place(b.as_mut_slice());
-        for kx in 0..ne {
-            s[(kx, kx)] += self.mu * self.k_v[kx];
-            b[kx] += l.data.load[kx] - self.mu * self.k_v[kx] * at.v[kx];
-        }
+        comm.sum_in_place(s.as_mut_slice());
+        comm.sum_in_place(b.as_mut_slice());
         let s = (&s + s.transpose()) * 0.5;
         let sol = s.lu().solve(&b).filter(|x| x.iter().all(|x| x.is_finite()));
         let sol = sol.ok_or_else(|| non_finite("the extras' Schur complement", self.factorisations))?;
