@@ -214,6 +214,29 @@ pub struct Step {
     pub lambda: Vec<f64>,
 }
 
+/// Every extra with a load needs a touching row (theory §4.2 step 2): where none of `active` holds
+/// it, the row with the smallest gap in `gap` joins (over every rank's rows; on a tie of gaps,
+/// the lowest rank's). Returns the rows this rank added. Collective.
+pub(crate) fn touch_loaded_extras(l: &Lagrangian<'_>, active: &mut [bool], gap: &[f64]) -> usize {
+    let (rows, comm) = (l.data.rows, l.comm());
+    let mut added = 0;
+    for (kx, f) in l.data.load.iter().enumerate() {
+        let touching = (0..rows.n_rows()).filter(|&i| rows.extra_row(i)[kx] != 0.0);
+        if *f == 0.0 || comm.any(touching.clone().any(|i| active[i])) {
+            continue;
+        }
+        let closest = touching.min_by(|&a, &b| gap[a].total_cmp(&gap[b]));
+        let least = comm.min(closest.map_or(f64::INFINITY, |i| gap[i]));
+        let mine = closest.filter(|&i| gap[i] == least);
+        let first = comm.min(if mine.is_some() { comm.rank() as f64 } else { f64::INFINITY });
+        if let Some(i) = mine.filter(|_| first == comm.rank() as f64) {
+            active[i] = true;
+            added += 1;
+        }
+    }
+    added
+}
+
 /// The Newton step from the solves `x` = [du⁰, W_1, …] (n × (1 + n_extras)) and the reactions
 /// λ = λ⁰ + Λ dV of the `active` rows (theory §4.2 step 3): dV from −H_Aᵀ(λ⁰ + Λ dV) = f, with
 /// H_AᵀΛ and H_Aᵀλ⁰ summed over every rank's rows (theory §12), then du = du⁰ + W dV (in the

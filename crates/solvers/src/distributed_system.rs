@@ -34,6 +34,11 @@ pub struct DistributedSystem {
     solver: String,
     /// Tangent assemblies so far.
     pub assemblies: usize,
+    /// The tangent's values are the same at every step (a metric, theory §4.1): the matrix is
+    /// assembled again only when the fixed coordinates change on some rank.
+    pub constant_tangent: bool,
+    /// The fixed coordinates of the last assembly.
+    assembled: Option<Vec<usize>>,
     /// Krylov solves so far.
     pub solves: usize,
     /// Krylov iterations so far.
@@ -103,6 +108,8 @@ impl DistributedSystem {
             local,
             solver: solver.into(),
             assemblies: 0,
+            constant_tangent: false,
+            assembled: None,
             solves: 0,
             iterations: 0,
             unconverged: 0,
@@ -142,7 +149,7 @@ impl DistributedSystem {
 
     /// `out` = TᵀKT y with the unfixed tangent `material` from the operators: Tᵀ Bᵀ(C B T y),
     /// T at the owned dofs.
-    fn tangent_times(&mut self, l: &Lagrangian<'_>, material: Material<'_>, y: &[f64], out: &mut [f64]) {
+    pub fn tangent_times(&mut self, l: &Lagrangian<'_>, material: Material<'_>, y: &[f64], out: &mut [f64]) {
         self.ty.copy_from_slice(y);
         self.basis.displacement_from_coordinates(&mut self.ty);
         l.strain(&self.ty, &mut self.eps);
@@ -151,6 +158,46 @@ impl DistributedSystem {
         }
         l.divergence(&self.sigma, &mut self.kty);
         self.basis.force_to_coordinates(&self.kty, out);
+    }
+
+    /// `cols` (`nc` columns over the owned coordinates) ← (TᵀKT + D)⁻¹ `cols`, K with values `k`
+    /// on this rank's pattern and D diagonal, `diagonal` its (owned coordinate, value) pairs;
+    /// each Krylov solve to the relative residual `rtol`. Returns max/min of the diagonal of
+    /// TᵀKT + D over the ranks, a lower bound of its condition number (theory §4.3, §12.4).
+    pub fn solve_columns(
+        &mut self,
+        l: &Lagrangian<'_>,
+        k: &[f64],
+        diagonal: &[(usize, f64)],
+        cols: &mut [f64],
+        nc: usize,
+        rtol: f64,
+    ) -> Result<f64, SolveError> {
+        let mut values = Self::transformed(&self.local, k, &mut self.kt).to_vec();
+        let cp = l.pattern().col_ptr();
+        for &(s, d) in diagonal {
+            values[cp[s]] += d;
+        }
+        let n = l.n_dofs();
+        let mut diag = vec![0.0; n];
+        self.spd.diagonal(&values, &mut diag).map_err(|e| error(&self.solver, e))?;
+        let (lo, hi) = diag.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+        let comm = l.comm();
+        let condition = comm.max(hi) / comm.min(lo);
+        self.spd.assemble(&values, &[]).map_err(|e| error(&self.solver, e))?;
+        self.assemblies += 1;
+        self.assembled = None;
+        let mut x = vec![0.0; n];
+        for c in 0..nc {
+            let col = &mut cols[c * n..(c + 1) * n];
+            x.iter_mut().for_each(|v| *v = 0.0);
+            let report = self.spd.solve(col, &mut x, rtol).map_err(|e| error(&self.solver, e))?;
+            self.iterations += report.iterations;
+            self.unconverged += !report.converged as usize;
+            self.solves += 1;
+            col.copy_from_slice(&x);
+        }
+        Ok(condition)
     }
 
     /// The step for active set `active` with tangent `material` (its values `k` on this rank's
@@ -171,9 +218,13 @@ impl DistributedSystem {
         let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let fixed: Vec<usize> = (0..nr).filter(|&i| active[i]).map(|i| self.basis.dof[i]).collect();
-        let values = Self::transformed(&self.local, k, &mut self.kt);
-        self.spd.assemble(values, &fixed).map_err(|e| error(&self.solver, e))?;
-        self.assemblies += 1;
+        // collective: assembled on every rank or on none
+        if !self.constant_tangent || l.comm().any(self.assembled.as_ref() != Some(&fixed)) {
+            let values = Self::transformed(&self.local, k, &mut self.kt);
+            self.spd.assemble(values, &fixed).map_err(|e| error(&self.solver, e))?;
+            self.assemblies += 1;
+            self.assembled = Some(fixed.clone());
+        }
         self.basis.force_to_coordinates(grad, &mut self.grad_t);
         // the reactions come through T⁻ᵀ, which amplifies the residual by up to cond(T)
         let rtol = (rtol / self.condition).max(CG_TOL_MIN.min(rtol));

@@ -16,6 +16,7 @@ pub mod active_set;
 mod armijo;
 pub mod conformance;
 pub mod distributed_basis;
+pub mod distributed_projection;
 pub mod distributed_system;
 mod fallback;
 pub mod kh_projection;

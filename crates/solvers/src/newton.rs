@@ -40,7 +40,7 @@
 //! Once the active set and the plastic set settle, convergence is quadratic.
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
-use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper};
+use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper, touch_loaded_extras};
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
 use crate::kh_projection::MetricProjection;
@@ -680,24 +680,8 @@ impl<'a> Run<'a> {
             changed += (a != s.active[i]) as usize;
             s.active[i] = a;
         }
-        // an extra with a load needs a touching row: the one with the smallest gap (over every
-        // rank's rows; on a tie of gaps, the lowest rank's)
-        let comm = l.comm();
-        for (kx, f) in l.data.load.iter().enumerate() {
-            let touching = (0..rows.n_rows()).filter(|&i| rows.extra_row(i)[kx] != 0.0);
-            if *f == 0.0 || comm.any(touching.clone().any(|i| s.active[i])) {
-                continue;
-            }
-            let closest = touching.min_by(|&a, &b| w.gap[a].total_cmp(&w.gap[b]));
-            let gap = comm.min(closest.map_or(f64::INFINITY, |i| w.gap[i]));
-            let mine = closest.filter(|&i| w.gap[i] == gap);
-            let first = comm.min(if mine.is_some() { comm.rank() as f64 } else { f64::INFINITY });
-            if let Some(i) = mine.filter(|_| first == comm.rank() as f64) {
-                s.active[i] = true;
-                changed += 1;
-            }
-        }
-        let changed = comm.sum_count(changed);
+        changed += touch_loaded_extras(l, &mut s.active, &w.gap);
+        let changed = l.comm().sum_count(changed);
         // the elastic phase ends once its active set has settled: the last step solved it
         if s.elastic_phase && s.it > 0 && (changed == 0 || s.it >= ELASTIC_PHASE_MAX_STEPS) {
             s.elastic_phase = false;
@@ -799,8 +783,9 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (the penalty
-    /// method is serial).
+    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (on a
+    /// distributed problem Newton keeps to its own steps, although the penalty method runs
+    /// there too, theory §12.4).
     fn can_fall_back(&self) -> bool {
         self.count.fallbacks < self.settings.max_fallbacks && matches!(self.system, Systems::Serial(_))
     }

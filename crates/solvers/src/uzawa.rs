@@ -16,6 +16,10 @@
 //! multiple of V's natural stiffness). The iteration stops on the relative KKT residual of the
 //! iterate, never on the step length; divergence and NaN are detected and reported.
 //!
+//! On a distributed problem (theory §12.4) step (ii) is the same projection, solved by Newton's
+//! distributed active set ([`DistributedProjection`]) with V eliminated exactly; stage 3 then
+//! has nothing to do (the projection needs no z).
+//!
 //! The iteration runs in named stages (one method of the private `Run` each):
 //!
 //! 0. **set-up** (`Run::set_up`): M assembled and factorised, the projection onto K_h set up
@@ -30,6 +34,7 @@
 //! 5. **step length** (`Run::measure_step`): ‖xⁿ⁺¹ − xⁿ‖ in diag(M, m), for the guard;
 //! 6. **update** (`Run::advance`): λⁿ⁺¹ = μ/ρ.
 
+use crate::distributed_projection::DistributedProjection;
 use crate::kh_projection::MetricProjection;
 use crate::linear::{self, InSolver};
 use crate::local_law::{IterateMut, local_law_and_residual};
@@ -117,14 +122,18 @@ impl Solver for Uzawa {
         self.tol
     }
 
+    /// Step 2's projection by the distributed active set, decisions from sums over the ranks
+    /// (theory §12.4).
+    fn runs_distributed(&self) -> bool {
+        true
+    }
+
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        saddle_core::one_rank("uzawa", l)?;
         self.iterate(l, None, monitor)
     }
 
     /// The iteration from the previous step's (u, V, λ) (theory §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        saddle_core::one_rank("uzawa", l)?;
         warm_solve(l, start, "uzawa", || self.iterate(l, Some(start), monitor))
     }
 }
@@ -234,6 +243,14 @@ impl Scratch {
     }
 }
 
+/// Step (ii)'s linear algebra: on one process M factorised and the exact projection onto K_h in
+/// diag(M, m) (`None` without contact rows, where step (ii) is a plain gradient step); on a
+/// distributed problem the projection by the distributed active set (theory §12.4).
+enum Projector {
+    Serial { chol: SparseCholesky, proj: Option<MetricProjection> },
+    Distributed(DistributedProjection),
+}
+
 /// One Uzawa solve: what it reads, the factorised metric, the projection onto K_h, state,
 /// counters and scratch.
 struct Run<'a> {
@@ -241,11 +258,8 @@ struct Run<'a> {
     l: &'a Lagrangian<'a>,
     /// The step ρ/L.
     rho: f64,
-    /// M, factorised.
-    chol: SparseCholesky,
-    /// The exact projection onto K_h in diag(M, m); `None` without contact rows, where step
-    /// (ii) is a plain gradient step.
-    proj: Option<MetricProjection>,
+    /// M and the projection onto K_h.
+    projector: Projector,
     state: State,
     watch: Watch,
     count: Counts,
@@ -268,22 +282,26 @@ impl<'a> Run<'a> {
         let mut count = Counts::default();
         let (metric, lip) = settings.metric(l.data.elasticity);
         let rho = settings.rho / lip;
-        let mut chol = Self::factorise_metric(l, &metric, monitor, &mut timer, &mut count)?;
-        let rows = l.data.rows;
-        let proj = if rows.n_rows() > 0 {
-            monitor.phase("contact set-up");
-            Some(timer.time("contact set-up", || {
-                MetricProjection::new(rows, &mut chol, settings.extra_metric, rho, l.data.load, "uzawa")
-            })?)
+        let projector = if l.distributed_solver().is_some() {
+            Self::distributed(settings, l, &metric, rho, monitor, &mut timer)?
         } else {
-            None
+            let mut chol = Self::factorise_metric(l, &metric, monitor, &mut timer, &mut count)?;
+            let rows = l.data.rows;
+            let proj = if rows.n_rows() > 0 {
+                monitor.phase("contact set-up");
+                Some(timer.time("contact set-up", || {
+                    MetricProjection::new(rows, &mut chol, settings.extra_metric, rho, l.data.load, "uzawa")
+                })?)
+            } else {
+                None
+            };
+            Projector::Serial { chol, proj }
         };
         Ok(Self {
             settings,
             l,
             rho,
-            chol,
-            proj,
+            projector,
             state: Self::start(l, start, rho),
             watch: Watch { best: (f64::INFINITY, 0), smallest_step: f64::INFINITY, first_step: 0.0, last_step: 0.0 },
             count,
@@ -291,6 +309,31 @@ impl<'a> Run<'a> {
             timer,
             history: History::new("uzawa", settings.tol),
         })
+    }
+
+    /// Stage 0 on a distributed problem (theory §12.4): the projection by the distributed active
+    /// set in the metric M with step `rho`; the extras eliminated exactly (`extra_metric` = 0).
+    fn distributed(
+        settings: &Uzawa,
+        l: &Lagrangian<'_>,
+        metric: &SymOp,
+        rho: f64,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+    ) -> Result<Projector, SolveError> {
+        if settings.extra_metric != 0.0 {
+            return Err(SolveError::Unsupported {
+                solver: "uzawa".into(),
+                message: format!(
+                    "solver.extra_metric = {} on a distributed problem: the extras are eliminated exactly there \
+                     (extra_metric = 0), or run on one process",
+                    settings.extra_metric
+                ),
+            });
+        }
+        monitor.phase("analysis");
+        let p = timer.time("analysis", || DistributedProjection::new(l, metric, rho, "uzawa"))?;
+        Ok(Projector::Distributed(p))
     }
 
     /// M = (metric ε(·), ε(·)) assembled on L's pattern, analysed and factorised once (theory
@@ -389,9 +432,13 @@ impl<'a> Run<'a> {
     }
 
     /// Stage 3 (theory §4.1 step 2, the gradient step): z = uⁿ − ρM⁻¹Bᵀσ̂ⁿ⁺¹ by one triangular
-    /// solve pair with the factorised M (`ws.force` holds Bᵀσ̂ⁿ⁺¹).
+    /// solve pair with the factorised M (`ws.force` holds Bᵀσ̂ⁿ⁺¹); the distributed projection
+    /// needs no z.
     fn gradient_step(&mut self) {
-        let (rho, s, w, chol) = (self.rho, &self.state, &mut self.work, &mut self.chol);
+        let Projector::Serial { chol, .. } = &mut self.projector else {
+            return;
+        };
+        let (rho, s, w) = (self.rho, &self.state, &mut self.work);
         self.timer.time("linear solves", || {
             for (zi, fi) in w.z.iter_mut().zip(&w.ws.force) {
                 *zi = -rho * fi;
@@ -407,13 +454,23 @@ impl<'a> Run<'a> {
     /// Stage 4 (theory §4.1 step 2, the multipliers): (uⁿ⁺¹, Vⁿ⁺¹) the projection of z onto
     /// K_h in diag(M, m), exactly, with its multipliers μ ≥ 0 (u = z without contact rows).
     fn project(&mut self) -> Result<(), SolveError> {
-        let (rows, s, w, chol) = (self.l.data.rows, &mut self.state, &mut self.work, &mut self.chol);
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
         w.u_prev.clone_from(&s.u);
         w.v_prev.clone_from(&s.v);
-        self.count.solves += match &mut self.proj {
-            Some(p) => self.timer.time("projection", || p.project(rows, chol, &w.z, &mut s.v, &mut s.u, &mut s.mu))?,
-            None => {
+        self.count.solves += match &mut self.projector {
+            Projector::Serial { chol, proj: Some(p) } => {
+                self.timer.time("projection", || p.project(l.data.rows, chol, &w.z, &mut s.v, &mut s.u, &mut s.mu))?
+            }
+            Projector::Serial { proj: None, .. } => {
                 s.u.copy_from_slice(&w.z);
+                0
+            }
+            Projector::Distributed(p) => {
+                // from (uⁿ, Vⁿ, λⁿ); its multipliers are λⁿ⁺¹ = μ/ρ
+                self.timer.time("projection", || p.project(l, &w.ws.force, &mut s.u, &mut s.v, &mut s.lambda))?;
+                for (m, x) in s.mu.iter_mut().zip(&s.lambda) {
+                    *m = self.rho * x;
+                }
                 0
             }
         };
@@ -427,7 +484,11 @@ impl<'a> Run<'a> {
         w.z.iter_mut().for_each(|x| *x = 0.0);
         self.l.data.rows.add_transpose(&s.mu, &mut w.z, &mut w.ht_mu);
         let du_m_du: f64 = (0..s.u.len()).map(|j| (s.u[j] - w.u_prev[j]) * (w.z[j] - rho * w.ws.force[j])).sum();
-        let weights = self.proj.as_ref().map_or(&[][..], |p| p.extra_weights());
+        let du_m_du = self.l.comm().sum(du_m_du);
+        let weights = match &self.projector {
+            Projector::Serial { proj: Some(p), .. } => p.extra_weights(),
+            _ => &[],
+        };
         let dv_m_dv: f64 = weights.iter().zip(s.v.iter().zip(&w.v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
         wt.last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
         if s.it == 0 {
@@ -449,7 +510,11 @@ impl<'a> Run<'a> {
     /// The solution and its report (theory §5): the iterate, `stop` and the last residuals
     /// `kkt`, the counters and the phases.
     fn finish(self, stop: StopReason, kkt: KktResiduals) -> Solution {
-        let (c, proj) = (&self.count, self.proj.as_ref());
+        let c = &self.count;
+        let proj = match &self.projector {
+            Projector::Serial { proj, .. } => proj.as_ref(),
+            Projector::Distributed(_) => None,
+        };
         let mut counters = BTreeMap::new();
         let mut put = |k: &str, x: f64| counters.insert(k.to_string(), x);
         put("rho", self.settings.rho);
@@ -459,9 +524,18 @@ impl<'a> Run<'a> {
         put("setup_solves", proj.map_or(0, |p| p.setup_solves) as f64);
         put("triangular_solve_pairs", c.solves as f64);
         put("qp_factorisations", proj.map_or(0, |p| p.qp_work().1) as f64);
-        put("return_mappings", c.return_mappings as f64);
-        put("contact_structures", proj.is_some() as u8 as f64);
+        put("return_mappings", self.l.comm().sum_count(c.return_mappings) as f64);
+        let distributed = matches!(self.projector, Projector::Distributed(_));
+        put("contact_structures", (proj.is_some() || distributed) as u8 as f64);
         put("delassus_columns_kept", proj.is_some_and(|p| p.keeps_delassus_columns()) as u8 as f64);
+        if let Projector::Distributed(p) = &self.projector {
+            let [assemblies, solves, iterations, unconverged] = p.counts();
+            put("projection_sweeps", p.sweeps as f64);
+            put("distributed_assemblies", assemblies as f64);
+            put("distributed_solves", solves as f64);
+            put("krylov_iterations", iterations as f64);
+            put("krylov_unconverged", unconverged as f64);
+        }
         let State { u, v, lambda, stress, it, .. } = self.state;
         let report = self.history.report(stop, it, kkt, self.timer.into_phases(), counters);
         Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }

@@ -281,6 +281,8 @@ impl<'a> Run<'a> {
             w.gt_chi.iter_mut().for_each(|x| *x = 0.0);
             w.ht_chi.iter_mut().for_each(|x| *x = 0.0);
             rows.add_transpose(&s.chi, &mut w.gt_chi, &mut w.ht_chi);
+            // Hᵀχ of every rank's rows (theory §12.4)
+            l.comm().sum_in_place(&mut w.ht_chi);
             for ((g, a), b) in w.grad_u.iter_mut().zip(&w.r).zip(&w.gt_chi) {
                 *g = a - b;
             }
@@ -288,9 +290,12 @@ impl<'a> Run<'a> {
                 w.grad_v[kx] = -l.data.load[kx] - w.ht_chi[kx] + mu * sys.k_v[kx] * s.v[kx];
             }
         });
-        let grad_norm = (norm(&w.grad_u).powi(2) + norm(&w.grad_v).powi(2)).sqrt();
+        // norms of vectors over the dofs, over every rank's (on one process the norm itself)
+        let comm = l.comm();
+        let owned = |x: &[f64]| if comm.size() == 1 { norm(x) } else { comm.sum(norm(x).powi(2)).sqrt() };
+        let grad_norm = (owned(&w.grad_u).powi(2) + norm(&w.grad_v).powi(2)).sqrt();
         let grad_scale =
-            norm(&w.r).max(norm(&w.gt_chi)).max(norm(l.data.load)).max(norm(&w.ht_chi)).max(norm(l.data.nodal_load));
+            owned(&w.r).max(owned(&w.gt_chi)).max(norm(l.data.load)).max(norm(&w.ht_chi)).max(owned(l.data.nodal_load));
         s.grad_rel = if grad_scale > 0.0 { grad_norm / grad_scale } else { grad_norm };
         if !s.grad_rel.is_finite() {
             return Err(non_finite("the gradient of J_μ", s.it));
@@ -314,7 +319,7 @@ impl<'a> Run<'a> {
     /// Stage 5 (theory §4.3): K' = K_t + μK_el on L's pattern — (1 + μ)K_el in the cold
     /// iteration or without plasticity.
     fn assemble(&mut self, timer: &mut PhaseTimer) {
-        let elastic_tangent = self.elastic() || !self.plastic;
+        let elastic_tangent = self.elastic_tangent();
         let (l, sys, w) = (self.l, &mut self.sys, &mut self.work);
         let (c_el, mu) = (sys.c_el, self.settings.mu);
         if elastic_tangent {
@@ -327,11 +332,19 @@ impl<'a> Run<'a> {
         }
     }
 
+    /// K' is the elastic (1 + μ)K_el: in the cold iteration or without plasticity.
+    fn elastic_tangent(&self) -> bool {
+        self.elastic() || !self.plastic
+    }
+
     /// Stage 6 (theory §4.3): the Newton step of the contact model, its active-set loop started
     /// from every row (cold) or from the rows penetrating now, and the gaps ĝ after it.
     fn model_step(&mut self, timer: &mut PhaseTimer) -> Result<(), SolveError> {
         let elastic = self.elastic();
+        let elastic_tangent = self.elastic_tangent();
         let (l, sys, s, w) = (self.l, &mut self.sys, &mut self.state, &mut self.work);
+        // K' as the operators apply it (the distributed products; theory §12.4)
+        let material = if elastic_tangent { Material::Uniform(&self.c_el_mu) } else { Material::PerPoint(&w.tangents) };
         if !elastic {
             for (a, g) in s.model.iter_mut().zip(&s.gap) {
                 *a = *g < 0.0;
@@ -340,13 +353,13 @@ impl<'a> Run<'a> {
         let (sweeps, settled) = timer.time("factorisation and solves", || {
             let at = Point { r: &w.r, gap: &s.gap, v: &s.v };
             let mut d = Direction { du: &mut w.du, dv: &mut w.dv, g_next: &mut w.g_next };
-            sys.model_step(l, &mut s.model, &at, &mut d, !elastic)
+            sys.model_step(l, material, &mut s.model, &at, &mut d, !elastic)
         })?;
         self.count.sweeps += sweeps;
         self.count.unsettled += !settled as usize;
         self.count.active_changes += s.model.iter().zip(&s.previous).filter(|(a, b)| a != b).count();
         s.previous.copy_from_slice(&s.model);
-        if w.du.iter().chain(&w.dv).any(|x| !x.is_finite()) {
+        if l.comm().any(w.du.iter().chain(&w.dv).any(|x| !x.is_finite())) {
             return Err(non_finite("the Newton step", s.it));
         }
         Ok(())
@@ -361,9 +374,10 @@ impl<'a> Run<'a> {
             return 1.0;
         }
         let (l, sys, s, w) = (self.l, &self.sys, &mut self.state, &mut self.work);
-        let slope = dot(&w.grad_u, &w.du) + dot(&w.grad_v, &w.dv);
-        let x_scale = max_abs(&s.u).max(max_abs(&s.v)).max(max_abs(&l.data.rows.offset));
-        let step_rel = max_abs(&w.du).max(max_abs(&w.dv)) / x_scale.max(f64::MIN_POSITIVE);
+        let comm = l.comm();
+        let slope = comm.sum(dot(&w.grad_u, &w.du)) + dot(&w.grad_v, &w.dv);
+        let x_scale = comm.max(max_abs(&s.u).max(max_abs(&l.data.rows.offset))).max(max_abs(&s.v));
+        let step_rel = comm.max(max_abs(&w.du)).max(max_abs(&w.dv)) / x_scale.max(f64::MIN_POSITIVE);
         let j0 = timer.time("line search", || sys.energy(l, &s.u, &s.v, &s.gap, &mut w.ws));
         let j_scale = j0.abs().max(l.data.load.iter().zip(&s.v).map(|(f, v)| (f * v).abs()).sum());
         s.decrement_rel = (-slope).max(0.0) / j_scale.max(f64::MIN_POSITIVE);
@@ -440,13 +454,20 @@ impl<'a> Run<'a> {
         put("factorisations", sys.factorisations as f64);
         put("symbolic_analyses", sys.symbolic_analyses as f64);
         put("triangular_solve_pairs", sys.solves as f64);
+        if let Some((iterations, unconverged)) = sys.krylov() {
+            put("distributed_solves", sys.solves as f64);
+            put("krylov_iterations", iterations as f64);
+            put("krylov_unconverged", unconverged as f64);
+        }
         put("contact_model_sweeps", c.sweeps as f64);
         put("contact_model_unsettled", c.unsettled as f64);
         put("line_search_backtracks", c.backtracks as f64);
         put("line_search_failures", c.line_search_failures as f64);
-        put("active_set_changes", c.active_changes as f64);
-        put("contact_rows_active", s.chi.iter().filter(|c| **c > 0.0).count() as f64);
-        put("return_mappings", c.return_mappings as f64);
+        // a rank's counts summed over the ranks (theory §12; on one process the count itself)
+        let comm = self.l.comm();
+        put("active_set_changes", comm.sum_count(c.active_changes) as f64);
+        put("contact_rows_active", comm.sum_count(s.chi.iter().filter(|c| **c > 0.0).count()) as f64);
+        put("return_mappings", comm.sum_count(c.return_mappings) as f64);
         put("inner_converged", inner_solved as u8 as f64);
         put("inner_gradient_relative", s.grad_rel);
         put("newton_decrement_relative", s.decrement_rel);
@@ -462,12 +483,14 @@ impl<'a> Run<'a> {
     fn error_indicators(&mut self) -> BTreeMap<String, f64> {
         let (l, sys, s, w) = (self.l, &self.sys, &self.state, &mut self.work);
         let rows = l.data.rows;
-        let x_scale = max_abs(&s.u).max(max_abs(&s.v)).max(max_abs(&rows.offset));
+        // the largest values over every rank's dofs and rows (Hᵀχ is summed already)
+        let comm = l.comm();
+        let x_scale = comm.max(max_abs(&s.u).max(max_abs(&rows.offset))).max(max_abs(&s.v));
         let relative = |x: f64, scale: f64| if scale > 0.0 { x / scale } else { x };
-        let max_pen = s.gap.iter().fold(0.0f64, |m, g| m.max(-g));
+        let max_pen = comm.max(s.gap.iter().fold(0.0f64, |m, g| m.max(-g)));
         let load_def = l.data.load.iter().zip(&w.ht_chi).map(|(f, h)| (f + h).powi(2)).sum::<f64>().sqrt();
         rows.gap(&s.u, &s.v, &mut w.ws.gap);
-        let drift = s.gap.iter().zip(&w.ws.gap).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let drift = comm.max(s.gap.iter().zip(&w.ws.gap).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())));
         let mut counters = BTreeMap::new();
         let mut put = |k: &str, x: f64| counters.insert(k.to_string(), x);
         put("mu", self.settings.mu);
@@ -476,7 +499,7 @@ impl<'a> Run<'a> {
         put("load_defect", load_def);
         put("load_defect_relative", relative(load_def, norm(l.data.load)));
         put("condition_estimate", sys.condition_estimate);
-        put("penalty_stiffness_max", sys.k.iter().copied().fold(0.0, f64::max));
+        put("penalty_stiffness_max", comm.max(sys.k.iter().copied().fold(0.0, f64::max)));
         put("gap_drift_relative", relative(drift, x_scale));
         counters
     }

@@ -103,6 +103,10 @@
 //! the displacement scale), `load_defect` = ‖f + Hᵀχ‖ (|Σχ − F| for the punch; absolute and
 //! relative to ‖f‖), `mu`, and `condition_estimate` (see [`PenaltySystem`]).
 //!
+//! On a distributed problem (theory §12.4) the u-block is solved by the operators' distributed
+//! solver instead of the factorisation, K' applied through the operators, and every sum, norm
+//! and decision above is reduced over the ranks.
+//!
 //! # Files
 //!
 //! This file holds the settings ([`Penalty`], every tuning constant) and the solver's entry
@@ -193,15 +197,19 @@ impl Solver for Penalty {
         self.tol
     }
 
+    /// Newton on J_μ with its systems through the distributed solver, its sums and decisions
+    /// over the ranks (theory §12.4).
+    fn runs_distributed(&self) -> bool {
+        true
+    }
+
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        saddle_core::one_rank("penalty", l)?;
         self.newton(l, None, monitor)
     }
 
     /// Newton on J_μ from the previous step's (u, V), without the elastic iteration (theory
     /// §11.2).
     fn solve_warm(&self, l: &Lagrangian<'_>, start: &Start, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
-        saddle_core::one_rank("penalty", l)?;
         warm_solve(l, start, "penalty", || self.newton(l, Some(start), monitor))
     }
 }

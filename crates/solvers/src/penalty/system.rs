@@ -3,6 +3,8 @@
 //! coupled through a Schur complement free of cancellation ([`PenaltySystem`]).
 
 use super::{MODEL_SWEEPS, non_finite};
+use crate::active_set::CG_TOL_MIN;
+use crate::distributed_system::DistributedSystem;
 use crate::linear::{self, InSolver};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
@@ -41,8 +43,8 @@ pub struct PenaltySystem {
     pub(super) k_v: Vec<f64>,
     /// The elastic stiffness C.
     pub(super) c_el: SymOp,
-    /// The Cholesky factorisation of K' + D_A, analysed once.
-    chol: SparseCholesky,
+    /// The solver of K' + D_A.
+    linear: Linear,
     /// K' = K_t + μK_el on L's pattern.
     pub(super) kprime: Vec<f64>,
     /// TᵀK'T in the rows' coordinates, and Tᵀr (empty when T = I).
@@ -65,6 +67,19 @@ pub struct PenaltySystem {
     /// max/min diagonal of the last factorised matrix.
     pub condition_estimate: f64,
 }
+
+/// How the u-block is solved: on one process a Cholesky factorisation analysed once; on a
+/// distributed problem the operators' distributed solver, with K' applied through the operators
+/// (theory §12.4).
+enum Linear {
+    Serial(SparseCholesky),
+    Distributed(DistributedSystem),
+}
+
+/// The relative residual of the distributed Krylov solves of the penalty's Newton systems: the
+/// round-off floor of CG in double precision ([`CG_TOL_MIN`]), so that the steps are those of
+/// the serial factorisation to that accuracy.
+pub const DISTRIBUTED_RTOL: f64 = CG_TOL_MIN;
 
 impl std::fmt::Debug for PenaltySystem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -97,25 +112,33 @@ impl PenaltySystem {
     /// pattern (once).
     pub fn new(l: &Lagrangian<'_>, mu: f64) -> Result<Self, SolveError> {
         let rows = l.data.rows;
-        let slaves = RowBasis::new(rows, l.n_dofs(), l.pattern(), "penalty")?;
         let c_el = l.data.elasticity.stiffness_matrix();
         let mut kprime = l.stiffness(Material::Uniform(&c_el));
-        let k = contact_stiffness(&slaves, l, &kprime, mu)?;
+        let mut symbolic_analyses = 0;
+        let (slaves, row_stiffness, linear) = if l.distributed_solver().is_some() {
+            let mut system = DistributedSystem::new(l, "penalty")?;
+            let row_stiffness = system.row_stiffness(l, &kprime)?;
+            (system.basis().clone(), row_stiffness, Linear::Distributed(system))
+        } else {
+            let slaves = RowBasis::new(rows, l.n_dofs(), l.pattern(), "penalty")?;
+            let row_stiffness = slaves.row_stiffness(l.pattern(), &kprime);
+            let pattern = slaves.pattern(l.pattern());
+            let chol = linear::analyse(pattern, "penalty Hessian", "penalty", &mut symbolic_analyses)?;
+            (slaves, row_stiffness, Linear::Serial(chol))
+        };
+        let k = contact_stiffness(row_stiffness, mu)?;
         let k_v = extra_stiffness(l)?;
         let (n, ne) = (l.n_dofs(), l.n_extras());
         kprime.iter_mut().for_each(|x| *x = 0.0);
-        let mut symbolic_analyses = 0;
-        let pattern = slaves.pattern(l.pattern());
-        let chol = linear::analyse(pattern, "penalty Hessian", "penalty", &mut symbolic_analyses)?;
-        let nnz = pattern.nnz();
-        let transformed = !slaves.is_identity();
+        let nnz = slaves.pattern(l.pattern()).nnz();
+        let transformed = !slaves.is_identity() && matches!(linear, Linear::Serial(_));
         Ok(Self {
             mu,
             slaves,
             k,
             k_v,
             c_el,
-            chol,
+            linear,
             hess: vec![0.0; nnz],
             kprime_t: if transformed { vec![0.0; nnz] } else { Vec::new() },
             r_t: if transformed { vec![0.0; n] } else { Vec::new() },
@@ -128,6 +151,15 @@ impl PenaltySystem {
             solves: 0,
             condition_estimate: f64::NAN,
         })
+    }
+
+    /// The distributed solver's Krylov iterations and unconverged solves so far; `None` on one
+    /// process.
+    pub fn krylov(&self) -> Option<(usize, usize)> {
+        match &self.linear {
+            Linear::Serial(_) => None,
+            Linear::Distributed(system) => Some((system.iterations, system.unconverged)),
+        }
     }
 
     /// χ_i = k_i g_i⁻.
@@ -143,6 +175,8 @@ impl PenaltySystem {
         let c = &self.c_el;
         let reg: f64 = ws.eps.par_iter().zip(l.weights().par_iter()).map(|(e, w)| w * e.dot(&(c * e))).sum();
         let pen: f64 = gap.iter().zip(&self.k).map(|(g, k)| k * (-g).max(0.0).powi(2)).sum();
+        // a rank's points and rows summed over the ranks (theory §12; one process: themselves)
+        let (reg, pen) = (l.comm().sum(reg), l.comm().sum(pen));
         let reg_v: f64 = self.k_v.iter().zip(v).map(|(k, v)| k * v * v).sum();
         j + 0.5 * (self.mu * (reg + reg_v) + pen)
     }
@@ -151,27 +185,33 @@ impl PenaltySystem {
     /// active-set loop from `model`, which holds the final set on return. Returns the number of
     /// sweeps and whether the set settled; if not, and `descent` asks for a descent direction of
     /// J_μ, d is the plain semismooth Newton direction (A = {g < 0}), else the last sweep's.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn model_step(
         &mut self,
         l: &Lagrangian<'_>,
+        material: Material<'_>,
         model: &mut [bool],
         at: &Point<'_>,
         d: &mut Direction<'_>,
         descent: bool,
     ) -> Result<(usize, bool), SolveError> {
         if !self.slaves.is_identity() {
-            // K' and r in the rows' coordinates, once for all the sweeps
-            self.slaves.stiffness(&self.kprime, &mut self.kprime_t);
+            // K' (on one process) and r in the rows' coordinates, once for all the sweeps
+            if !self.kprime_t.is_empty() {
+                self.slaves.stiffness(&self.kprime, &mut self.kprime_t);
+            }
+            self.r_t.resize(l.n_dofs(), 0.0);
             self.slaves.force_to_coordinates(at.r, &mut self.r_t);
         }
         for sweep in 1..=MODEL_SWEEPS {
-            self.step(l, model, at, d)?;
+            self.step(l, material, model, at, d)?;
             let mut settled = true;
             for ((next, g), a) in self.next.iter_mut().zip(d.g_next.iter()).zip(model.iter()) {
                 *next = *g < 0.0;
                 settled &= *next == *a;
             }
-            if settled {
+            // settled on every rank (theory §12: one decision)
+            if !l.comm().any(!settled) {
                 return Ok((sweep, true));
             }
             if sweep == MODEL_SWEEPS && !descent {
@@ -182,7 +222,7 @@ impl PenaltySystem {
         for (a, g) in model.iter_mut().zip(at.gap) {
             *a = *g < 0.0;
         }
-        self.step(l, model, at, d)?;
+        self.step(l, material, model, at, d)?;
         Ok((MODEL_SWEEPS + 1, false))
     }
 
@@ -192,11 +232,12 @@ impl PenaltySystem {
     fn step(
         &mut self,
         l: &Lagrangian<'_>,
+        material: Material<'_>,
         active: &[bool],
         at: &Point<'_>,
         d: &mut Direction<'_>,
     ) -> Result<(), SolveError> {
-        self.right_hand_sides(l, active, at);
+        self.right_hand_sides(l, material, active, at);
         self.factorise_and_solve(l, active)?;
         if l.n_extras() > 0 {
             self.extras_step(l, active, at, d.dv)?;
@@ -211,8 +252,7 @@ impl PenaltySystem {
     /// The columns [z, P] on the active slave dofs (z_s = −g_i/a_i, P_k[s] = H_ik/a_i) and
     /// [r + K'z, K'P], with K' and r in the rows' coordinates (transformed once per Newton step,
     /// [`Self::model_step`]).
-    fn right_hand_sides(&mut self, l: &Lagrangian<'_>, active: &[bool], at: &Point<'_>) {
-        let p = self.slaves.pattern(l.pattern());
+    fn right_hand_sides(&mut self, l: &Lagrangian<'_>, material: Material<'_>, active: &[bool], at: &Point<'_>) {
         let rows = l.data.rows;
         let n = l.n_dofs();
         let (kprime, r): (&[f64], &[f64]) =
@@ -226,7 +266,12 @@ impl PenaltySystem {
             }
         }
         for c in 0..1 + l.n_extras() {
-            p.matvec(kprime, &self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
+            let (col, kcol) = (&self.cols[c * n..(c + 1) * n], &mut self.kcols[c * n..(c + 1) * n]);
+            match &mut self.linear {
+                Linear::Serial(_) => self.slaves.pattern(l.pattern()).matvec(kprime, col, kcol),
+                // TᵀK'T through the operators: a rank's K' values are its elements' only
+                Linear::Distributed(system) => system.tangent_times(l, material, col, kcol),
+            }
         }
         for (x, ri) in self.kcols[..n].iter_mut().zip(r) {
             *x += ri;
@@ -236,6 +281,22 @@ impl PenaltySystem {
     /// A = K' + D_A on the fixed pattern, its condition estimate, its numeric factorisation,
     /// and [y⁰ Y] = A⁻¹[r + K'z, K'P] in place of the right-hand sides.
     fn factorise_and_solve(&mut self, l: &Lagrangian<'_>, active: &[bool]) -> Result<(), SolveError> {
+        let nc = 1 + l.n_extras();
+        let chol = match &mut self.linear {
+            Linear::Serial(chol) => chol,
+            Linear::Distributed(system) => {
+                let rows = 0..l.data.rows.n_rows();
+                let diagonal: Vec<(usize, f64)> = rows
+                    .filter(|&i| active[i])
+                    .map(|i| (self.slaves.dof[i], self.k[i] * self.slaves.coef[i].powi(2)))
+                    .collect();
+                self.condition_estimate =
+                    system.solve_columns(l, &self.kprime, &diagonal, &mut self.kcols, nc, DISTRIBUTED_RTOL)?;
+                self.factorisations += 1;
+                self.solves += nc;
+                return Ok(());
+            }
+        };
         let cp = self.slaves.pattern(l.pattern()).col_ptr();
         let n = l.n_dofs();
         self.hess.copy_from_slice(if self.slaves.is_identity() { &self.kprime } else { &self.kprime_t });
@@ -247,16 +308,16 @@ impl PenaltySystem {
             (lo.min(x), hi.max(x))
         });
         self.condition_estimate = dmax / dmin;
-        self.chol.factorise(&self.hess).in_solver("penalty")?;
+        chol.factorise(&self.hess).in_solver("penalty")?;
         self.factorisations += 1;
-        let nc = 1 + l.n_extras();
-        self.chol.solve_columns(&mut self.kcols, nc);
+        chol.solve_columns(&mut self.kcols, nc);
         self.solves += nc;
         Ok(())
     }
 
     /// dV from the extras' Schur complement S dV = f − μ k_V V + Pᵀ D_A y⁰, S = μ diag(k_V) +
-    /// Pᵀ D_A Y (symmetrised), by a dense LU.
+    /// Pᵀ D_A Y (symmetrised), by a dense LU; the rows' terms summed over the ranks, the same
+    /// small solve on every rank (theory §12.4).
     fn extras_step(
         &self,
         l: &Lagrangian<'_>,
@@ -269,9 +330,13 @@ impl PenaltySystem {
         let (y0, y) = self.kcols.split_at(n);
         let mut s = DMatrix::<f64>::zeros(ne, ne);
         let mut b = DVector::<f64>::zeros(ne);
-        for kx in 0..ne {
-            s[(kx, kx)] = self.mu * self.k_v[kx];
-            b[kx] = l.data.load[kx] - self.mu * self.k_v[kx] * at.v[kx];
+        // the extras' own terms once (rank 0's), then every rank's rows
+        let comm = l.comm();
+        if comm.rank() == 0 {
+            for kx in 0..ne {
+                s[(kx, kx)] = self.mu * self.k_v[kx];
+                b[kx] = l.data.load[kx] - self.mu * self.k_v[kx] * at.v[kx];
+            }
         }
         for i in (0..rows.n_rows()).filter(|&i| active[i]) {
             let (sd, ka) = (self.slaves.dof[i], self.k[i] * self.slaves.coef[i]);
@@ -282,6 +347,8 @@ impl PenaltySystem {
                 }
             }
         }
+        comm.sum_in_place(s.as_mut_slice());
+        comm.sum_in_place(b.as_mut_slice());
         let s = (&s + s.transpose()) * 0.5;
         let sol = s.lu().solve(&b).filter(|x| x.iter().all(|x| x.is_finite()));
         let sol = sol.ok_or_else(|| non_finite("the extras' Schur complement", self.factorisations))?;
@@ -320,10 +387,10 @@ impl PenaltySystem {
     }
 }
 
-/// k_i = (K_el)_{s_i s_i} / (μ a_i²) from the assembled elastic stiffness `k_el` (module docs);
-/// an error naming `solver.mu` if one overflows.
-fn contact_stiffness(slaves: &RowBasis, l: &Lagrangian<'_>, k_el: &[f64], mu: f64) -> Result<Vec<f64>, SolveError> {
-    let k: Vec<f64> = slaves.row_stiffness(l.pattern(), k_el).iter().map(|k| k / mu).collect();
+/// k_i = (K_el)_{s_i s_i} / (μ a_i²) from the rows' elastic stiffnesses (K_el)_{s_i s_i} / a_i²
+/// `row_stiffness` (module docs); an error naming `solver.mu` if one overflows.
+fn contact_stiffness(row_stiffness: Vec<f64>, mu: f64) -> Result<Vec<f64>, SolveError> {
+    let k: Vec<f64> = row_stiffness.iter().map(|k| k / mu).collect();
     if let Some(i) = k.iter().position(|k| !k.is_finite()) {
         let why = format!("is too small: the penalty stiffness (elastic stiffness / mu) of contact row {i} overflows");
         return Err(ParameterError::new("solver.mu", mu, why).into());
@@ -335,11 +402,14 @@ fn contact_stiffness(slaves: &RowBasis, l: &Lagrangian<'_>, k_el: &[f64], mu: f6
 /// if a loaded extra has no row.
 fn extra_stiffness(l: &Lagrangian<'_>) -> Result<Vec<f64>, SolveError> {
     let rows = l.data.rows;
-    let body_stiffness = l.data.elasticity.young * l.weights().iter().sum::<f64>().cbrt();
+    let comm = l.comm();
+    let body_stiffness = l.data.elasticity.young * comm.sum(l.weights().iter().sum::<f64>()).cbrt();
     let k_v: Vec<f64> = (0..l.n_extras())
         .map(|kx| {
             let h2: Vec<f64> = (0..rows.n_rows()).map(|i| rows.extra_row(i)[kx].powi(2)).filter(|h| *h > 0.0).collect();
-            if h2.is_empty() { 0.0 } else { body_stiffness * h2.iter().sum::<f64>() / h2.len() as f64 }
+            // every rank's rows
+            let (sum, count) = (comm.sum(h2.iter().sum::<f64>()), comm.sum_count(h2.len()));
+            if count == 0 { 0.0 } else { body_stiffness * sum / count as f64 }
         })
         .collect();
     for (kx, kv) in k_v.iter().enumerate() {
