@@ -18,9 +18,10 @@
 //!
 //! The systems are solved by one of two [`LinearBackend`]s: a sparse Cholesky factorisation of
 //! every tangent (symbolic analysis once), or conjugate gradients preconditioned by a
-//! smoothed-aggregation multigrid of the *elastic* stiffness, built once and reused for every
-//! tangent (the fixed dofs are handled by the preconditioner as a diagonal block), to a
-//! relative tolerance the caller sets per step (inexact Newton).
+//! smoothed-aggregation multigrid of the elastic stiffness, built once, whose values follow the
+//! tangent when CG slows down on it (its aggregates kept; the fixed dofs are handled by the
+//! preconditioner as a diagonal block), to a relative tolerance the caller sets per step
+//! (inexact Newton).
 
 use crate::linear::{self, InSolver, lower, near_null_space};
 use crate::row_basis::RowBasis;
@@ -137,6 +138,16 @@ pub struct IterativeSolve {
     pub max_iter: usize,
     /// CG iterations so far.
     pub iterations: usize,
+    /// Rebuilds of the hierarchy's values on the tangent so far.
+    pub refreshes: usize,
+    /// The hierarchy follows the tangent (its values rebuilt on it, the aggregates kept) when
+    /// the last CG solve took more than this many iterations (Newton's `amg_refresh_cg`).
+    pub refresh_above: usize,
+    /// The tangent in the dofs' own coordinates (when the rows' coordinates differ), for the
+    /// hierarchy's refresh.
+    tangent: Csr,
+    /// CG iterations of the last solve.
+    last_iterations: usize,
     /// Solves that stopped at the budget before the tolerance.
     pub unconverged: usize,
     /// The last solutions of the extras' columns (W = K⁻¹(−K δ_V)): they change little from
@@ -168,6 +179,38 @@ impl Preconditioner for FixedDofs<'_> {
         for &(s, d) in self.fixed {
             z[s] = r[s] / d;
         }
+    }
+}
+
+/// The multigrid rebuilt on the tangent (theory §4.2): the aggregates and tentative
+/// prolongators of the elastic hierarchy kept, the smoothed prolongators, Galerkin operators and
+/// coarse factor recomputed ([`SmoothedAggregation::refresh`]). With T = I the matrix is the
+/// system's `a` itself (the fixed dofs decoupled); otherwise the tangent in the dofs' own
+/// coordinates, `k` on L's `pattern`, which the preconditioner transforms around. A tangent
+/// whose coarse operator is not positive definite keeps the last hierarchy.
+#[allow(clippy::too_many_arguments)]
+fn follow_the_tangent(
+    amg: &mut SmoothedAggregation,
+    basis: &RowBasis,
+    a: &Csr,
+    tangent: &mut Csr,
+    pattern: &SymmetricPattern,
+    k: &[f64],
+    fill: &mut Vec<usize>,
+    refreshes: &mut usize,
+) {
+    let m = if basis.is_identity() {
+        a
+    } else {
+        if tangent.nrows == 0 {
+            *tangent = Csr::from_symmetric_lower(lower(pattern), k);
+        } else {
+            tangent.assign_symmetric_lower(lower(pattern), k, fill);
+        }
+        &*tangent
+    };
+    if amg.refresh(m).is_ok() {
+        *refreshes += 1;
     }
 }
 
@@ -312,12 +355,14 @@ impl ActiveSetSystem {
     }
 
     /// The iterative backend: the multigrid hierarchy of the elastic stiffness with the
-    /// parameters `amg`, and CG with at most `cg_max_iter` iterations per solve.
+    /// parameters `amg`, and CG with at most `cg_max_iter` iterations per solve; the hierarchy
+    /// follows the tangent once a solve takes more than `refresh_above` iterations.
     pub fn multigrid(
         l: &Lagrangian<'_>,
         solver: &str,
         amg: &AmgParams,
         cg_max_iter: usize,
+        refresh_above: usize,
     ) -> Result<Self, SolveError> {
         let basis = RowBasis::new(l.data.rows, l.n_dofs(), l.pattern(), solver)?;
         let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
@@ -349,6 +394,10 @@ impl ActiveSetSystem {
             col: vec![0.0; n],
             max_iter: cg_max_iter,
             iterations: 0,
+            refreshes: 0,
+            refresh_above,
+            tangent: Csr::default(),
+            last_iterations: 0,
             unconverged: 0,
             previous: Vec::new(),
         };
@@ -381,6 +430,7 @@ impl ActiveSetSystem {
         if let LinearBackend::Amg(it) = &mut self.backend {
             it.iterations = 0;
             it.unconverged = 0;
+            it.refreshes = 0;
         }
     }
 
@@ -424,6 +474,7 @@ impl ActiveSetSystem {
         let p = basis.pattern(l.pattern());
         let cp = p.col_ptr();
         // the tangent TᵀKT and the force Tᵀ∇E in the rows' coordinates (T = I: K and ∇E)
+        let k_dofs = k;
         let (k, grad): (&[f64], &[f64]) = if basis.is_identity() {
             (k, grad)
         } else {
@@ -470,9 +521,26 @@ impl ActiveSetSystem {
         match &mut self.backend {
             LinearBackend::Direct(chol) => chol.solve_columns(&mut x, nc),
             LinearBackend::Amg(it) => {
-                let IterativeSolve { amg, pcg, a, fill, scratch, col, previous, max_iter, iterations, unconverged } =
-                    &mut **it;
+                let IterativeSolve {
+                    amg,
+                    pcg,
+                    a,
+                    fill,
+                    scratch,
+                    col,
+                    previous,
+                    max_iter,
+                    iterations,
+                    unconverged,
+                    refreshes,
+                    refresh_above,
+                    tangent,
+                    last_iterations,
+                } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
+                if *last_iterations > *refresh_above {
+                    follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, refreshes);
+                }
                 let fixed: Vec<(usize, f64)> =
                     (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
                 let pre = FixedDofs { amg, basis, fixed: &fixed, scratch };
@@ -492,6 +560,7 @@ impl ActiveSetSystem {
                             message: format!("CG on the tangent: {e}"),
                         })?;
                     *iterations += report.iterations;
+                    *last_iterations = report.iterations;
                     *unconverged += !report.converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(col);
                     if c > 0 {
