@@ -146,6 +146,8 @@ pub struct IterativeSolve {
     /// The tangent in the dofs' own coordinates (when the rows' coordinates differ), for the
     /// hierarchy's refresh.
     tangent: Csr,
+    /// The values of the matrix of the last rebuild (empty: the elastic stiffness).
+    built_on: Vec<f64>,
     /// CG iterations of the last solve.
     last_iterations: usize,
     /// Solves that stopped at the budget before the tolerance.
@@ -187,7 +189,8 @@ impl Preconditioner for FixedDofs<'_> {
 /// coarse factor recomputed ([`SmoothedAggregation::refresh`]). With T = I the matrix is the
 /// system's `a` itself (the fixed dofs decoupled); otherwise the tangent in the dofs' own
 /// coordinates, `k` on L's `pattern`, which the preconditioner transforms around. A tangent
-/// whose coarse operator is not positive definite keeps the last hierarchy.
+/// that has not [`changed_enough`] since the last rebuild (`built_on`) or whose coarse
+/// operator is not positive definite keeps the last hierarchy.
 #[allow(clippy::too_many_arguments)]
 fn follow_the_tangent(
     amg: &mut SmoothedAggregation,
@@ -197,6 +200,7 @@ fn follow_the_tangent(
     pattern: &SymmetricPattern,
     k: &[f64],
     fill: &mut Vec<usize>,
+    built_on: &mut Vec<f64>,
     refreshes: &mut usize,
 ) {
     let m = if basis.is_identity() {
@@ -209,9 +213,30 @@ fn follow_the_tangent(
         }
         &*tangent
     };
+    if !changed_enough(built_on, &m.val) {
+        return;
+    }
     if amg.refresh(m).is_ok() {
         *refreshes += 1;
+        built_on.clear();
+        built_on.extend_from_slice(&m.val);
     }
+}
+
+/// A rebuild pays only when the tangent moved since the last one: by more than this fraction
+/// of its largest entry anywhere (an element entering or leaving the plastic set changes its
+/// entries by a fraction of the elastic moduli; a near-incompressible elastic tangent, which
+/// the rebuild cannot help, does not change at all).
+pub const REFRESH_CHANGE: f64 = 1e-2;
+
+/// Whether `now` differs from `before` (values on the same pattern; empty: never built on a
+/// tangent) by more than [`REFRESH_CHANGE`] of max |now|.
+fn changed_enough(before: &[f64], now: &[f64]) -> bool {
+    if before.len() != now.len() {
+        return true;
+    }
+    let scale = now.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    before.iter().zip(now).any(|(b, v)| (b - v).abs() > REFRESH_CHANGE * scale)
 }
 
 /// Positions of the entries of each row i in the columns j < i of a lower-triangular pattern,
@@ -397,6 +422,7 @@ impl ActiveSetSystem {
             refreshes: 0,
             refresh_above,
             tangent: Csr::default(),
+            built_on: Vec::new(),
             last_iterations: 0,
             unconverged: 0,
             previous: Vec::new(),
@@ -535,11 +561,12 @@ impl ActiveSetSystem {
                     refreshes,
                     refresh_above,
                     tangent,
+                    built_on,
                     last_iterations,
                 } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
                 if *last_iterations > *refresh_above {
-                    follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, refreshes);
+                    follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, built_on, refreshes);
                 }
                 let fixed: Vec<(usize, f64)> =
                     (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
