@@ -77,6 +77,22 @@ pub const SOLVE_WEIGHT: f64 = 10.0;
 /// 10.6k (0.36 s against 0.54 s).
 pub const AMG_COST_PER_NONZERO: f64 = 6e4;
 
+/// The cost rule of `auto`: the CG iterations of the multigrid Newton solve that
+/// [`AMG_COST_PER_NONZERO`] stands for (the default scene: 263 over 12 Newton steps, Newton's
+/// `cg_max_iter` docs), so that one CG iteration costs `AMG_COST_PER_NONZERO / 263` per nonzero.
+pub const AMG_CG_ITERATIONS_PER_SOLVE: f64 = 263.0;
+
+/// The CG iterations after which `auto`, having picked the multigrid, takes the direct path
+/// instead (theory §4.2): those whose cost, at [`AMG_CG_ITERATIONS_PER_SOLVE`] per multigrid
+/// estimate, equals the `direct` estimate of a whole solve. The rule sees the tangent through
+/// CG's iterations on it (the set-up saw only the elastic stiffness): a tangent the multigrid
+/// no longer approximates (perfect plasticity) spends the budget, and from then on the
+/// factorisation, estimated no dearer than what was spent, is used. At most twice the cost of
+/// the cheaper choice made with hindsight.
+pub fn direct_budget(direct: f64, stiffness_nonzeros: usize) -> f64 {
+    AMG_CG_ITERATIONS_PER_SOLVE * direct / (AMG_COST_PER_NONZERO * stiffness_nonzeros as f64)
+}
+
 /// How much dearer a multigrid solve gets as ν → ½: `sqrt(max(1, (λ/μ)/1.5))`, λ/μ = 2ν/(1 − 2ν)
 /// (1 up to ν = 0.3). The multigrid is built on the rigid-body modes, not on the nearly
 /// divergence-free modes that soften as λ/μ grows, so CG's iterations grow like the square
@@ -124,6 +140,25 @@ pub enum LinearBackend {
     Amg(Box<IterativeSolve>),
 }
 
+impl LinearBackend {
+    /// The factor that solves this step's systems: the direct backend's, or `auto`'s reserve
+    /// once taken (then from this step on).
+    fn cholesky(&mut self) -> Option<&mut SparseCholesky> {
+        match self {
+            LinearBackend::Direct(chol) => Some(chol),
+            LinearBackend::Amg(it) => {
+                if let Some((_, budget)) = &it.reserve
+                    && !it.switched
+                    && it.spent as f64 >= *budget
+                {
+                    it.switched = true;
+                }
+                if it.switched { it.reserve.as_mut().map(|(c, _)| &mut **c) } else { None }
+            }
+        }
+    }
+}
+
 /// CG preconditioned by smoothed aggregation of the elastic stiffness (module docs).
 pub struct IterativeSolve {
     amg: SmoothedAggregation,
@@ -150,8 +185,15 @@ pub struct IterativeSolve {
     built_on: Vec<f64>,
     /// CG iterations of the last solve.
     last_iterations: usize,
+    /// CG iterations since the set-up (kept across warm solves, unlike `iterations`).
+    spent: usize,
     /// Solves that stopped at the budget before the tolerance.
     pub unconverged: usize,
+    /// `auto`'s direct path in reserve, analysed, and the CG iterations after which it is taken
+    /// ([`direct_budget`]); taken once, it solves every later system.
+    reserve: Option<(Box<SparseCholesky>, f64)>,
+    /// The reserve has been taken.
+    pub switched: bool,
     /// The last solutions of the extras' columns (W = K⁻¹(−K δ_V)): they change little from
     /// one Newton step to the next and start the next CG solves.
     previous: Vec<f64>,
@@ -423,11 +465,23 @@ impl ActiveSetSystem {
             refresh_above,
             tangent: Csr::default(),
             built_on: Vec::new(),
+            reserve: None,
+            switched: false,
             last_iterations: 0,
+            spent: 0,
             unconverged: 0,
             previous: Vec::new(),
         };
         Ok(Self::with(l, solver, basis, LinearBackend::Amg(Box::new(iterative))))
+    }
+
+    /// `auto`'s reserve for the multigrid backend: the direct backend of `direct` (the same
+    /// L), taken once CG has spent `budget` iterations ([`direct_budget`]).
+    pub fn keep_in_reserve(&mut self, direct: ActiveSetSystem, budget: f64) {
+        if let (LinearBackend::Amg(it), LinearBackend::Direct(chol)) = (&mut self.backend, direct.backend) {
+            it.reserve = Some((chol, budget));
+        }
+        self.symbolic_analyses += direct.symbolic_analyses;
     }
 
     /// The system for the rows' coordinates `basis` on `backend`.
@@ -517,7 +571,7 @@ impl ActiveSetSystem {
                 self.work[q] = 0.0;
             }
         }
-        if let LinearBackend::Direct(chol) = &mut self.backend {
+        if let Some(chol) = self.backend.cholesky() {
             chol.factorise(&self.work).in_solver(&self.solver)?;
             self.factorisations += 1;
         }
@@ -544,8 +598,12 @@ impl ActiveSetSystem {
                 xcol[s] = self.work[cp[s]] * dcol[s];
             }
         }
+        let switched = matches!(&self.backend, LinearBackend::Amg(it) if it.switched);
         match &mut self.backend {
             LinearBackend::Direct(chol) => chol.solve_columns(&mut x, nc),
+            LinearBackend::Amg(it) if switched => {
+                it.reserve.as_mut().expect("taken only when kept").0.solve_columns(&mut x, nc)
+            }
             LinearBackend::Amg(it) => {
                 let IterativeSolve {
                     amg,
@@ -563,6 +621,8 @@ impl ActiveSetSystem {
                     tangent,
                     built_on,
                     last_iterations,
+                    spent,
+                    ..
                 } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
                 if *last_iterations > *refresh_above {
@@ -587,6 +647,7 @@ impl ActiveSetSystem {
                             message: format!("CG on the tangent: {e}"),
                         })?;
                     *iterations += report.iterations;
+                    *spent += report.iterations;
                     *last_iterations = report.iterations;
                     *unconverged += !report.converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(col);

@@ -40,7 +40,7 @@
 //! Once the active set and the plastic set settle, convergence is quadratic.
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
-use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper};
+use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_budget, direct_is_cheaper};
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
 use crate::kh_projection::MetricProjection;
@@ -656,8 +656,9 @@ impl<'a> Run<'a> {
                 if cheaper || l.rigid_body_modes().is_none() {
                     direct
                 } else {
+                    // the reserve: taken once CG on the tangent has spent the direct estimate
                     let mut amg = multigrid(timer)?;
-                    amg.symbolic_analyses += direct.symbolic_analyses;
+                    amg.keep_in_reserve(direct, direct_budget(d, l.pattern().nnz()));
                     amg
                 }
             }
@@ -750,7 +751,11 @@ impl<'a> Run<'a> {
         let (s, w) = (&self.state, &self.work);
         let step = match &mut self.system {
             Systems::Serial(system) => {
-                let phase = if system.iterative().is_some() { "CG solves" } else { "factorisation and solves" };
+                let phase = if system.iterative().is_some_and(|it| !it.switched) {
+                    "CG solves"
+                } else {
+                    "factorisation and solves"
+                };
                 timer.time(phase, || system.step(l, &w.k, &s.active, &w.grad, &w.gap, cg_tol))?
             }
             Systems::Distributed(system) => {
@@ -905,6 +910,7 @@ impl<'a> Run<'a> {
                     put("pcg_iterations", iterative.iterations);
                     put("pcg_unconverged", iterative.unconverged);
                     put("multigrid_refreshes", iterative.refreshes);
+                    put("auto_switched_to_direct", iterative.switched as usize);
                 }
             }
             Systems::Distributed(d) => {
