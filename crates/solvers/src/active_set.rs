@@ -18,9 +18,10 @@
 //!
 //! The systems are solved by one of two [`LinearBackend`]s: a sparse Cholesky factorisation of
 //! every tangent (symbolic analysis once), or conjugate gradients preconditioned by a
-//! smoothed-aggregation multigrid of the *elastic* stiffness, built once and reused for every
-//! tangent (the fixed dofs are handled by the preconditioner as a diagonal block), to a
-//! relative tolerance the caller sets per step (inexact Newton).
+//! smoothed-aggregation multigrid of the elastic stiffness, built once, whose values follow the
+//! tangent when CG slows down on it (its aggregates kept; the fixed dofs are handled by the
+//! preconditioner as a diagonal block), to a relative tolerance the caller sets per step
+//! (inexact Newton).
 
 use crate::linear::{self, InSolver, lower, near_null_space};
 use crate::row_basis::RowBasis;
@@ -76,6 +77,22 @@ pub const SOLVE_WEIGHT: f64 = 10.0;
 /// 10.6k (0.36 s against 0.54 s).
 pub const AMG_COST_PER_NONZERO: f64 = 6e4;
 
+/// The cost rule of `auto`: the CG iterations of the multigrid Newton solve that
+/// [`AMG_COST_PER_NONZERO`] stands for (the default scene: 263 over 12 Newton steps, Newton's
+/// `cg_max_iter` docs), so that one CG iteration costs `AMG_COST_PER_NONZERO / 263` per nonzero.
+pub const AMG_CG_ITERATIONS_PER_SOLVE: f64 = 263.0;
+
+/// The CG iterations after which `auto`, having picked the multigrid, takes the direct path
+/// instead (theory §4.2): those whose cost, at [`AMG_CG_ITERATIONS_PER_SOLVE`] per multigrid
+/// estimate, equals the `direct` estimate of a whole solve. The rule sees the tangent through
+/// CG's iterations on it (the set-up saw only the elastic stiffness): a tangent the multigrid
+/// no longer approximates (perfect plasticity) spends the budget, and from then on the
+/// factorisation, estimated no dearer than what was spent, is used. At most twice the cost of
+/// the cheaper choice made with hindsight.
+pub fn direct_budget(direct: f64, stiffness_nonzeros: usize) -> f64 {
+    AMG_CG_ITERATIONS_PER_SOLVE * direct / (AMG_COST_PER_NONZERO * stiffness_nonzeros as f64)
+}
+
 /// How much dearer a multigrid solve gets as ν → ½: `sqrt(max(1, (λ/μ)/1.5))`, λ/μ = 2ν/(1 − 2ν)
 /// (1 up to ν = 0.3). The multigrid is built on the rigid-body modes, not on the nearly
 /// divergence-free modes that soften as λ/μ grows, so CG's iterations grow like the square
@@ -123,6 +140,25 @@ pub enum LinearBackend {
     Amg(Box<IterativeSolve>),
 }
 
+impl LinearBackend {
+    /// The factor that solves this step's systems: the direct backend's, or `auto`'s reserve
+    /// once taken (then from this step on).
+    fn cholesky(&mut self) -> Option<&mut SparseCholesky> {
+        match self {
+            LinearBackend::Direct(chol) => Some(chol),
+            LinearBackend::Amg(it) => {
+                if let Some((_, budget)) = &it.reserve
+                    && !it.switched
+                    && it.spent as f64 >= *budget
+                {
+                    it.switched = true;
+                }
+                if it.switched { it.reserve.as_mut().map(|(c, _)| &mut **c) } else { None }
+            }
+        }
+    }
+}
+
 /// CG preconditioned by smoothed aggregation of the elastic stiffness (module docs).
 pub struct IterativeSolve {
     amg: SmoothedAggregation,
@@ -137,8 +173,27 @@ pub struct IterativeSolve {
     pub max_iter: usize,
     /// CG iterations so far.
     pub iterations: usize,
+    /// Rebuilds of the hierarchy's values on the tangent so far.
+    pub refreshes: usize,
+    /// The hierarchy follows the tangent (its values rebuilt on it, the aggregates kept) when
+    /// the last CG solve took more than this many iterations (Newton's `amg_refresh_cg`).
+    pub refresh_above: usize,
+    /// The tangent in the dofs' own coordinates (when the rows' coordinates differ), for the
+    /// hierarchy's refresh.
+    tangent: Csr,
+    /// The values of the matrix of the last rebuild (empty: the elastic stiffness).
+    built_on: Vec<f64>,
+    /// CG iterations of the last solve.
+    last_iterations: usize,
+    /// CG iterations since the set-up (kept across warm solves, unlike `iterations`).
+    spent: usize,
     /// Solves that stopped at the budget before the tolerance.
     pub unconverged: usize,
+    /// `auto`'s direct path in reserve, analysed, and the CG iterations after which it is taken
+    /// ([`direct_budget`]); taken once, it solves every later system.
+    reserve: Option<(Box<SparseCholesky>, f64)>,
+    /// The reserve has been taken.
+    pub switched: bool,
     /// The last solutions of the extras' columns (W = K⁻¹(−K δ_V)): they change little from
     /// one Newton step to the next and start the next CG solves.
     previous: Vec<f64>,
@@ -169,6 +224,61 @@ impl Preconditioner for FixedDofs<'_> {
             z[s] = r[s] / d;
         }
     }
+}
+
+/// The multigrid rebuilt on the tangent (theory §4.2): the aggregates and tentative
+/// prolongators of the elastic hierarchy kept, the smoothed prolongators, Galerkin operators and
+/// coarse factor recomputed ([`SmoothedAggregation::refresh`]). With T = I the matrix is the
+/// system's `a` itself (the fixed dofs decoupled); otherwise the tangent in the dofs' own
+/// coordinates, `k` on L's `pattern`, which the preconditioner transforms around. A tangent
+/// that has not [`changed_enough`] since the last rebuild (`built_on`) or whose coarse
+/// operator is not positive definite keeps the last hierarchy.
+#[allow(clippy::too_many_arguments)]
+fn follow_the_tangent(
+    amg: &mut SmoothedAggregation,
+    basis: &RowBasis,
+    a: &Csr,
+    tangent: &mut Csr,
+    pattern: &SymmetricPattern,
+    k: &[f64],
+    fill: &mut Vec<usize>,
+    built_on: &mut Vec<f64>,
+    refreshes: &mut usize,
+) {
+    let m = if basis.is_identity() {
+        a
+    } else {
+        if tangent.nrows == 0 {
+            *tangent = Csr::from_symmetric_lower(lower(pattern), k);
+        } else {
+            tangent.assign_symmetric_lower(lower(pattern), k, fill);
+        }
+        &*tangent
+    };
+    if !changed_enough(built_on, &m.val) {
+        return;
+    }
+    if amg.refresh(m).is_ok() {
+        *refreshes += 1;
+        built_on.clear();
+        built_on.extend_from_slice(&m.val);
+    }
+}
+
+/// A rebuild pays only when the tangent moved since the last one: by more than this fraction
+/// of its largest entry anywhere (an element entering or leaving the plastic set changes its
+/// entries by a fraction of the elastic moduli; a near-incompressible elastic tangent, which
+/// the rebuild cannot help, does not change at all).
+pub const REFRESH_CHANGE: f64 = 1e-2;
+
+/// Whether `now` differs from `before` (values on the same pattern; empty: never built on a
+/// tangent) by more than [`REFRESH_CHANGE`] of max |now|.
+fn changed_enough(before: &[f64], now: &[f64]) -> bool {
+    if before.len() != now.len() {
+        return true;
+    }
+    let scale = now.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    before.iter().zip(now).any(|(b, v)| (b - v).abs() > REFRESH_CHANGE * scale)
 }
 
 /// Positions of the entries of each row i in the columns j < i of a lower-triangular pattern,
@@ -335,12 +445,14 @@ impl ActiveSetSystem {
     }
 
     /// The iterative backend: the multigrid hierarchy of the elastic stiffness with the
-    /// parameters `amg`, and CG with at most `cg_max_iter` iterations per solve.
+    /// parameters `amg`, and CG with at most `cg_max_iter` iterations per solve; the hierarchy
+    /// follows the tangent once a solve takes more than `refresh_above` iterations.
     pub fn multigrid(
         l: &Lagrangian<'_>,
         solver: &str,
         amg: &AmgParams,
         cg_max_iter: usize,
+        refresh_above: usize,
     ) -> Result<Self, SolveError> {
         let basis = RowBasis::new(l.data.rows, l.n_dofs(), l.pattern(), solver)?;
         let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
@@ -372,10 +484,27 @@ impl ActiveSetSystem {
             col: vec![0.0; n],
             max_iter: cg_max_iter,
             iterations: 0,
+            refreshes: 0,
+            refresh_above,
+            tangent: Csr::default(),
+            built_on: Vec::new(),
+            reserve: None,
+            switched: false,
+            last_iterations: 0,
+            spent: 0,
             unconverged: 0,
             previous: Vec::new(),
         };
         Ok(Self::with(l, solver, basis, LinearBackend::Amg(Box::new(iterative))))
+    }
+
+    /// `auto`'s reserve for the multigrid backend: the direct backend of `direct` (the same
+    /// L), taken once CG has spent `budget` iterations ([`direct_budget`]).
+    pub fn keep_in_reserve(&mut self, direct: ActiveSetSystem, budget: f64) {
+        if let (LinearBackend::Amg(it), LinearBackend::Direct(chol)) = (&mut self.backend, direct.backend) {
+            it.reserve = Some((chol, budget));
+        }
+        self.symbolic_analyses += direct.symbolic_analyses;
     }
 
     /// The system for the rows' coordinates `basis` on `backend`.
@@ -404,6 +533,7 @@ impl ActiveSetSystem {
         if let LinearBackend::Amg(it) = &mut self.backend {
             it.iterations = 0;
             it.unconverged = 0;
+            it.refreshes = 0;
         }
     }
 
@@ -447,6 +577,7 @@ impl ActiveSetSystem {
         let p = basis.pattern(l.pattern());
         let cp = p.col_ptr();
         // the tangent TᵀKT and the force Tᵀ∇E in the rows' coordinates (T = I: K and ∇E)
+        let k_dofs = k;
         let (k, grad): (&[f64], &[f64]) = if basis.is_identity() {
             (k, grad)
         } else {
@@ -463,7 +594,7 @@ impl ActiveSetSystem {
                 self.work[q] = 0.0;
             }
         }
-        if let LinearBackend::Direct(chol) = &mut self.backend {
+        if let Some(chol) = self.backend.cholesky() {
             chol.factorise(&self.work).in_solver(&self.solver)?;
             self.factorisations += 1;
         }
@@ -490,12 +621,36 @@ impl ActiveSetSystem {
                 xcol[s] = self.work[cp[s]] * dcol[s];
             }
         }
+        let switched = matches!(&self.backend, LinearBackend::Amg(it) if it.switched);
         match &mut self.backend {
             LinearBackend::Direct(chol) => chol.solve_columns(&mut x, nc),
+            LinearBackend::Amg(it) if switched => {
+                it.reserve.as_mut().expect("taken only when kept").0.solve_columns(&mut x, nc)
+            }
             LinearBackend::Amg(it) => {
-                let IterativeSolve { amg, pcg, a, fill, scratch, col, previous, max_iter, iterations, unconverged } =
-                    &mut **it;
+                let IterativeSolve {
+                    amg,
+                    pcg,
+                    a,
+                    fill,
+                    scratch,
+                    col,
+                    previous,
+                    max_iter,
+                    iterations,
+                    unconverged,
+                    refreshes,
+                    refresh_above,
+                    tangent,
+                    built_on,
+                    last_iterations,
+                    spent,
+                    ..
+                } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
+                if *last_iterations > *refresh_above {
+                    follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, built_on, refreshes);
+                }
                 let fixed: Vec<(usize, f64)> =
                     (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
                 let pre = FixedDofs { amg, basis, fixed: &fixed, scratch };
@@ -515,6 +670,8 @@ impl ActiveSetSystem {
                             message: format!("CG on the tangent: {e}"),
                         })?;
                     *iterations += report.iterations;
+                    *spent += report.iterations;
+                    *last_iterations = report.iterations;
                     *unconverged += !report.converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(col);
                     if c > 0 {

@@ -40,7 +40,9 @@
 //! Once the active set and the plastic set settle, convergence is quadratic.
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
-use crate::active_set::{AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_is_cheaper, touch_loaded_extras};
+use crate::active_set::{
+    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_budget, direct_is_cheaper, touch_loaded_extras,
+};
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
 use crate::kh_projection::MetricProjection;
@@ -101,6 +103,13 @@ pub struct Newton {
     /// `strength_threshold`, `smoother_degree`, `smoother_range`, `eigen_steps`, `coarse_size`,
     /// `max_levels`; defaults those of [`AmgParams`]).
     pub amg: AmgParams,
+    /// The multigrid follows the tangent (theory §4.2): when a CG solve took more than this
+    /// many iterations, the next one's hierarchy is rebuilt on the current tangent, its
+    /// aggregates kept (0: every step; a large number: never, the elastic hierarchy throughout).
+    /// The elastic hierarchy takes 20–30 iterations on elastic tangents (module docs of
+    /// `amg`); on a perfectly plastic P2 strip punch (56 896 dofs, h = 0) it took 216 per solve,
+    /// the refreshed one 71 with this default (`docs/plastic_tangent.md`).
+    pub amg_refresh_cg: usize,
     /// Iterations without the KKT residual falling below half its best before Newton is
     /// declared stalled and falls back on the penalty method (theory §4.2.1; 0: never).
     /// Newton near the solution gains orders of magnitude per step: 8 steps without halving
@@ -202,6 +211,7 @@ impl Default for Newton {
             cg_forcing: 1e-2,
             cg_max_iter: 2000,
             amg: AmgParams::default(),
+            amg_refresh_cg: AMG_REFRESH_CG,
             stall_window: 8,
             max_fallbacks: 2,
             fallback_max_iter: 50,
@@ -211,6 +221,10 @@ impl Default for Newton {
 }
 
 pub use crate::armijo::{ARMIJO, SLOPE_ROUND_OFF};
+
+/// The default of `amg_refresh_cg`: above the 20–30 iterations the elastic hierarchy takes on
+/// elastic tangents, so that only tangents it no longer approximates trigger a rebuild.
+pub const AMG_REFRESH_CG: usize = 40;
 /// Steps of the elastic phase (full steps with the elastic tangent while the contact set
 /// settles) before it ends anyway and the line search takes over. The punch settles in 2–4;
 /// with several obstacles at the same nodes (theory §8) undamped active-set steps can cycle,
@@ -627,7 +641,9 @@ impl<'a> Run<'a> {
         let nu = l.data.elasticity.poisson;
         let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs, nu);
         let multigrid = |timer: &mut PhaseTimer| {
-            timer.time("multigrid set-up", || ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter))
+            timer.time("multigrid set-up", || {
+                ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter, settings.amg_refresh_cg)
+            })
         };
         Ok(match linear {
             LinearSolver::Amg => multigrid(timer)?,
@@ -642,8 +658,9 @@ impl<'a> Run<'a> {
                 if cheaper || l.rigid_body_modes().is_none() {
                     direct
                 } else {
+                    // the reserve: taken once CG on the tangent has spent the direct estimate
                     let mut amg = multigrid(timer)?;
-                    amg.symbolic_analyses += direct.symbolic_analyses;
+                    amg.keep_in_reserve(direct, direct_budget(d, l.pattern().nnz()));
                     amg
                 }
             }
@@ -720,7 +737,11 @@ impl<'a> Run<'a> {
         let (s, w) = (&self.state, &self.work);
         let step = match &mut self.system {
             Systems::Serial(system) => {
-                let phase = if system.iterative().is_some() { "CG solves" } else { "factorisation and solves" };
+                let phase = if system.iterative().is_some_and(|it| !it.switched) {
+                    "CG solves"
+                } else {
+                    "factorisation and solves"
+                };
                 timer.time(phase, || system.step(l, &w.k, &s.active, &w.grad, &w.gap, cg_tol))?
             }
             Systems::Distributed(system) => {
@@ -875,6 +896,8 @@ impl<'a> Run<'a> {
                 if let Some(iterative) = sys.iterative() {
                     put("pcg_iterations", iterative.iterations);
                     put("pcg_unconverged", iterative.unconverged);
+                    put("multigrid_refreshes", iterative.refreshes);
+                    put("auto_switched_to_direct", iterative.switched as usize);
                 }
             }
             Systems::Distributed(d) => {

@@ -308,17 +308,19 @@ impl SmoothedAggregation {
     /// Takes new values of the matrix (e.g. the next Newton tangent; same size, same
     /// near-nullspace): keeps the aggregates and tentative prolongators, recomputes ρ(D⁻¹A),
     /// the smoothed prolongators, the Galerkin products and the coarse factorisation.
+    /// On an error (a coarse matrix that is not positive definite, say) the hierarchy is left
+    /// as it was.
     pub fn refresh(&mut self, a: &Csr) -> Result<(), AmgError> {
         check_square(a, self.n())?;
         let mut a = a.clone();
-        let old = std::mem::take(&mut self.levels);
-        for (l, lv) in old.into_iter().enumerate() {
-            let (level, a_c) = Level::build(a, lv.p_tent, l, &self.params)?;
-            self.levels.push(level);
+        let mut levels = Vec::with_capacity(self.levels.len());
+        for (l, lv) in self.levels.iter().enumerate() {
+            let (level, a_c) = Level::build(a, lv.p_tent.clone(), l, &self.params)?;
+            levels.push(level);
             a = a_c;
         }
-        let coarse = factorise_coarse(&a, self.levels.len())?;
-        self.coarse_a = a;
+        let coarse = factorise_coarse(&a, levels.len())?;
+        (self.levels, self.coarse_a) = (levels, a);
         let work = self.work.get_mut().unwrap_or_else(|e| e.into_inner());
         work.coarse = coarse;
         Ok(())
@@ -854,6 +856,38 @@ mod tests {
         let rho = spectral_radius(&a, &vec![0.5; n], 12);
         let exact = 1.0 + (std::f64::consts::PI / (n as f64 + 1.0)).cos();
         assert!(rho <= exact * (1.0 + 1e-12) && rho > 0.95 * exact, "{rho} vs {exact}");
+    }
+
+    #[test]
+    fn a_refreshed_hierarchy_follows_its_matrix_and_a_failed_refresh_keeps_it() {
+        let (a, nns) = grid_problem(10, 10, 6);
+        let params = AmgParams { coarse_size: 50, ..AmgParams::default() };
+        let mut amg = SmoothedAggregation::new(&a, &nns, &params).unwrap();
+        assert!(amg.levels.len() >= 2, "{:?}", amg.level_info());
+        let r: Vec<f64> = (0..a.nrows).map(pseudo_random).collect();
+        let mut z1 = vec![0.0; a.nrows];
+        amg.apply(&r, &mut z1);
+        // the cycle is linear in A⁻¹'s scale: on 2A (same aggregates) it is exactly half, up to
+        // round-off (D⁻¹A, ρ and the Chebyshev polynomial are unchanged; every level's
+        // operator and the coarse factor are doubled, which binary rounding leaves exact)
+        let mut a2 = a.clone();
+        a2.val.iter_mut().for_each(|v| *v *= 2.0);
+        amg.refresh(&a2).unwrap();
+        let mut z2 = vec![0.0; a.nrows];
+        amg.apply(&r, &mut z2);
+        let scale = z1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = z1.iter().zip(&z2).map(|(p, q)| (p - 2.0 * q).abs()).fold(0.0, f64::max);
+        // Lanczos on the doubled matrix rounds differently: 1e-10 relative is far above that
+        assert!(worst <= 1e-10 * scale, "{worst} against {scale}");
+        // a matrix with a non-positive diagonal is refused, and the hierarchy stays that of 2A
+        let mut bad = a2.clone();
+        let q = bad.ptr[7] + bad.idx[bad.ptr[7]..bad.ptr[8]].iter().position(|&c| c == 7).unwrap();
+        bad.val[q] = -1.0;
+        let e = amg.refresh(&bad).unwrap_err();
+        assert!(matches!(e, AmgError::NonPositiveDiagonal { level: 0, row: 7, .. }), "{e}");
+        let mut z3 = vec![0.0; a.nrows];
+        amg.apply(&r, &mut z3);
+        assert_eq!(z2, z3);
     }
 
     #[test]
