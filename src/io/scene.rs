@@ -233,7 +233,8 @@ impl Scene {
         let element = self.discretisation.unwrap_or_else(|| Box::new(P1::default()));
         let element = element.build(mesh, &self.dirichlet)?;
         element.dofs().check_rigid_motions(element.mesh())?;
-        let problem = DiscreteProblem::new(element, self.material, self.yield_surface, self.obstacle, &self.load)?;
+        let problem = DiscreteProblem::new(element, self.material, self.yield_surface, self.obstacle, &self.load)?
+            .with_supports(&self.dirichlet, &self.load)?;
         Ok((problem, self.solver))
     }
 
