@@ -113,25 +113,22 @@ impl Dirichlet {
                 ));
             }
             crate::error::check::bounded_all(path, "value", v)?;
-            if v.len() == 3 && n != 3 {
-                if let Some(c) = (0..3).find(|&c| v[c] != 0.0 && !self.components.iter().any(|k| k.index() == c)) {
-                    return Err(ParameterError::new(
-                        format!("{field}[{c}]"),
-                        crate::error::number(v[c]),
-                        format!(
-                            "prescribes component {:?}, which this entry does not constrain (components = {:?}): \
+            let unconstrained = |c: &usize| v[*c] != 0.0 && !self.components.iter().any(|k| k.index() == *c);
+            if let Some(c) = (0..3).filter(|_| v.len() == 3 && n != 3).find(unconstrained) {
+                return Err(ParameterError::new(
+                    format!("{field}[{c}]"),
+                    crate::error::number(v[c]),
+                    format!(
+                        "prescribes component {:?}, which this entry does not constrain (components = {:?}): \
                              add it to `components`, or set it to 0",
-                            ["x", "y", "z"][c],
-                            self.components
-                        ),
-                    ));
-                }
+                        ["x", "y", "z"][c],
+                        self.components
+                    ),
+                ));
             }
         }
-        if let Some(name) = &self.name {
-            if name.trim().is_empty() {
-                return Err(ParameterError::new(join(path, "name"), format!("{name:?}"), "must not be empty"));
-            }
+        if let Some(name) = self.name.as_ref().filter(|n| n.trim().is_empty()) {
+            return Err(ParameterError::new(join(path, "name"), format!("{name:?}"), "must not be empty"));
         }
         Ok(())
     }
