@@ -455,6 +455,7 @@ fn base_scenes() -> Vec<(&'static str, toml::Table)> {
         tiny("strip_punch.toml", [8, 1, 4]),
         tiny("circular_punch.toml", [4, 4, 3]),
         tiny("indentation.toml", [4, 4, 2]),
+        tiny("tensile_bar.toml", [2, 1, 1]),
     ];
     set(&mut scenes[5].1, "load_path.substeps", toml::Value::Integer(1));
     scenes
