@@ -177,6 +177,16 @@ impl Scene {
         if !factor.is_finite() {
             return Err(ParameterError::new(field, factor, "must be finite").into());
         }
+        // the prescribed displacements and the loads on u scale too (theory §14)
+        let scaled_dirichlet = self.dirichlet.iter().enumerate().filter_map(|(i, d)| {
+            let v = d.value.as_ref()?.iter().map(|x| x * factor).collect::<Vec<_>>();
+            Some(d.clone().with_value(v).validate(&format!("dirichlet[{i}]")))
+        });
+        let scaled_loads = self.load.iter().enumerate().map(|(i, l)| l.scaled(factor).validate(&format!("load[{i}]")));
+        if let Some(Err(e)) = scaled_dirichlet.chain(scaled_loads).find(Result::is_err) {
+            let message = format!("at this load factor {} = {} {}", e.field, e.value, e.requirement);
+            return Err(ParameterError::new(field, factor, message).into());
+        }
         if factor == 1.0 || self.obstacle.is_empty() {
             return Ok(());
         }

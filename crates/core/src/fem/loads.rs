@@ -64,11 +64,13 @@ impl Load {
 
 /// The consistent nodal forces of a traction `traction(n)` (n the facet's outward unit normal),
 /// constant on each facet selected by `on`, through `add(node, force, share)` (`path` names the
-/// load). A nonzero traction that lands on no free dof is an error on `{path}.on`.
+/// load, `what` its value). A nonzero traction that lands on no free dof is an error on
+/// `{path}.on`.
 fn facet_loads(
     mesh: &TetMesh,
     on: &Region,
     path: &str,
+    what: &str,
     add: &mut impl FnMut(usize, [f64; 3], f64) -> bool,
     traction: impl Fn([f64; 3]) -> [f64; 3],
 ) -> Result<(), SceneError> {
@@ -105,7 +107,7 @@ fn facet_loads(
         return Err(SceneError::Region {
             field,
             message: format!(
-                "the load acts on {n_facets} facet(s) whose nodes are all fixed by the [[dirichlet]] conditions in \
+                "{what} acts on {n_facets} facet(s) whose nodes are all fixed by the [[dirichlet]] conditions in \
                  every loaded component: the load would do nothing; load facets that are free to move, or release \
                  them"
             ),
@@ -138,11 +140,15 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
     for (i, load) in loads.iter().enumerate() {
         let path = format!("load[{i}]");
         match load {
-            Load::Traction { on, t } => facet_loads(mesh, on, &path, &mut add, |_| *t)?,
+            Load::Traction { on, t } => {
+                facet_loads(mesh, on, &path, &format!("the traction t = {t:?}"), &mut add, |_| *t)?
+            }
             // the boundary facets are oriented outward (TetMesh: each is a face of exactly one
             // positively oriented tetrahedron, its vertices ordered so that (b − a) × (c − a)
             // points away from the tetrahedron's fourth vertex)
-            Load::Pressure { on, p } => facet_loads(mesh, on, &path, &mut add, |n| n.map(|x| -p * x))?,
+            Load::Pressure { on, p } => {
+                facet_loads(mesh, on, &path, &format!("the pressure p = {p:?}"), &mut add, |n| n.map(|x| -p * x))?
+            }
             Load::BodyForce { b } => {
                 for (e, tet) in mesh.tets.iter().enumerate() {
                     let vol = mesh.volume(e);
