@@ -239,6 +239,11 @@ fn print_summary(s: &Summary) {
             rows.push((format!("  {prefix}{q}"), shown));
         }
     }
+    // each support's reaction (theory §14)
+    for (k, r) in &s.reactions {
+        let v = |x: [f64; 3]| format!("[{:.6e}, {:.6e}, {:.6e}]", x[0], x[1], x[2]);
+        rows.push((format!("reaction {k}"), format!("force {}, moment {}", v(r.force), v(r.moment))));
+    }
     rows.extend([
         ("contact nodes".into(), format!("{} of {}", s.contact_nodes, s.contact_rows)),
         ("contact radius".into(), format!("{:.4}", s.contact_radius)),

@@ -93,6 +93,11 @@ on = { box = { min = [-1.0, -1.0, -1.0], max = [2.0, 2.0, 0.0] } }
     scenes.push(("inline mesh".into(), toml::from_str(inline).unwrap()));
     scenes.push(("hertz".into(), example("hertz.toml")));
     scenes.push(("homogeneous".into(), example("homogeneous.toml")));
+    // supports (issue 28): a prescribed displacement, a pressure
+    let mut t = example("tensile_bar.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([2, 1, 1]).unwrap());
+    set(&mut t, "load", table("v = [ { type = \"pressure\", on = { group = \"ymax\" }, p = 0.5 } ]"));
+    scenes.push(("tensile bar with a pressure".into(), t));
     scenes
 }
 

@@ -23,7 +23,7 @@ fn scene_of(setup: &Setup) -> Scene {
         material: s.elasticity,
         yield_surface: s.stresses,
         dirichlet: s.dirichlet,
-        load: vec![],
+        load: s.loads,
         obstacle: s.obstacles,
         solver: None,
         load_path: None,

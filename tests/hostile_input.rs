@@ -455,6 +455,7 @@ fn base_scenes() -> Vec<(&'static str, toml::Table)> {
         tiny("strip_punch.toml", [8, 1, 4]),
         tiny("circular_punch.toml", [4, 4, 3]),
         tiny("indentation.toml", [4, 4, 2]),
+        tiny("tensile_bar.toml", [2, 1, 1]),
     ];
     set(&mut scenes[5].1, "load_path.substeps", toml::Value::Integer(1));
     scenes
@@ -644,4 +645,30 @@ fn mutated_example_scenes_fail_cleanly() {
     if let Err(e) = result {
         panic!("{e}");
     }
+}
+
+// ---- issue 28: supports ----
+
+/// The tensile bar with `edit` applied to its list of `[[dirichlet]]` entries.
+fn tensile_with(edit: impl FnOnce(&mut Vec<toml::Value>)) -> String {
+    let mut t = example("tensile_bar.toml");
+    set(&mut t, "mesh.cells", toml::Value::try_from([2, 1, 1]).unwrap());
+    edit(t.get_mut("dirichlet").and_then(|d| d.as_array_mut()).unwrap());
+    text(&t)
+}
+
+#[test]
+fn bad_supports_are_errors_naming_the_field_and_the_value() {
+    let grip = |v: &str| tensile_with(|d| drop(d[3].as_table_mut().unwrap().insert("value".into(), value(v))));
+    assert_rejected(&grip("[0.1, 0.2]"), &["dirichlet[3].value = [0.1, 0.2]", "has 2 entries"]);
+    assert_rejected(&grip("[0.1, 0.2, 0.0]"), &["dirichlet[3].value[1] = 0.2", "does not constrain", "\"y\""]);
+    assert_rejected(&grip("[\"a\"]"), &["dirichlet[3].value", "\"a\""]);
+    let named = tensile_with(|d| drop(d[3].as_table_mut().unwrap().insert("name".into(), value("\" \""))));
+    assert_rejected(&named, &["dirichlet[3].name = \" \"", "must not be empty"]);
+    // without the roller on y = 0 the bar may slide along y: the existing check names it
+    assert_rejected(&tensile_with(|d| drop(d.remove(1))), &["dirichlet", "rigid-body motion free", "translation"]);
+    // a reaction that is not reported cannot be a plot axis
+    let mut t: toml::Table = toml::from_str(&tensile_with(|_| ())).unwrap();
+    set(&mut t, "load_path.plot", value("[\"factor\", \"clamp.Fx\"]"));
+    assert_rejected(&text(&t), &["load_path.plot", "clamp.Fx", "grip.Fx"]);
 }

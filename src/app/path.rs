@@ -26,9 +26,11 @@ use super::setup::{Loaded, Outcome, RunError};
 use crate::io::outdir::OutDir;
 use crate::io::scene::LoadPath;
 use crate::io::summary::{
-    CutAttempt, PathSummary, ResidualState, StepSummary, Summary, check_quantity, reported_quantities,
+    CutAttempt, PathSummary, ResidualState, StepSummary, Summary, check_quantity, reaction_names, reaction_quantities,
+    reported_quantities,
 };
 use saddle_core::{Evolution, Increment, Monitor, PathError, SceneError, SolveError, StepSolution};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write as _};
@@ -74,7 +76,7 @@ pub fn solve_and_write(
     let factors = path.step_factors();
     let names = loaded.problem.view().extra_names();
     let mut evolution = Evolution::new(&loaded.problem);
-    let mut series = Series::new(&known, &names);
+    let mut series = Series::new(&known, &names, &reaction_names(loaded.problem.view()));
     let mut steps: Vec<StepSummary> = Vec::new();
     let mut last: Option<(Summary, StepSolution)> = None;
     let mut failure: Option<(usize, String)> = None;
@@ -276,11 +278,13 @@ struct Series {
 }
 
 impl Series {
-    fn new(known: &[String], extras: &[String]) -> Self {
+    fn new(known: &[String], extras: &[String], reactions: &[String]) -> Self {
         let mut extras = extras.to_vec();
         extras.sort();
-        let quantities = known.iter().filter(|k| !extras.contains(k)).cloned().collect();
-        Self { columns: Columns { extras, quantities }, files: None }
+        let quantities = known.iter().filter(|k| !extras.contains(k) && !reactions.contains(k)).cloned().collect();
+        let mut reactions = reactions.to_vec();
+        reactions.sort();
+        Self { columns: Columns { extras, quantities, reactions }, files: None }
     }
 
     /// Appends the last of `steps` to both files (creating them at the first step).
@@ -324,6 +328,8 @@ const PVD_HEAD: &str = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" ve
 struct Columns {
     extras: Vec<String>,
     quantities: Vec<String>,
+    /// The reactions' components (`grip.Fx`, …), after `cuts`.
+    reactions: Vec<String>,
 }
 
 impl Columns {
@@ -336,13 +342,18 @@ impl Columns {
             steps.iter().flat_map(|s| s.contact.keys().cloned()).filter(|k| !extras.contains(k)).collect();
         quantities.sort();
         quantities.dedup();
-        Self { extras, quantities }
+        let mut reactions: Vec<String> =
+            steps.iter().flat_map(|s| reaction_quantities(&s.reactions).map(|(n, _)| n)).collect();
+        reactions.sort();
+        reactions.dedup();
+        Self { extras, quantities, reactions }
     }
 
     /// True when every value of `s` has its column.
     fn covers(&self, s: &StepSummary) -> bool {
         s.extras.keys().all(|k| self.extras.contains(k))
             && s.contact.keys().all(|k| self.extras.contains(k) || self.quantities.contains(k))
+            && reaction_quantities(&s.reactions).all(|(k, _)| self.reactions.contains(&k))
     }
 
     fn header(&self) -> String {
@@ -354,7 +365,11 @@ impl Columns {
             let _ = write!(out, ",{n}");
         }
         // after the columns of the first version of the table (theory §11.5)
-        out.push_str(",cuts\n");
+        out.push_str(",cuts");
+        for n in &self.reactions {
+            let _ = write!(out, ",{n}");
+        }
+        out.push('\n');
         out
     }
 
@@ -382,7 +397,12 @@ impl Columns {
         for n in &self.quantities {
             let _ = write!(out, ",{}", num(s.contact.get(n).copied()));
         }
-        let _ = writeln!(out, ",{}", s.cuts);
+        let _ = write!(out, ",{}", s.cuts);
+        let values: BTreeMap<String, f64> = reaction_quantities(&s.reactions).collect();
+        for n in &self.reactions {
+            let _ = write!(out, ",{}", num(values.get(n).copied()));
+        }
+        out.push('\n');
         out
     }
 }

@@ -14,7 +14,7 @@
 use super::setup::{RunError, default_solver, solver_by_type};
 use crate::io::outdir::{OutDir, OutError};
 use crate::io::scene::{Scene, element_by_type};
-use crate::io::summary::{Summary, check_quantity, reported_quantities};
+use crate::io::summary::{Summary, check_quantity, reaction_quantities, reported_quantities};
 use saddle_core::error::{check, number};
 use saddle_core::{DiscreteProblem, Evolution, SceneError, Silent, Solver};
 use std::collections::BTreeMap;
@@ -209,7 +209,9 @@ fn solve_points(
                     contact_nodes: s.contact_nodes,
                     plastic_elements: s.plastic_elements,
                     // an undetermined quantity (theory §11.3) is not reported: empty in the CSV
-                    quantities: s.contact.into_iter().filter(|(_, v)| v.is_finite()).collect(),
+                    quantities: (s.contact.into_iter().chain(reaction_quantities(&s.reactions)))
+                        .filter(|(_, v)| v.is_finite())
+                        .collect(),
                     wall_s: started.elapsed().as_secs_f64(),
                 }
             }

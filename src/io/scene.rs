@@ -177,6 +177,16 @@ impl Scene {
         if !factor.is_finite() {
             return Err(ParameterError::new(field, factor, "must be finite").into());
         }
+        // the prescribed displacements and the loads on u scale too (theory §14)
+        let scaled_dirichlet = self.dirichlet.iter().enumerate().filter_map(|(i, d)| {
+            let v = d.value.as_ref()?.iter().map(|x| x * factor).collect::<Vec<_>>();
+            Some(d.clone().with_value(v).validate(&format!("dirichlet[{i}]")))
+        });
+        let scaled_loads = self.load.iter().enumerate().map(|(i, l)| l.scaled(factor).validate(&format!("load[{i}]")));
+        if let Some(Err(e)) = scaled_dirichlet.chain(scaled_loads).find(Result::is_err) {
+            let message = format!("at this load factor {} = {} {}", e.field, e.value, e.requirement);
+            return Err(ParameterError::new(field, factor, message).into());
+        }
         if factor == 1.0 || self.obstacle.is_empty() {
             return Ok(());
         }
@@ -233,7 +243,8 @@ impl Scene {
         let element = self.discretisation.unwrap_or_else(|| Box::new(P1::default()));
         let element = element.build(mesh, &self.dirichlet)?;
         element.dofs().check_rigid_motions(element.mesh())?;
-        let problem = DiscreteProblem::new(element, self.material, self.yield_surface, self.obstacle, &self.load)?;
+        let problem = DiscreteProblem::new(element, self.material, self.yield_surface, self.obstacle, &self.load)?
+            .with_supports(&self.dirichlet, &self.load)?;
         Ok((problem, self.solver))
     }
 

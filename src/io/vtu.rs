@@ -32,7 +32,7 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
     let mean_stress: Vec<saddle_core::Sym> =
         sol.stress.sigma.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
     let plastic: Vec<u8> = sol.stress.plastic.chunks(k).map(|p| p.iter().any(|x| *x) as u8).collect();
-    let disp = element.nodal_vectors(&sol.u);
+    let disp = p.displacements(&sol.u);
     let mut gu = vec![0.0; l.n_dofs()];
     let mut gv = vec![0.0; l.n_extras()];
     l.data.rows.add_transpose(&sol.lambda, &mut gu, &mut gv);
@@ -59,7 +59,7 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
     // residual plastic strain
     if l.data.plasticity().is_some() {
         let mut eps = vec![saddle_core::Sym::zeros(); l.n_points()];
-        l.strain(&sol.u, &mut eps);
+        l.total_strain(&sol.u, &mut eps);
         let ep = plastic_strains(l.data.elasticity, &eps, sol);
         let mean: Vec<saddle_core::Sym> = ep.chunks(k).map(|s| s.iter().sum::<saddle_core::Sym>() / k as f64).collect();
         arrays.push(("cell", "plastic_strain", 6, f64_bytes(mean.iter().flat_map(to_vtk))));

@@ -8,6 +8,7 @@
 
 pub mod locking;
 
+use saddle_core::fem::supports::Reaction;
 use saddle_core::problem::tensor::von_mises;
 use saddle_core::{
     Discretisation, Elasticity, KktResiduals, MeshQuality, ObstacleReport, ProblemView, Solution, StopReason,
@@ -88,6 +89,10 @@ pub struct Summary {
     pub extras: BTreeMap<String, Option<f64>>,
     /// One entry per obstacle, in the scene's order.
     pub obstacles: Vec<ObstacleSummary>,
+    /// The reaction of every `[[dirichlet]]` entry (theory §14), keyed by its `name` or
+    /// `dirichlet[i]`: `force` = Σ(Bᵀσ − f) over the dofs it fixes, `moment` about the origin.
+    /// Empty under `mpirun`.
+    pub reactions: BTreeMap<String, Reaction>,
     /// Element shape statistics (aspect ratio: 1 for a regular tetrahedron).
     pub mesh_quality: MeshQuality,
     /// Wall time per solver phase.
@@ -179,6 +184,8 @@ pub struct StepSummary {
     pub extras: BTreeMap<String, Option<f64>>,
     /// Everything the obstacles report, with `imprint` (null when undetermined).
     pub contact: BTreeMap<String, f64>,
+    /// The supports' reactions, as in a one-step summary.
+    pub reactions: BTreeMap<String, Reaction>,
     /// Contact nodes.
     pub contact_nodes: usize,
     /// Plastic elements (a stress point of the element plastic in this step).
@@ -221,6 +228,7 @@ impl StepSummary {
             force: s.force,
             extras: s.extras.clone(),
             contact: s.contact.clone(),
+            reactions: s.reactions.clone(),
             contact_nodes: s.contact_nodes,
             plastic_elements: s.plastic_elements,
             plastic_points: s.plastic_points,
@@ -248,6 +256,7 @@ impl StepSummary {
             force: None,
             extras: BTreeMap::new(),
             contact: BTreeMap::new(),
+            reactions: BTreeMap::new(),
             contact_nodes: 0,
             plastic_elements: 0,
             plastic_points: 0,
@@ -261,12 +270,16 @@ impl StepSummary {
         }
     }
 
-    /// The quantity `name`: a reported one (`U`, `force`, `imprint`, …), an extra, or `factor`.
+    /// The quantity `name`: a reported one (`U`, `force`, `imprint`, …), an extra, a reaction's
+    /// component (`grip.Fx`, [`reaction_quantities`]), or `factor`.
     pub fn get(&self, name: &str) -> Option<f64> {
         if name == "factor" {
             return Some(self.factor);
         }
-        self.contact.get(name).copied().or_else(|| self.extras.get(name).copied().flatten()).filter(|v| v.is_finite())
+        (self.contact.get(name).copied())
+            .or_else(|| self.extras.get(name).copied().flatten())
+            .or_else(|| reaction_quantities(&self.reactions).find(|(n, _)| n == name).map(|(_, v)| v))
+            .filter(|v| v.is_finite())
     }
 }
 
@@ -328,6 +341,20 @@ pub struct ResidualState {
     pub max_von_mises: f64,
     /// The largest equivalent plastic strain.
     pub max_equivalent_plastic_strain: f64,
+}
+
+/// The components of the reactions as named quantities: `key.Fx`, `key.Fy`, `key.Fz`, `key.Mx`,
+/// `key.My`, `key.Mz` of every entry (a plot axis, a column of `load_path.csv`).
+pub fn reaction_quantities(reactions: &BTreeMap<String, Reaction>) -> impl Iterator<Item = (String, f64)> + '_ {
+    reactions.iter().flat_map(|(k, r)| {
+        let values = r.force.iter().chain(&r.moment);
+        ["Fx", "Fy", "Fz", "Mx", "My", "Mz"].into_iter().zip(values).map(move |(c, v)| (format!("{k}.{c}"), *v))
+    })
+}
+
+/// The reactions of a view's supports to the stresses `sigma`, keyed (theory §14).
+fn reactions_of(p: ProblemView<'_>, sigma: &[saddle_core::Sym]) -> BTreeMap<String, Reaction> {
+    p.reactions(sigma).into_iter().map(|r| (r.key.clone(), r)).collect()
 }
 
 /// What one obstacle reports, as written in `summary.json`: its name, type, contact set, and
@@ -445,10 +472,17 @@ fn contact_entries(p: ProblemView<'_>, reports: &[ObstacleReport]) -> BTreeMap<S
 pub fn reported_quantities(p: ProblemView<'_>) -> Vec<String> {
     let (u, extras, lambda) = (vec![0.0; p.l.n_dofs()], vec![0.0; p.l.n_extras()], vec![0.0; p.l.n_rows()]);
     let reports = reports_with_imprints(p, &u, &extras, &lambda, &[]);
-    let mut names: Vec<String> = contact_entries(p, &reports).into_keys().chain(p.extra_names()).collect();
+    let mut names: Vec<String> =
+        contact_entries(p, &reports).into_keys().chain(p.extra_names()).chain(reaction_names(p)).collect();
     names.sort();
     names.dedup();
     names
+}
+
+/// The names of the reactions' components a summary of `p` reports ([`reaction_quantities`]).
+pub fn reaction_names(p: ProblemView<'_>) -> Vec<String> {
+    let zero = vec![saddle_core::Sym::zeros(); p.l.n_points()];
+    reaction_quantities(&reactions_of(p, &zero)).map(|(n, _)| n).collect()
 }
 
 /// `name` is a quantity of `known` or `factor`; otherwise an error on `field` that lists them.
@@ -531,6 +565,7 @@ impl Summary {
             plastic_points: comm.sum_count(sol.stress.n_plastic()),
             max_von_mises: comm.max(sol.stress.sigma.iter().map(von_mises).fold(0.0, f64::max)),
             max_equivalent_plastic_strain: comm.max(max_equivalent_plastic_strain(l, &ws.eps, sol)),
+            reactions: reactions_of(p, &sol.stress.sigma),
             J: j,
             dual_energy: dual_energy(l, &sol.stress, &sol.lambda),
             kkt_residual: kkt.max(),
@@ -573,12 +608,15 @@ pub fn plastic_strains(law: &Elasticity, eps: &[saddle_core::Sym], sol: &Solutio
     eps.iter().zip(&sol.stress.sigma).map(|(e, s)| e - law.compliance(s)).collect()
 }
 
-/// The largest √(2/3)|ε_p| (0 for an elastic problem).
+/// The largest √(2/3)|ε_p| (0 for an elastic problem); `eps` the strains of w, to which the
+/// lifting's are added (theory §14).
 fn max_equivalent_plastic_strain(l: &saddle_core::Lagrangian<'_>, eps: &[saddle_core::Sym], sol: &Solution) -> f64 {
     if l.data.plasticity().is_none() {
         return 0.0;
     }
-    plastic_strains(l.data.elasticity, eps, sol).iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).fold(0.0, f64::max)
+    let mut eps = eps.to_vec();
+    l.data.lifting.add_strain(&mut eps);
+    plastic_strains(l.data.elasticity, &eps, sol).iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).fold(0.0, f64::max)
 }
 
 /// The elements with at least one plastic stress point.

@@ -148,12 +148,14 @@ impl<'a> Evolution<'a> {
 }
 
 /// The state a step leaves at displacement `u` (theory §11.1): ε_p = ε(u) − Aσ with σ̂ the
-/// step's local law at ε(u) (so that the next step's trial C(ε − ε_p) is σ + C(ε − ε(u))).
+/// step's local law at ε(u) (so that the next step's trial C(ε − ε_p) is σ + C(ε − ε(u))). The
+/// law reads ε(w) against the shifted state, ε_p the strain of u = w + u_D (theory §14).
 fn state_after(l: &Lagrangian<'_>, u: &[f64]) -> PlasticState {
     let mut eps = vec![Sym::zeros(); l.n_points()];
     l.strain(u, &mut eps);
     let mut stress = StressField::new(l.n_points(), l.data.hardening_dim());
     l.data.local_law(&eps, &mut stress, None);
+    l.data.lifting.add_strain(&mut eps);
     PlasticState::from_solution(l.data.elasticity, &eps, &stress)
 }
 

@@ -37,6 +37,11 @@ impl<'a> LoadStep<'a> {
         let element = &*base.element;
         let obstacles = base.obstacles.at_factor(factor, element.mesh(), element.dofs())?;
         let nodal_load = base.nodal_load.iter().map(|f| factor * f).collect();
+        // the local law of w reads the state shifted by the lifting (theory §14)
+        let state = match &base.supports {
+            Some(s) if s.is_lifted() => s.shifted_state(state, factor),
+            _ => state,
+        };
         // zero on every rank (a collective decision: the state's force is a global norm)
         let state = element.comm().any(!state.is_zero()).then_some(state);
         let locked_in = state.as_ref().map_or(0.0, |st| locked_in_force(element, &base.elasticity, st));
@@ -73,12 +78,18 @@ impl<'a> LoadStep<'a> {
             nodal_load: &self.nodal_load,
             state: self.state.as_ref(),
             locked_in: self.locked_in,
+            lifting: self.base.supports.as_ref().map_or_else(Default::default, |s| s.lifting(self.factor)),
         };
         Lagrangian::new(&*self.base.element, data)
     }
 
     /// The step seen whole, for output and reports.
     pub fn view(&self) -> ProblemView<'_> {
-        ProblemView { element: &*self.base.element, obstacles: &self.obstacles, l: self.lagrangian() }
+        ProblemView {
+            element: &*self.base.element,
+            obstacles: &self.obstacles,
+            l: self.lagrangian(),
+            supports: self.base.supports.as_ref(),
+        }
     }
 }

@@ -6,8 +6,12 @@
 use crate::error::SceneError;
 use crate::fem::Discretisation;
 use crate::fem::loads::{Load, nodal_loads};
+use crate::fem::supports::Supports;
+use crate::mesh::dofs::Dirichlet;
 use crate::problem::displacements::AdmissibleDisplacements;
 use crate::problem::elasticity::Elasticity;
+use crate::problem::fields::PlasticState;
+use crate::problem::kkt::locked_in_force;
 use crate::problem::lagrangian::{Data, Lagrangian};
 use crate::problem::obstacles::{DiscreteObstacles, OBSTACLE_PATH, ObstacleReport, Obstacles};
 use crate::problem::stresses::{AdmissibleStresses, MAX_HARDENING_DIM};
@@ -25,6 +29,11 @@ pub struct DiscreteProblem {
     pub obstacles: DiscreteObstacles,
     /// Consistent nodal forces of tractions and body forces (empty: none).
     pub nodal_load: Vec<f64>,
+    /// The `[[dirichlet]]` entries with their lifting and reactions (theory §14); `None` when
+    /// the problem was made without them ([`DiscreteProblem::with_supports`]).
+    pub supports: Option<Supports>,
+    /// With a lifting: the zero state shifted by −ε(u_D) and its ‖BᵀCε_p‖ (theory §14).
+    lifted: Option<(PlasticState, f64)>,
 }
 
 impl DiscreteProblem {
@@ -47,7 +56,36 @@ impl DiscreteProblem {
         let obstacles = obstacles.into().discretise(element.mesh(), element.dofs(), OBSTACLE_PATH)?;
         let nodal_load =
             if loads.is_empty() { Vec::new() } else { nodal_loads(element.mesh(), element.dofs(), loads)? };
-        Ok(Self { element, elasticity, stresses, obstacles, nodal_load })
+        Ok(Self { element, elasticity, stresses, obstacles, nodal_load, supports: None, lifted: None })
+    }
+
+    /// The problem with its supports `dirichlet` (the entries the element's dofs were made
+    /// with) and the loads `loads` it was made with: prescribed displacements as a lifting, and
+    /// reactions (theory §14). A prescribed value at a node an obstacle's row acts on is an
+    /// error: the rows see w only.
+    pub fn with_supports(mut self, dirichlet: &[Dirichlet], loads: &[Load]) -> Result<Self, SceneError> {
+        let supports = Supports::new(&*self.element, dirichlet, loads)?;
+        if supports.is_lifted() {
+            let rows = self.obstacles.rows();
+            let lifted: Vec<usize> = supports.lifted_nodes().collect();
+            if let Some(&n) = rows.node.iter().find(|n| lifted.binary_search(n).is_ok()) {
+                let i = dirichlet.iter().position(Dirichlet::is_inhomogeneous).unwrap_or(0);
+                return Err(SceneError::Region {
+                    field: format!("dirichlet[{i}].value"),
+                    message: format!(
+                        "prescribes a displacement at node {n}, where an obstacle's contact row acts: contact at \
+                         nodes with prescribed displacements is not supported"
+                    ),
+                });
+            }
+            let l = self.lagrangian();
+            let zero = PlasticState::zero(l.n_points(), l.data.hardening_dim());
+            let state = supports.shifted_state(zero, 1.0);
+            let locked_in = locked_in_force(&*self.element, &self.elasticity, &state);
+            self.lifted = Some((state, locked_in));
+        }
+        self.supports = Some(supports);
+        Ok(self)
     }
 
     /// The problem on `element` with K already discretised on it and the nodal loads `nodal_load`
@@ -59,24 +97,35 @@ impl DiscreteProblem {
         obstacles: DiscreteObstacles,
         nodal_load: Vec<f64>,
     ) -> Self {
-        Self { element, elasticity, stresses, obstacles, nodal_load }
+        Self { element, elasticity, stresses, obstacles, nodal_load, supports: None, lifted: None }
     }
 
-    /// L: the element's operators with the problem's data (the stationary problem).
+    /// L: the element's operators with the problem's data (the stationary problem; with
+    /// prescribed displacements, its state is the lifting's, theory §14).
     pub fn lagrangian(&self) -> Lagrangian<'_> {
-        let data = Data::stationary(
+        let mut data = Data::stationary(
             &self.elasticity,
             self.stresses.as_deref(),
             self.obstacles.rows(),
             self.obstacles.load(),
             &self.nodal_load,
         );
+        if let (Some((state, locked_in)), Some(s)) = (&self.lifted, &self.supports) {
+            data.state = Some(state);
+            data.locked_in = *locked_in;
+            data.lifting = s.lifting(1.0);
+        }
         Lagrangian::new(&*self.element, data)
     }
 
     /// The problem seen whole, for output and reports.
     pub fn view(&self) -> ProblemView<'_> {
-        ProblemView { element: &*self.element, obstacles: &self.obstacles, l: self.lagrangian() }
+        ProblemView {
+            element: &*self.element,
+            obstacles: &self.obstacles,
+            l: self.lagrangian(),
+            supports: self.supports.as_ref(),
+        }
     }
 }
 
@@ -91,6 +140,8 @@ pub struct ProblemView<'a> {
     pub obstacles: &'a DiscreteObstacles,
     /// L.
     pub l: Lagrangian<'a>,
+    /// The supports (`None`: a problem made without them, or a rank's part).
+    pub supports: Option<&'a Supports>,
 }
 
 impl<'a> ProblemView<'a> {
@@ -110,6 +161,20 @@ impl<'a> ProblemView<'a> {
     /// the concatenated vectors of a solution).
     pub fn contact_reports(&self, extras: &[f64], lambda: &[f64]) -> Vec<ObstacleReport> {
         self.obstacles.reports(self.element.mesh(), extras, lambda)
+    }
+
+    /// The reaction of every `[[dirichlet]]` entry to the stresses `sigma` (theory §14), at the
+    /// view's load factor; empty without supports or where they cannot be computed.
+    pub fn reactions(&self, sigma: &[crate::problem::tensor::Sym]) -> Vec<crate::fem::supports::Reaction> {
+        let factor = self.l.data.lifting.factor;
+        self.supports.and_then(|s| s.reactions(self.element, sigma, factor)).unwrap_or_default()
+    }
+
+    /// Nodal displacements u = w + u_D of the free values `w` (theory §14).
+    pub fn displacements(&self, w: &[f64]) -> Vec<[f64; 3]> {
+        let mut d = self.element.nodal_vectors(w);
+        self.l.data.lifting.add_nodal(&mut d);
+        d
     }
 
     /// Warnings about the set-up (P's parameters, nodes dropped from K_h).

@@ -1,5 +1,5 @@
-//! Loads on the displacements (Neumann data): surface tractions on boundary facets and body
-//! forces, assembled into consistent P1 nodal forces f_u. They enter the primal energy as
+//! Loads on the displacements (Neumann data): surface tractions and pressures on boundary facets
+//! and body forces, assembled into consistent nodal forces f_u. They enter the primal energy as
 //! `J = Σ_T |T| ψ(ε_T(u)) − f_u·u − f·V` and equilibrium as `Bᵀσ = Gᵀλ + f_u` (theory §3 with
 //! the load term of (1.11) extended to u).
 
@@ -20,6 +20,14 @@ pub enum Load {
         /// t.
         t: [f64; 3],
     },
+    /// A pressure p (force per area) on the selected boundary facets: the traction −p n along
+    /// each facet's outward normal n of the reference configuration (theory §14.3).
+    Pressure {
+        /// The facets.
+        on: Region,
+        /// p (positive pushes into the body).
+        p: f64,
+    },
     /// A constant body force b (force per volume) on the whole body.
     BodyForce {
         /// b.
@@ -32,6 +40,7 @@ impl Load {
     pub fn scaled(&self, factor: f64) -> Self {
         match self {
             Load::Traction { on, t } => Load::Traction { on: on.clone(), t: t.map(|x| x * factor) },
+            Load::Pressure { on, p } => Load::Pressure { on: on.clone(), p: p * factor },
             Load::BodyForce { b } => Load::BodyForce { b: b.map(|x| x * factor) },
         }
     }
@@ -44,9 +53,67 @@ impl Load {
                 on.validate(&join(path, "on"))?;
                 check::bounded_all(path, "t", t)
             }
+            Load::Pressure { on, p } => {
+                on.validate(&join(path, "on"))?;
+                check::bounded(path, "p", *p).map(|_| ())
+            }
             Load::BodyForce { b } => check::bounded_all(path, "b", b),
         }
     }
+}
+
+/// The consistent nodal forces of a traction `traction(n)` (n the facet's outward unit normal),
+/// constant on each facet selected by `on`, through `add(node, force, share)` (`path` names the
+/// load, `what` its value). A nonzero traction that lands on no free dof is an error on
+/// `{path}.on`.
+fn facet_loads(
+    mesh: &TetMesh,
+    on: &Region,
+    path: &str,
+    what: &str,
+    add: &mut impl FnMut(usize, [f64; 3], f64) -> bool,
+    traction: impl Fn([f64; 3]) -> [f64; 3],
+) -> Result<(), SceneError> {
+    let field = join(path, "on");
+    let missing = on.missing_groups(mesh);
+    if !missing.is_empty() {
+        return Err(SceneError::Region {
+            field,
+            message: format!("no facet group named {:?}; the mesh has {:?}", missing, mesh.group_names()),
+        });
+    }
+    let facets = on.facets(mesh);
+    if facets.is_empty() {
+        return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
+    }
+    let n_facets = facets.len();
+    let (mut landed, mut nonzero) = (false, false);
+    for fi in facets {
+        let [a, b, c] = mesh.boundary[fi].map(|n| mesh.nodes[n]);
+        let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
+        let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let area = 0.5 * norm;
+        let t = traction(n.map(|x| x / norm));
+        nonzero |= t.iter().any(|x| *x != 0.0);
+        // ∫N over a flat triangle: ⅓|F| for P1; 0 at the vertices and ⅓|F| at the edge nodes
+        // for P2 (whose facets are flat: edge nodes at the midpoints, TetMesh::SecondOrder)
+        landed |= match &mesh.second_order {
+            None => mesh.boundary[fi].iter().fold(false, |l, &node| add(node, t, area / 3.0) | l),
+            Some(so) => so.facet_edges[fi].iter().fold(false, |l, &node| add(node, t, area / 3.0) | l),
+        };
+    }
+    if !landed && nonzero {
+        return Err(SceneError::Region {
+            field,
+            message: format!(
+                "{what} acts on {n_facets} facet(s) whose nodes are all fixed by the [[dirichlet]] conditions in \
+                 every loaded component: the load would do nothing; load facets that are free to move, or release \
+                 them"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The consistent nodal forces f_u of `loads` on the free dofs (fixed dofs take none): ∫N·t and
@@ -74,42 +141,13 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
         let path = format!("load[{i}]");
         match load {
             Load::Traction { on, t } => {
-                let field = join(&path, "on");
-                let missing = on.missing_groups(mesh);
-                if !missing.is_empty() {
-                    return Err(SceneError::Region {
-                        field,
-                        message: format!("no facet group named {:?}; the mesh has {:?}", missing, mesh.group_names()),
-                    });
-                }
-                let facets = on.facets(mesh);
-                if facets.is_empty() {
-                    return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
-                }
-                let n_facets = facets.len();
-                let mut landed = false;
-                for fi in facets {
-                    let [a, b, c] = mesh.boundary[fi].map(|n| mesh.nodes[n]);
-                    let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
-                    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-                    let area = 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                    // ∫N over a triangle: ⅓|F| for P1; 0 at the vertices and ⅓|F| at the edge
-                    // nodes for P2
-                    landed |= match &mesh.second_order {
-                        None => mesh.boundary[fi].iter().fold(false, |l, &node| add(node, *t, area / 3.0) | l),
-                        Some(so) => so.facet_edges[fi].iter().fold(false, |l, &node| add(node, *t, area / 3.0) | l),
-                    };
-                }
-                if !landed && t.iter().any(|x| *x != 0.0) {
-                    return Err(SceneError::Region {
-                        field,
-                        message: format!(
-                            "the traction t = {t:?} acts on {n_facets} facet(s) whose nodes are all fixed by the \
-                             [[dirichlet]] conditions in every loaded component: the load would do nothing; load \
-                             facets that are free to move, or release them"
-                        ),
-                    });
-                }
+                facet_loads(mesh, on, &path, &format!("the traction t = {t:?}"), &mut add, |_| *t)?
+            }
+            // the boundary facets are oriented outward (TetMesh: each is a face of exactly one
+            // positively oriented tetrahedron, its vertices ordered so that (b − a) × (c − a)
+            // points away from the tetrahedron's fourth vertex)
+            Load::Pressure { on, p } => {
+                facet_loads(mesh, on, &path, &format!("the pressure p = {p:?}"), &mut add, |n| n.map(|x| -p * x))?
             }
             Load::BodyForce { b } => {
                 for (e, tet) in mesh.tets.iter().enumerate() {
@@ -179,6 +217,31 @@ mod tests {
         // the values are validated once, when a scene is read (Load::validate), not again here
         let e = Load::BodyForce { b: [f64::NAN, 0.0, 0.0] }.validate("load[0]").unwrap_err();
         assert!(e.to_string().contains("load[0].b[0]"), "{e}");
+    }
+
+    #[test]
+    fn pressure_pushes_along_the_inward_normal_of_every_facet() {
+        for m in [BoxMesh::new([0.0; 3], [2.0, 1.0, 1.0], [3, 2, 2]).graded([0.0; 3], 2.0).mesh().unwrap()] {
+            for m in [m.clone(), m.second_order()] {
+                let dofs = DofMap::new(&m, &[]).unwrap();
+                let total = |f: &[f64], c: usize| (0..m.n_nodes()).map(|n| f[dofs.free(n, c).unwrap()]).sum::<f64>();
+                // on x = 2 (area 1): the resultant −p e_x; on the closed surface: zero
+                let f = nodal_loads(&m, &dofs, &[Load::Pressure { on: Region::Group("xmax".into()), p: 3.0 }]).unwrap();
+                assert!((total(&f, 0) + 3.0).abs() < 1e-12 && total(&f, 1).abs() < 1e-12, "{}", total(&f, 0));
+                let all: Vec<Load> = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"]
+                    .map(|g| Load::Pressure { on: Region::Group(g.into()), p: 3.0 })
+                    .into();
+                let f = nodal_loads(&m, &dofs, &all).unwrap();
+                assert!((0..3).all(|c| total(&f, c).abs() < 1e-12));
+                // the work on u = x is −p times the volume: ∫ −p n·x dA = −3p|Ω|
+                let work: f64 = (0..m.n_nodes())
+                    .map(|n| (0..3).map(|c| f[dofs.free(n, c).unwrap()] * m.nodes[n][c]).sum::<f64>())
+                    .sum();
+                assert!((work + 3.0 * 3.0 * 2.0).abs() < 1e-12, "{work}");
+            }
+        }
+        let e = Load::Pressure { on: Region::Group("a".into()), p: f64::INFINITY }.validate("load[2]").unwrap_err();
+        assert!(e.to_string().contains("load[2].p"), "{e}");
     }
 
     #[test]

@@ -10,6 +10,7 @@ pub mod loads;
 mod operator_checks;
 pub mod p1p0;
 pub mod p2;
+pub mod supports;
 pub mod topology;
 
 use crate::error::{ParameterError, SceneError};
@@ -43,7 +44,7 @@ pub trait FiniteElement: Debug + Send + Sync + dyn_clone::DynClone {
     /// Dirichlet conditions `dirichlet`.
     fn build(&self, mesh: TetMesh, dirichlet: &[Dirichlet]) -> Result<Box<dyn Discretisation>, SceneError> {
         let mesh = self.prepare_mesh(mesh);
-        let dofs = DofMap::new(&mesh, dirichlet)?;
+        let dofs = DofMap::with_values(&mesh, dirichlet)?;
         Ok(self.build_with_dofs(mesh, dofs))
     }
 }
@@ -88,5 +89,11 @@ pub trait Discretisation: ElementOperators {
     /// true for P1 tetrahedra, false for P2 with B̄. Reports warn about a locked answer by it.
     fn locks(&self) -> bool {
         true
+    }
+    /// The same element on the same mesh with every dof free: its B reaches the fixed dofs,
+    /// for the strain of a lifting and the reactions of the supports (theory §14). `None` (the
+    /// default) for a rank's part of a distributed problem.
+    fn unconstrained(&self) -> Option<Box<dyn Discretisation>> {
+        None
     }
 }

@@ -113,6 +113,10 @@ impl Discretisation for P1P0Element {
     fn mesh(&self) -> &TetMesh {
         &self.parts.mesh
     }
+    fn unconstrained(&self) -> Option<Box<dyn Discretisation>> {
+        let dofs = DofMap::from_fixed(&vec![[false; 3]; self.parts.mesh.n_nodes()]);
+        Some(Box::new(Self::with_dofs(self.parts.mesh.clone(), dofs)))
+    }
     fn dofs(&self) -> &DofMap {
         &self.parts.dofs
     }

@@ -199,6 +199,11 @@ impl Discretisation for P2Element {
         &self.parts.mesh
     }
 
+    fn unconstrained(&self) -> Option<Box<dyn Discretisation>> {
+        let dofs = DofMap::from_fixed(&vec![[false; 3]; self.parts.mesh.n_nodes()]);
+        Some(Box::new(Self::with_dofs(self.parts.mesh.clone(), dofs).with_mean_dilatation(self.mean_dilatation)))
+    }
+
     fn dofs(&self) -> &DofMap {
         &self.parts.dofs
     }

@@ -1,6 +1,7 @@
 //! The P1 displacement space W_h (theory §3): three degrees of freedom per node, those fixed by
 //! Dirichlet conditions eliminated. A Dirichlet condition fixes chosen components on the nodes
-//! of the selected facets (closure): all three is clamped, one is a roller.
+//! of the selected facets (closure): all three is clamped, one is a roller; `value` prescribes
+//! a displacement other than zero (theory §14: a lifting, not a change of the dofs).
 
 use crate::error::{ParameterError, SceneError, join};
 use crate::mesh::TetMesh;
@@ -30,7 +31,8 @@ fn all_components() -> Vec<Component> {
     vec![Component::X, Component::Y, Component::Z]
 }
 
-/// `[[dirichlet]]`: u_c = 0 for the listed components on the closure of the selected facets.
+/// `[[dirichlet]]`: u_c = value_c (0 by default) for the listed components on the closure of
+/// the selected facets; its reaction is reported under `name` (theory §14).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Dirichlet {
@@ -39,17 +41,53 @@ pub struct Dirichlet {
     /// Fixed components; all three (clamped) by default.
     #[serde(default = "all_components")]
     pub components: Vec<Component>,
+    /// The prescribed displacement, scaled by the load factor: `[ux, uy, uz]`, or one value per
+    /// entry of `components`; zero when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<Vec<f64>>,
+    /// The key of this entry's reaction in reports (`dirichlet[i]` when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
 }
 
 impl Dirichlet {
     /// Clamped on `on`.
     pub fn clamped(on: Region) -> Self {
-        Self { on, components: all_components() }
+        Self { on, components: all_components(), value: None, name: None }
     }
 
     /// A roller: only `c` fixed on `on`.
     pub fn roller(on: Region, c: Component) -> Self {
-        Self { on, components: vec![c] }
+        Self { on, components: vec![c], value: None, name: None }
+    }
+
+    /// The same condition with the prescribed displacement `value` (as the scene key).
+    pub fn with_value(self, value: Vec<f64>) -> Self {
+        Self { value: Some(value), ..self }
+    }
+
+    /// The prescribed value of each component at load factor 1 (`None`: not fixed by this
+    /// entry). The entry is taken as validated.
+    pub fn prescribed(&self) -> [Option<f64>; 3] {
+        let mut out = [None; 3];
+        for (k, c) in self.components.iter().enumerate() {
+            out[c.index()] = Some(match &self.value {
+                None => 0.0,
+                Some(v) if v.len() == self.components.len() => v[k],
+                Some(v) => v[c.index()],
+            });
+        }
+        out
+    }
+
+    /// True when some prescribed value is not zero.
+    pub fn is_inhomogeneous(&self) -> bool {
+        self.value.as_ref().is_some_and(|v| v.iter().any(|x| *x != 0.0))
+    }
+
+    /// The key of the entry's reaction: its `name`, or `dirichlet[i]`.
+    pub fn key(&self, i: usize) -> String {
+        self.name.clone().unwrap_or_else(|| format!("dirichlet[{i}]"))
     }
 
     /// Checks the region's numbers (`{path}.on`) and that at least one component is fixed: an
@@ -64,8 +102,71 @@ impl Dirichlet {
                  \"z\"), or omit the key to clamp all three",
             ));
         }
+        if let Some(v) = &self.value {
+            let field = join(path, "value");
+            let n = self.components.len();
+            if v.len() != 3 && v.len() != n {
+                return Err(ParameterError::new(
+                    &field,
+                    format!("{v:?}"),
+                    format!("has {} entries: give [ux, uy, uz] (3) or one value per component ({n})", v.len()),
+                ));
+            }
+            crate::error::check::bounded_all(path, "value", v)?;
+            let unconstrained = |c: &usize| v[*c] != 0.0 && !self.components.iter().any(|k| k.index() == *c);
+            if let Some(c) = (0..3).filter(|_| v.len() == 3 && n != 3).find(unconstrained) {
+                return Err(ParameterError::new(
+                    format!("{field}[{c}]"),
+                    crate::error::number(v[c]),
+                    format!(
+                        "prescribes component {:?}, which this entry does not constrain (components = {:?}): \
+                             add it to `components`, or set it to 0",
+                        ["x", "y", "z"][c],
+                        self.components
+                    ),
+                ));
+            }
+        }
+        if let Some(name) = self.name.as_ref().filter(|n| n.trim().is_empty()) {
+            return Err(ParameterError::new(join(path, "name"), format!("{name:?}"), "must not be empty"));
+        }
         Ok(())
     }
+}
+
+/// No entry fixes the dof (in [`fixing_entries`]).
+pub const FREE: u32 = u32::MAX;
+
+/// For every node and component, the first of `conditions` that fixes it, or [`FREE`]. Errors
+/// name the condition whose region selects no facet or a group that does not exist.
+pub fn fixing_entries(mesh: &TetMesh, conditions: &[Dirichlet]) -> Result<Vec<[u32; 3]>, SceneError> {
+    let mut owner = vec![[FREE; 3]; mesh.n_nodes()];
+    for (i, c) in conditions.iter().enumerate() {
+        c.validate(&format!("dirichlet[{i}]"))?;
+        let field = format!("dirichlet[{i}].on");
+        let missing = c.on.missing_groups(mesh);
+        if !missing.is_empty() {
+            return Err(SceneError::Region {
+                field,
+                message: format!("no facet group named {:?}; the mesh has {:?}", missing, mesh.group_names()),
+            });
+        }
+        let facets = c.on.facets(mesh);
+        if facets.is_empty() {
+            return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
+        }
+        for f in facets {
+            for n in mesh.facet_nodes(f) {
+                for comp in &c.components {
+                    let o = &mut owner[n][comp.index()];
+                    if *o == FREE {
+                        *o = i as u32;
+                    }
+                }
+            }
+        }
+    }
+    Ok(owner)
 }
 
 /// Marker of an eliminated (fixed) degree of freedom.
@@ -81,32 +182,27 @@ pub struct DofMap {
 }
 
 impl DofMap {
-    /// Applies the conditions to the mesh. Errors name the condition whose region selects no
-    /// facet or a group that does not exist.
+    /// Applies homogeneous conditions to the mesh. Errors name the condition whose region
+    /// selects no facet or a group that does not exist, and a prescribed value other than zero:
+    /// only a whole problem ([`crate::fem::DiscreteProblem`], through
+    /// [`DofMap::with_values`]) carries its lifting (theory §14), a rank's part does not yet.
     pub fn new(mesh: &TetMesh, conditions: &[Dirichlet]) -> Result<Self, SceneError> {
-        let mut fixed = vec![[false; 3]; mesh.n_nodes()];
-        for (i, c) in conditions.iter().enumerate() {
-            c.validate(&format!("dirichlet[{i}]"))?;
-            let field = format!("dirichlet[{i}].on");
-            let missing = c.on.missing_groups(mesh);
-            if !missing.is_empty() {
-                return Err(SceneError::Region {
-                    field,
-                    message: format!("no facet group named {:?}; the mesh has {:?}", missing, mesh.group_names()),
-                });
-            }
-            let facets = c.on.facets(mesh);
-            if facets.is_empty() {
-                return Err(SceneError::Region { field, message: "selects no boundary facet".into() });
-            }
-            for f in facets {
-                for n in mesh.facet_nodes(f) {
-                    for comp in &c.components {
-                        fixed[n][comp.index()] = true;
-                    }
-                }
-            }
+        if let Some(i) = conditions.iter().position(Dirichlet::is_inhomogeneous) {
+            return Err(ParameterError::new(
+                format!("dirichlet[{i}].value"),
+                format!("{:?}", conditions[i].value.as_deref().unwrap_or_default()),
+                "prescribed displacements other than zero are not available in a distributed run yet: run on \
+                 one machine",
+            )
+            .into());
         }
+        Self::with_values(mesh, conditions)
+    }
+
+    /// Applies the conditions to the mesh, prescribed values allowed (the dofs are the same as
+    /// for zero values: the values enter as a lifting, theory §14).
+    pub fn with_values(mesh: &TetMesh, conditions: &[Dirichlet]) -> Result<Self, SceneError> {
+        let fixed: Vec<[bool; 3]> = fixing_entries(mesh, conditions)?.iter().map(|o| o.map(|e| e != FREE)).collect();
         Ok(Self::from_fixed(&fixed))
     }
 

@@ -8,6 +8,7 @@
 //! are free functions of it, independent of the solver that produced the iterate. A load step or
 //! a reduced problem is the same operators with other data: nothing forwards.
 
+use crate::fem::supports::Lifting;
 use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::fields::{PlasticState, StressField};
@@ -37,6 +38,9 @@ pub struct Data<'a> {
     /// without a state; [`locked_in_force`](crate::problem::kkt::locked_in_force)). The equilibrium residual is measured against it
     /// too, so that a step whose answer is zero stress has a scale (theory §11.2).
     pub locked_in: f64,
+    /// The lifting u_D of prescribed displacements at the load factor (theory §14): the
+    /// unknown u of the solvers is w, and `state` is already shifted by ε(u_D) (none: empty).
+    pub lifting: Lifting<'a>,
 }
 
 impl<'a> Data<'a> {
@@ -48,7 +52,7 @@ impl<'a> Data<'a> {
         load: &'a [f64],
         nodal_load: &'a [f64],
     ) -> Self {
-        Self { elasticity, stresses, rows, load, nodal_load, state: None, locked_in: 0.0 }
+        Self { elasticity, stresses, rows, load, nodal_load, state: None, locked_in: 0.0, lifting: Lifting::default() }
     }
 
     /// Number of extra unknowns V.
@@ -158,6 +162,13 @@ impl<'a> Lagrangian<'a> {
     /// Number of rows of K_h.
     pub fn n_rows(&self) -> usize {
         self.data.rows.n_rows()
+    }
+
+    /// ε(u) = ε(w) + ε(u_D) of the displacement u whose free part is `w` (theory §14): the
+    /// strain of the body, where [`ElementOperators::strain`] gives that of w.
+    pub fn total_strain(&self, w: &[f64], eps: &mut [Sym]) {
+        self.ops.strain(w, eps);
+        self.data.lifting.add_strain(eps);
     }
 }
 

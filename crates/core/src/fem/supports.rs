@@ -1,0 +1,179 @@
+//! The supports of a problem (theory §14): the `[[dirichlet]]` entries, their prescribed
+//! displacements as a lifting u_D (u = u_D + w with w = 0 on Γ_D, so that the dofs stay those of
+//! the homogeneous conditions and no solver changes), and their reactions r = Bᵀσ − f at the
+//! constrained dofs, summed per entry with their moment about the origin.
+
+use crate::error::SceneError;
+use crate::fem::Discretisation;
+use crate::fem::loads::{Load, nodal_loads};
+use crate::mesh::dofs::{Dirichlet, DofMap, FREE, fixing_entries};
+use crate::problem::fields::PlasticState;
+use crate::problem::tensor::Sym;
+use std::sync::OnceLock;
+
+/// The lifting of a problem at its load factor (theory §14): nodal values u_D and their strain
+/// ε(u_D) at factor 1, and the factor. Empty for homogeneous conditions.
+#[derive(Clone, Copy, Debug)]
+pub struct Lifting<'a> {
+    /// u_D per node at factor 1 (empty: none).
+    pub nodal: &'a [[f64; 3]],
+    /// ε(u_D) per stress point at factor 1 (empty: none).
+    pub strain: &'a [Sym],
+    /// The load factor the lifting is taken at.
+    pub factor: f64,
+}
+
+impl Default for Lifting<'_> {
+    fn default() -> Self {
+        Self { nodal: &[], strain: &[], factor: 1.0 }
+    }
+}
+
+impl Lifting<'_> {
+    /// eps += factor · ε(u_D): the strain of w made the strain of u.
+    pub fn add_strain(&self, eps: &mut [Sym]) {
+        for (e, d) in eps.iter_mut().zip(self.strain) {
+            *e += d * self.factor;
+        }
+    }
+
+    /// nodal += factor · u_D: nodal values of w made those of u.
+    pub fn add_nodal(&self, nodal: &mut [[f64; 3]]) {
+        for (x, d) in nodal.iter_mut().zip(self.nodal) {
+            for c in 0..3 {
+                x[c] += self.factor * d[c];
+            }
+        }
+    }
+}
+
+/// The reaction of one `[[dirichlet]]` entry (theory §14): the resultant of r = Bᵀσ − f over the
+/// dofs it constrains, and its moment about the origin.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Reaction {
+    /// The entry's `name`, or `dirichlet[i]`.
+    #[serde(skip)]
+    pub key: String,
+    /// Σ r.
+    pub force: [f64; 3],
+    /// Σ x × r.
+    pub moment: [f64; 3],
+}
+
+/// The `[[dirichlet]]` entries of a problem with their lifting and what their reactions need.
+#[derive(Debug)]
+pub struct Supports {
+    entries: Vec<Dirichlet>,
+    /// The first entry fixing each node's component ([`FREE`]: none).
+    owner: Vec<[u32; 3]>,
+    /// u_D per node at factor 1 (empty for homogeneous conditions).
+    lifting: Vec<[f64; 3]>,
+    /// ε(u_D) per point at factor 1 (empty as `lifting`).
+    lifting_strain: Vec<Sym>,
+    /// The loads' consistent nodal forces on every dof (3 per node), at factor 1.
+    load: Vec<f64>,
+    /// The element with every dof free, built on first use.
+    unconstrained: OnceLock<Option<Box<dyn Discretisation>>>,
+}
+
+impl Supports {
+    /// The supports `entries` of the problem on `element` with the loads `loads`. Errors name a
+    /// prescribed value the element cannot carry (a distributed part).
+    pub fn new(element: &dyn Discretisation, entries: &[Dirichlet], loads: &[Load]) -> Result<Self, SceneError> {
+        let mesh = element.mesh();
+        let owner = fixing_entries(mesh, entries)?;
+        let all_free = DofMap::from_fixed(&vec![[false; 3]; mesh.n_nodes()]);
+        let load = if loads.is_empty() { Vec::new() } else { nodal_loads(mesh, &all_free, loads)? };
+        let mut s = Self {
+            entries: entries.to_vec(),
+            owner,
+            lifting: Vec::new(),
+            lifting_strain: Vec::new(),
+            load,
+            unconstrained: OnceLock::new(),
+        };
+        if let Some(i) = entries.iter().position(Dirichlet::is_inhomogeneous) {
+            let values: Vec<[Option<f64>; 3]> = entries.iter().map(Dirichlet::prescribed).collect();
+            s.lifting = vec![[0.0; 3]; mesh.n_nodes()];
+            for (n, o) in s.owner.iter().enumerate() {
+                for c in 0..3 {
+                    if o[c] != FREE {
+                        s.lifting[n][c] = values[o[c] as usize][c].unwrap_or(0.0);
+                    }
+                }
+            }
+            let full = s.unconstrained(element).ok_or_else(|| SceneError::Region {
+                field: format!("dirichlet[{i}].value"),
+                message: "prescribed displacements other than zero are not available for this element yet".into(),
+            })?;
+            let u: Vec<f64> = s.lifting.iter().flatten().copied().collect();
+            let mut strain = vec![Sym::zeros(); full.n_points()];
+            full.strain(&u, &mut strain);
+            s.lifting_strain = strain;
+        }
+        Ok(s)
+    }
+
+    fn unconstrained(&self, element: &dyn Discretisation) -> Option<&dyn Discretisation> {
+        self.unconstrained.get_or_init(|| element.unconstrained()).as_deref()
+    }
+
+    /// The entries.
+    pub fn entries(&self) -> &[Dirichlet] {
+        &self.entries
+    }
+
+    /// The lifting at load factor `factor`.
+    pub fn lifting(&self, factor: f64) -> Lifting<'_> {
+        Lifting { nodal: &self.lifting, strain: &self.lifting_strain, factor }
+    }
+
+    /// True when some prescribed value is not zero.
+    pub fn is_lifted(&self) -> bool {
+        !self.lifting.is_empty()
+    }
+
+    /// The state the local law of w reads (theory §14): (ε_p − factor·ε(u_D), q_n), so that its
+    /// trial C(ε(w) − ε_p + factor·ε(u_D)) is that of u. `state` unchanged without a lifting.
+    pub fn shifted_state(&self, mut state: PlasticState, factor: f64) -> PlasticState {
+        for (p, d) in state.plastic_strain.iter_mut().zip(&self.lifting_strain) {
+            *p -= d * factor;
+        }
+        state
+    }
+
+    /// The mesh nodes where a prescribed value is not zero.
+    pub fn lifted_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.lifting.iter().enumerate().filter(|(_, d)| d.iter().any(|x| *x != 0.0)).map(|(n, _)| n)
+    }
+
+    /// The reaction of every entry (theory §14) to the stresses `sigma` at load factor `factor`:
+    /// r = Bᵀσ − factor·f on every dof, summed over the dofs each entry fixes first. `None` when
+    /// the element cannot give its unconstrained form (a distributed part).
+    pub fn reactions(&self, element: &dyn Discretisation, sigma: &[Sym], factor: f64) -> Option<Vec<Reaction>> {
+        let full = self.unconstrained(element)?;
+        let mut r = vec![0.0; full.n_dofs()];
+        full.divergence(sigma, &mut r);
+        for (ri, f) in r.iter_mut().zip(&self.load) {
+            *ri -= factor * f;
+        }
+        let nodes = &element.mesh().nodes;
+        let mut out: Vec<Reaction> = (self.entries.iter().enumerate())
+            .map(|(i, d)| Reaction { key: d.key(i), force: [0.0; 3], moment: [0.0; 3] })
+            .collect();
+        for (n, o) in self.owner.iter().enumerate() {
+            for c in 0..3 {
+                if o[c] == FREE {
+                    continue;
+                }
+                let (x, rc, e) = (nodes[n], r[3 * n + c], &mut out[o[c] as usize]);
+                e.force[c] += rc;
+                // x × (rc e_c)
+                let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                e.moment[a] += x[b] * rc;
+                e.moment[b] -= x[a] * rc;
+            }
+        }
+        Some(out)
+    }
+}
