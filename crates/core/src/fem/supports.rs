@@ -11,41 +11,7 @@ use crate::problem::fields::PlasticState;
 use crate::problem::tensor::Sym;
 use std::sync::OnceLock;
 
-/// The lifting of a problem at its load factor (theory §14): nodal values u_D and their strain
-/// ε(u_D) at factor 1, and the factor. Empty for homogeneous conditions.
-#[derive(Clone, Copy, Debug)]
-pub struct Lifting<'a> {
-    /// u_D per node at factor 1 (empty: none).
-    pub nodal: &'a [[f64; 3]],
-    /// ε(u_D) per stress point at factor 1 (empty: none).
-    pub strain: &'a [Sym],
-    /// The load factor the lifting is taken at.
-    pub factor: f64,
-}
-
-impl Default for Lifting<'_> {
-    fn default() -> Self {
-        Self { nodal: &[], strain: &[], factor: 1.0 }
-    }
-}
-
-impl Lifting<'_> {
-    /// eps += factor · ε(u_D): the strain of w made the strain of u.
-    pub fn add_strain(&self, eps: &mut [Sym]) {
-        for (e, d) in eps.iter_mut().zip(self.strain) {
-            *e += d * self.factor;
-        }
-    }
-
-    /// nodal += factor · u_D: nodal values of w made those of u.
-    pub fn add_nodal(&self, nodal: &mut [[f64; 3]]) {
-        for (x, d) in nodal.iter_mut().zip(self.nodal) {
-            for c in 0..3 {
-                x[c] += self.factor * d[c];
-            }
-        }
-    }
-}
+pub use crate::problem::lifting::Lifting;
 
 /// The reaction of one `[[dirichlet]]` entry (theory §14): the resultant of r = Bᵀσ − f over the
 /// dofs it constrains, and its moment about the origin.

@@ -8,10 +8,10 @@
 //! are free functions of it, independent of the solver that produced the iterate. A load step or
 //! a reduced problem is the same operators with other data: nothing forwards.
 
-use crate::fem::supports::Lifting;
 use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::fields::{PlasticState, StressField};
+use crate::problem::lifting::Lifting;
 use crate::problem::operators::ElementOperators;
 use crate::problem::stresses::{AdmissibleStresses, StepOutput};
 use crate::problem::tensor::{Sym, SymOp};

@@ -24,6 +24,7 @@ pub mod energies;
 pub mod fields;
 pub mod kkt;
 pub mod lagrangian;
+pub mod lifting;
 pub mod obstacles;
 pub mod operators;
 pub mod pattern;
