@@ -324,6 +324,18 @@ pub struct Step {
     pub lambda: Vec<f64>,
 }
 
+/// The primal–dual active set (theory §4.2 step 2): `active` ← {i : λ_i − c_i g_i > 0}; the
+/// number of this rank's rows that changed.
+pub(crate) fn primal_dual_update(lambda: &[f64], c: &[f64], gap: &[f64], active: &mut [bool]) -> usize {
+    let mut changed = 0;
+    for (i, a) in active.iter_mut().enumerate() {
+        let next = lambda[i] - c[i] * gap[i] > 0.0;
+        changed += (next != *a) as usize;
+        *a = next;
+    }
+    changed
+}
+
 /// Every extra with a load needs a touching row (theory §4.2 step 2): where none of `active` holds
 /// it, the row with the smallest gap in `gap` joins (over every rank's rows; on a tie of gaps,
 /// the lowest rank's). Returns the rows this rank added. Collective.

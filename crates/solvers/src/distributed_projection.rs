@@ -13,7 +13,7 @@
 //! first sweep starts from the previous iteration's λ and active set, so that once the contact
 //! zone has settled one sweep is one solve per column (1 + n_extras).
 
-use crate::active_set::{CG_TOL_MIN, touch_loaded_extras};
+use crate::active_set::{CG_TOL_MIN, primal_dual_update, touch_loaded_extras};
 use crate::distributed_system::DistributedSystem;
 use crate::vector::axpy;
 use saddle_core::problem::lagrangian::Lagrangian;
@@ -46,6 +46,8 @@ pub struct DistributedProjection {
     gap: Vec<f64>,
     /// Active-set sweeps so far.
     pub sweeps: usize,
+    /// The solver that asked for the projection (errors name it).
+    solver: String,
 }
 
 impl DistributedProjection {
@@ -70,6 +72,7 @@ impl DistributedProjection {
             grad: vec![0.0; n],
             gap: vec![0.0; nr],
             sweeps: 0,
+            solver: solver.into(),
         })
     }
 
@@ -95,12 +98,7 @@ impl DistributedProjection {
         self.du.iter_mut().for_each(|x| *x = 0.0);
         for sweep in 0..=MAX_SWEEPS {
             rows.gap(u, v, &mut self.gap);
-            let mut changed = 0;
-            for (i, a) in self.active.iter_mut().enumerate() {
-                let next = lambda[i] - self.row_stiffness[i] * self.gap[i] > 0.0;
-                changed += (next != *a) as usize;
-                *a = next;
-            }
+            let mut changed = primal_dual_update(lambda, &self.row_stiffness, &self.gap, &mut self.active);
             changed += touch_loaded_extras(l, &mut self.active, &self.gap);
             if sweep > 0 && l.comm().sum_count(changed) == 0 {
                 return Ok(());
@@ -118,7 +116,7 @@ impl DistributedProjection {
             self.sweeps += 1;
         }
         Err(SolveError::Unsupported {
-            solver: "uzawa".into(),
+            solver: self.solver.clone(),
             message: format!("the active set of the projection onto K_h did not settle in {MAX_SWEEPS} sweeps"),
         })
     }

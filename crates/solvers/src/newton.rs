@@ -41,7 +41,8 @@
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{
-    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_budget, direct_is_cheaper, touch_loaded_extras,
+    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_budget, direct_is_cheaper, primal_dual_update,
+    touch_loaded_extras,
 };
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
@@ -685,18 +686,18 @@ impl<'a> Run<'a> {
         let (l, s, w) = (self.l, &mut self.state, &mut self.work);
         let rows = l.data.rows;
         rows.gap(&s.u, &s.v, &mut w.gap);
-        let mut changed = 0;
         // cold start: every candidate row active (the punch imprints its shape), tensile rows
         // are released at the next iteration — but of rows that share dofs (two obstacles at
         // one node, theory §8.1) only the closest: activating all of them would pin the node
         // to every obstacle at once
-        let all = self.cold && s.it == 0;
-        let closest = if all { self.system.basis().closest_in_blocks(&w.gap) } else { vec![false; rows.n_rows()] };
-        for (i, &first) in closest.iter().enumerate() {
-            let a = if all { first } else { s.lambda[i] - self.row_stiffness[i] * w.gap[i] > 0.0 };
-            changed += (a != s.active[i]) as usize;
-            s.active[i] = a;
-        }
+        let mut changed = if self.cold && s.it == 0 {
+            let closest = self.system.basis().closest_in_blocks(&w.gap);
+            let changed = closest.iter().zip(&s.active).filter(|(a, b)| a != b).count();
+            s.active.copy_from_slice(&closest);
+            changed
+        } else {
+            primal_dual_update(&s.lambda, &self.row_stiffness, &w.gap, &mut s.active)
+        };
         changed += touch_loaded_extras(l, &mut s.active, &w.gap);
         let changed = l.comm().sum_count(changed);
         // the elastic phase ends once its active set has settled: the last step solved it
