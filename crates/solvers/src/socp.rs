@@ -167,6 +167,7 @@ impl Solver for Socp {
         saddle_core::one_rank("socp", l)?;
         let mut timer = PhaseTimer::default();
         let (prog, ipm) = self.interior_point(l, monitor, &mut timer)?;
+        beyond_collapse(l, &ipm)?;
         let found = Found::recover(l, &prog, &ipm, &mut timer);
         let r_ipm = found.kkt.max();
         monitor.iteration(ipm.iterations, r_ipm, self.tol);
@@ -262,6 +263,24 @@ impl Socp {
         report.iterations += iterations;
         Ok(sol)
     }
+}
+
+/// Stage 1b (theory §4.6): Clarabel's certificate that the cone programme is infeasible —
+/// no stress in P balances the prescribed forces on a plastic body — is the error
+/// [`SolveError::BeyondCollapse`]: the certificate is a collapse mechanism. Otherwise `Ok`.
+fn beyond_collapse(l: &Lagrangian<'_>, ipm: &IpmResult) -> Result<(), SolveError> {
+    let infeasible = matches!(ipm.status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible);
+    if !(infeasible && l.data.plasticity().is_some() && l.forced()) {
+        return Ok(());
+    }
+    Err(SolveError::BeyondCollapse {
+        solver: NAME.into(),
+        evidence: format!(
+            "the conic solver certifies that no stress in P balances the loads (Clarabel {:?} after {} iterations; \
+             its certificate is a collapse mechanism whose loads' power exceeds its plastic dissipation)",
+            ipm.status, ipm.iterations
+        ),
+    })
 }
 
 /// The interior point's solution in the units of `l`, with the residual of theory §3.4.
