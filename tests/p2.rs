@@ -150,17 +150,60 @@ fn the_multigrid_that_follows_the_plastic_tangent_needs_fewer_cg_iterations_for_
     assert!(cg_follow < 0.6 * cg_elastic, "{cg_follow} against {cg_elastic}");
 }
 
+/// Uzawa on the perfectly plastic P2 strip at 5× (U = 0.05): the projected gradient contracts
+/// by 0.99966 per iteration at the end of its 20,000 (KKT 5.7e-6; theory §4.1, the rate), too
+/// slowly for any budget; stopped after 2,000 iterations it says so, with the rate and the
+/// solvers to use instead.
+#[test]
+fn uzawa_on_the_perfectly_plastic_p2_strip_names_why_it_stops_short() {
+    let mut t = strip("p2", 0.05);
+    set(&mut t, "mesh.cells", toml::Value::try_from([16, 1, 8]).unwrap());
+    let (l, _) = build(&t);
+    let uzawa = saddle::solvers::Uzawa { max_iter: 2000, ..Default::default() };
+    let sol = uzawa.solve(&l.lagrangian(), &mut Silent).unwrap();
+    let r = &sol.report;
+    assert_eq!(r.stop_reason, saddle::core::StopReason::MaxIterations);
+    let w = r.warnings.iter().find(|w| w.contains("converges too slowly")).expect("the warning");
+    println!("{w}");
+    assert!(w.contains("use newton, penalty or socp"), "{w}");
+    // the rate it states is the history's: the residual over the last quarter (500 iterations)
+    let h = &r.residual_history;
+    let q = (h[h.len() - 1] / h[h.len() - 1 - h.len() / 4]).powf(1.0 / (h.len() / 4) as f64);
+    assert!(q > 0.99 && q < 1.0 && w.contains(&format!("{q:.6}")), "{q} in {w}");
+}
+
 #[test]
 fn perfectly_plastic_p2_strip_converges_to_the_same_force_for_newton_penalty_and_socp_up_to_20x() {
     // the strip on 16 × 1 × 8 cells, h = 0, at U = 0.01 (already yielded: 354 of 512 elements
     // plastic, so first yield is below it) and 20× that; uzawa stops at its budget from 5×
-    // (docs/plastic_tangent.md) and is left out
+    // (KKT 5.7e-6 after 20,000 iterations: too slow, theory §4.1, the rate; the test above) and
+    // is left out
+    let forces = coarse_strip_forces(None, &[("newton", ""), ("penalty", ""), ("socp", "")], &[0.01, 0.2]);
+    // the stresses, hence the force, are unique at h = 0 (theory §1); the solvers agree to
+    // 7e-10 relative (measured, `saddle sweep` with the three solvers)
+    assert_forces_agree(&forces, 1e-8);
+    // a plateau within 5 % of Prandtl's force on this coarse mesh (measured +3.0 %)
+    let f20 = forces[1].2;
+    assert!((f20 / prandtl_force() - 1.0).abs() < 0.05, "{f20} against {}", prandtl_force());
+}
+
+/// The force of the P2 strip on 16 × 1 × 8 cells at each punch displacement of `us`, for each of
+/// `solvers` (type and further settings as TOML; Newton with 200 iterations), with the yield
+/// table `yield_surface` (None: the example's von Mises, h = 0): (solver, U, force).
+fn coarse_strip_forces(
+    yield_surface: Option<toml::Value>,
+    solvers: &[(&'static str, &str)],
+    us: &[f64],
+) -> Vec<(&'static str, f64, f64)> {
     let mut forces = Vec::new();
-    for solver in ["newton", "penalty", "socp"] {
-        for u in [0.01, 0.2] {
+    for &(solver, settings) in solvers {
+        for &u in us {
             let mut t = strip("p2", u);
             set(&mut t, "mesh.cells", toml::Value::try_from([16, 1, 8]).unwrap());
-            let mut s = toml::Table::new();
+            if let Some(y) = &yield_surface {
+                t.insert("yield".into(), y.clone());
+            }
+            let mut s: toml::Table = toml::from_str(settings).unwrap();
             s.insert("type".into(), toml::Value::String(solver.into()));
             if solver == "newton" {
                 s.insert("max_iter".into(), toml::Value::Integer(200));
@@ -170,13 +213,44 @@ fn perfectly_plastic_p2_strip_converges_to_the_same_force_for_newton_penalty_and
         }
     }
     println!("{forces:?}");
-    // the stresses, hence the force, are unique at h = 0 (theory §1); the solvers agree to
-    // 7e-10 relative (measured, `saddle sweep` with the three solvers)
-    for &(solver, u, f) in &forces {
+    forces
+}
+
+/// Every force of `forces` within `rel` of Newton's at the same U.
+fn assert_forces_agree(forces: &[(&str, f64, f64)], rel: f64) {
+    for &(solver, u, f) in forces {
         let newton = forces.iter().find(|x| x.0 == "newton" && x.1 == u).unwrap().2;
-        assert!((f - newton).abs() <= 1e-8 * newton, "{solver} at U = {u}: {f} against newton's {newton}");
+        assert!((f - newton).abs() <= rel * newton, "{solver} at U = {u}: {f} against newton's {newton}");
     }
-    // a plateau within 5 % of Prandtl's force on this coarse mesh (measured +3.0 %)
+}
+
+/// Drucker–Prager (α = 0.1, k₀ = 1, h = 0) on the perfectly plastic P2 strip, U = 0.01 and 20×
+/// that (issue 25): newton, penalty and socp converge and agree on the force to 1e-8 (measured:
+/// 1.598699 and 1.934292 on all three to the 7 printed digits; the tolerances are 1e-10 and
+/// 1e-8); the force still rises from 0.01 to 0.2, to 2.1× Prandtl's von Mises value, as the
+/// compressive mean stress under the punch widens the surface.
+#[test]
+fn drucker_prager_on_the_perfectly_plastic_p2_strip_converges_up_to_20x() {
+    let dp = yield_table("drucker_prager", &[("k0", 1.0), ("alpha", 0.1), ("h", 0.0)]);
+    let forces = coarse_strip_forces(Some(dp), &[("newton", ""), ("penalty", ""), ("socp", "")], &[0.01, 0.2]);
+    assert_forces_agree(&forces, 1e-8);
+    assert!(forces[1].2 > forces[0].2, "{forces:?}");
+}
+
+/// Tresca with the shear yield of the von Mises strip (σ₀ = √2 k₀, k = σ₀/2; theory §9.2, h = 0)
+/// on the perfectly plastic P2 strip at U = 0.01 and 0.2 (issue 25): with their defaults newton
+/// (200 iterations, KKT 0.98) and the penalty (50, KKT 0.59) stop short at 0.2; with a larger
+/// penalty budget — Newton's fallback `fallback_max_iter = 400` (one fallback of 140 penalty
+/// iterations, then 10 Newton iterations in all), the penalty's `max_iter = 400` (144
+/// iterations) — both converge and agree to 1e-8 (measured: 0.9544680 and 0.9678019 on both).
+/// The plateau is within 10 % of Prandtl's (2 + π)k per unit length (measured +6.5 % on this
+/// coarse mesh; von Mises +3.0 %). socp has no Tresca cone; uzawa is too slow at h = 0.
+#[test]
+fn tresca_on_the_perfectly_plastic_p2_strip_converges_up_to_20x_with_a_larger_penalty_budget() {
+    let tresca = yield_table("tresca", &[("sigma0", 2f64.sqrt()), ("h", 0.0)]);
+    let solvers = [("newton", "fallback_max_iter = 400"), ("penalty", "max_iter = 400")];
+    let forces = coarse_strip_forces(Some(tresca), &solvers, &[0.01, 0.2]);
+    assert_forces_agree(&forces, 1e-8);
     let f20 = forces[1].2;
-    assert!((f20 / prandtl_force() - 1.0).abs() < 0.05, "{f20} against {}", prandtl_force());
+    assert!((f20 / prandtl_force() - 1.0).abs() < 0.1, "{f20} against {}", prandtl_force());
 }

@@ -17,10 +17,12 @@ use crate::app::setup::solver_by_type;
 use crate::io::summary::Summary;
 use saddle_contact::{Flat, Paraboloid};
 use saddle_core::{
-    DiscreteProblem, FiniteElement, P2, SceneError, Silent, Solution, SolveError, Solver, StopReason, Workspace, kkt,
+    DiscreteProblem, Evolution, FiniteElement, P2, PathError, SceneError, Silent, Solution, SolveError, Solver,
+    StopReason, Workspace, kkt,
 };
 use saddle_solvers::conformance::{Johnson, Setup, johnson_p2};
 use saddle_solvers::{Penalty, Uzawa};
+use saddle_yield::Tresca;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -58,11 +60,26 @@ pub struct Case {
     pub setup: Setup,
     /// The solvers to run: the four defaults, or one special setting.
     pub solvers: Vec<Setting>,
+    /// The load factors of a path (theory §11), each step warm-started from the last; empty:
+    /// one solve at factor 1. The row reports the last step.
+    pub path: Vec<f64>,
 }
 
 impl Case {
     fn new(group: u8, label: impl Into<String>, setup: Setup) -> Self {
-        Self { group, label: label.into(), setup, solvers: all_solvers().into_iter().map(Setting::from).collect() }
+        Self {
+            group,
+            label: label.into(),
+            setup,
+            solvers: all_solvers().into_iter().map(Setting::from).collect(),
+            path: Vec::new(),
+        }
+    }
+
+    /// The case run along the load path `factors`.
+    fn along(mut self, factors: &[f64]) -> Self {
+        self.path = factors.to_vec();
+        self
     }
 
     /// The case run by one solver setting only.
@@ -116,7 +133,8 @@ pub fn first_yield_force(young: f64, nu: f64, k0: f64, radius: f64) -> f64 {
     std::f64::consts::PI.powi(3) * radius * radius * p0.powi(3) / (6.0 * e_star * e_star)
 }
 
-/// Every case of issue 5 (1–7) on the small default scene.
+/// Every case of issue 5 (1–8) and issue 25 (P2 with h = 0 at three loads, Tresca, 9: load
+/// paths unloading to a small load) on the small default scene.
 pub fn cases() -> Vec<Case> {
     let d = Johnson::default;
     let mut c = vec![];
@@ -134,6 +152,11 @@ pub fn cases() -> Vec<Case> {
         let label = if h_rel == 0.0 { "p2: h = 0".to_string() } else { format!("p2: h/E = {h_rel:e}") };
         c.push(Case::new(1, label, Johnson { h: 100.0 * h_rel, ..johnson_p2() }.setup()));
     }
+    // issue 25: P2 with h = 0 at two more loads (the default 0.3 is the row above), and Tresca
+    for force in P2_PERFECTLY_PLASTIC_FORCES {
+        c.push(Case::new(1, format!("p2: h = 0, F = {force}"), perfectly_plastic_p2(force)));
+    }
+    c.push(Case::new(1, format!("p2: Tresca, h = 0, F = {TRESCA_P2_FORCE}"), tresca_p2(TRESCA_P2_FORCE)));
     for nu in [0.49, 0.499, 0.4999] {
         c.push(Case::new(2, format!("p2: ν = {nu}"), Johnson { nu, ..johnson_p2() }.setup()));
     }
@@ -154,7 +177,36 @@ pub fn cases() -> Vec<Case> {
     // 7. meshes: slivers (a layer 0.03 thick: aspect ratio ≈ 100), no clamped node
     c.push(Case::new(7, "slivers (aspect ratio ~100)", sliver_scene()));
     c.push(Case::new(7, "no clamped node", unclamped_scene()));
+    // 9. load paths (issue 25): loaded to the default force, unloaded to 1 %, 0.1 % and 0
+    for (label, last) in UNLOADING {
+        c.push(Case::new(9, format!("unloaded to {label}"), scene()).along(&[0.4, 1.0, last]));
+    }
     c
+}
+
+/// Case 9: how far the punch is unloaded after loading to the default force (the path
+/// [0.4, 1, last]).
+pub const UNLOADING: [(&str, f64); 3] = [("1 %", 0.01), ("0.1 %", 0.001), ("0", 0.0)];
+
+/// Case 1 with P2 and h = 0 beyond the default force 0.3 (issue 25): 138 and 308 of 648
+/// elements plastic.
+pub const P2_PERFECTLY_PLASTIC_FORCES: [f64; 2] = [1.0, 3.0];
+
+/// Case 1: the P2 scene with perfect plasticity (h = 0) and the punch force `force`.
+pub fn perfectly_plastic_p2(force: f64) -> Setup {
+    Johnson { h: 0.0, force, ..johnson_p2() }.setup()
+}
+
+/// Case 1: Tresca's force on the P2 scene with h = 0: 144 of 648 elements plastic.
+pub const TRESCA_P2_FORCE: f64 = 1.0;
+
+/// Case 1: [`perfectly_plastic_p2`] with Tresca's surface of the same uniaxial yield stress
+/// σ₀ = √(3/2) k₀ (theory §9.2) in place of von Mises.
+pub fn tresca_p2(force: f64) -> Setup {
+    let mut s = perfectly_plastic_p2(force);
+    let sigma0 = (1.5f64).sqrt() * Johnson::default().k0;
+    s.stresses = Some(Box::new(Tresca::new(sigma0, 0.0).expect("σ₀ > 0, h = 0 are valid")));
+    s
 }
 
 /// Case 8: the default scene with the yield radius k₀ = 0.05 (20 times smaller): most elements
@@ -221,6 +273,35 @@ pub fn problem(setup: &Setup) -> Result<DiscreteProblem, SceneError> {
     setup.problem()
 }
 
+/// Runs `solver` along the load path `factors` of `setup` (theory §11.2): the last step, or
+/// the first that did not converge, as [`run`] reports a solve.
+pub fn run_path(setup: &Setup, factors: &[f64], solver: &dyn Solver) -> Outcome {
+    let p = match problem(setup) {
+        Ok(p) => p,
+        Err(e) => return Outcome::SceneError(Arc::new(e)),
+    };
+    let mut path = Evolution::new(&p);
+    let t0 = Instant::now();
+    let mut last = None;
+    for &factor in factors {
+        let step = match path.step(factor, solver, &mut Silent) {
+            Ok(step) => step,
+            Err(PathError::Scene { source, .. }) => return Outcome::SceneError(Arc::new(source)),
+            Err(PathError::Solve { source, .. }) => return Outcome::SolveError(Arc::new(source)),
+        };
+        let stop = !step.solution.report.converged;
+        last = Some(step);
+        if stop {
+            break;
+        }
+    }
+    let step = last.expect("a path has a step");
+    let l = &step.problem.lagrangian();
+    let recomputed_kkt = kkt(l, &step.solution.iterate(), &mut Workspace::new(l)).max();
+    let summary = Box::new(Summary::new(step.problem.view(), &step.solution, None));
+    Outcome::Returned { summary, recomputed_kkt, wall_s: t0.elapsed().as_secs_f64() }
+}
+
 /// Runs `solver` on `setup`.
 pub fn run(setup: &Setup, solver: &dyn Solver) -> (Outcome, Option<Solution>) {
     let p = match problem(setup) {
@@ -245,7 +326,11 @@ pub fn study(cases: &[Case], mut progress: impl FnMut(&Row)) -> Vec<Row> {
     let mut rows = vec![];
     for case in cases {
         for setting in &case.solvers {
-            let (outcome, _) = run(&case.setup, setting.solver.as_ref());
+            let outcome = if case.path.is_empty() {
+                run(&case.setup, setting.solver.as_ref()).0
+            } else {
+                run_path(&case.setup, &case.path, setting.solver.as_ref())
+            };
             let row = Row { case: case.clone(), solver: setting.label.clone(), outcome };
             progress(&row);
             rows.push(row);
@@ -295,6 +380,12 @@ pub fn markdown(rows: &[Row]) -> String {
                 }
                 if r.case.group == 7 {
                     notes.push(format!("aspect ratio {:.0}", s.mesh_quality.max_aspect_ratio));
+                }
+                if !r.case.path.is_empty() {
+                    notes.push(format!("path {:?}, the last step", r.case.path));
+                }
+                if let Some(f) = s.counters.get("fallbacks").filter(|f| **f > 0.0) {
+                    notes.push(format!("{f} fallbacks"));
                 }
                 if r.case.group == 8 {
                     notes.push(format!("{} of {} elements plastic", s.plastic_elements, s.elements));

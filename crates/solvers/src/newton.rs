@@ -841,7 +841,7 @@ impl<'a> Run<'a> {
     /// against them — a mechanism, the load beyond the limit.
     fn collapse_or(&mut self, e: SolveError) -> SolveError {
         let l = self.l;
-        let forced = l.comm().any(l.data.load.iter().chain(l.data.nodal_load).any(|f| *f != 0.0));
+        let forced = l.forced();
         let singular = matches!(&e, SolveError::LinearAlgebra { source, .. }
             if matches!(source.downcast_ref::<LinalgError>(), Some(LinalgError::NotPositiveDefinite { .. })));
         let plastic = !self.state.elastic_phase && l.data.plasticity().is_some();

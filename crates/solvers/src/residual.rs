@@ -31,6 +31,19 @@ impl History {
         }
     }
 
+    /// The mean contraction q of the residual per iteration over the last quarter of the
+    /// history (at least 100 iterations), the residual's geometric mean rate there; `None`
+    /// for a shorter history or a residual that did not fall.
+    pub(crate) fn contraction(&self) -> Option<f64> {
+        let (n, window) = (self.residuals.len(), self.residuals.len() / 4);
+        if window < 100 {
+            return None;
+        }
+        let (first, last) = (self.residuals[n - 1 - window], self.residuals[n - 1]);
+        let q = (last / first).powf(1.0 / window as f64);
+        (q < 1.0 && q > 0.0).then_some(q)
+    }
+
     /// The report of an iteration that ended for `stop` after `iterations` with the last
     /// residuals `kkt` — converged exactly when `stop` is [`StopReason::Converged`] — with its
     /// `phases` and `counters` and no warnings.

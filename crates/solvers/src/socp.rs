@@ -45,6 +45,7 @@
 //! **Polishing.** The interior point method alone gives stresses to about 10⁻⁵; its (u, V, λ)
 //! start [`Newton::solve_from`], which converges in a few iterations to `tol`.
 
+use crate::linear::{self, InSolver};
 use crate::newton::{Newton, Start};
 use crate::triplets::{Triplets, programme_json};
 use clarabel::algebra::CscMatrix;
@@ -56,6 +57,7 @@ use saddle_core::error::{ParameterError, check, join};
 use saddle_core::problem::fields::StressField;
 use saddle_core::problem::kkt::{KktResiduals, kkt_with_stress};
 use saddle_core::problem::lagrangian::{Iterate, Lagrangian, Workspace};
+use saddle_core::problem::operators::Material;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, SolveReport, Solver, StopReason};
 use saddle_core::problem::stresses::{MAX_HARDENING_DIM, SocBlock};
 use saddle_core::problem::tensor::Sym;
@@ -167,6 +169,7 @@ impl Solver for Socp {
         saddle_core::one_rank("socp", l)?;
         let mut timer = PhaseTimer::default();
         let (prog, ipm) = self.interior_point(l, monitor, &mut timer)?;
+        beyond_collapse(l, &ipm)?;
         let found = Found::recover(l, &prog, &ipm, &mut timer);
         let r_ipm = found.kkt.max();
         monitor.iteration(ipm.iterations, r_ipm, self.tol);
@@ -262,6 +265,28 @@ impl Socp {
         report.iterations += iterations;
         Ok(sol)
     }
+}
+
+/// Stage 1b (theory §4.6): Clarabel's certificate that the cone programme is infeasible —
+/// no stress in P balances the prescribed forces on a plastic body — is the error
+/// [`SolveError::BeyondCollapse`]: the certificate is a collapse mechanism, once the body is
+/// known to be held (else the singular elastic stiffness's error: no body without supports
+/// carries a force). Otherwise `Ok`.
+fn beyond_collapse(l: &Lagrangian<'_>, ipm: &IpmResult) -> Result<(), SolveError> {
+    let infeasible = matches!(ipm.status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible);
+    if !(infeasible && l.data.plasticity().is_some() && l.forced()) {
+        return Ok(());
+    }
+    let k = l.stiffness(Material::Uniform(&l.data.elasticity.stiffness_matrix()));
+    linear::analyse(l.pattern(), "elastic stiffness", NAME, &mut 0)?.factorise(&k).in_solver(NAME)?;
+    Err(SolveError::BeyondCollapse {
+        solver: NAME.into(),
+        evidence: format!(
+            "the conic solver certifies that no stress in P balances the loads (Clarabel {:?} after {} iterations; \
+             its certificate is a collapse mechanism whose loads' power exceeds its plastic dissipation)",
+            ipm.status, ipm.iterations
+        ),
+    })
 }
 
 /// The interior point's solution in the units of `l`, with the residual of theory §3.4.

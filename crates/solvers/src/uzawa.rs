@@ -108,6 +108,20 @@ pub const DIVERGENCE_WARM_UP: usize = 3;
 /// never a solution.
 pub const STAGNATION_WINDOW: usize = 500;
 
+/// Escape (theory §4.6): the iterates are judged at iterations 2ᵏ ≥ this, over the last two
+/// doublings of the count. Until then the first, elastic steps dominate the path.
+pub const ESCAPE_START: usize = 256;
+
+/// Escape: the chord ‖xⁿ − xⁿᐟ²‖ is at least this fraction of the path Σ‖xᵏ⁺¹ − xᵏ‖ between
+/// (a straight line). A converging iteration near its round-off floor, or one turning between
+/// active sets, falls far below it.
+pub const ESCAPE_STRAIGHTNESS: f64 = 0.99;
+
+/// Escape: the step length δₙ is at least this fraction of δₙ/₂ (an undiminished speed).
+/// Near a solution that a perfectly plastic body reaches sublinearly δ falls like n^(−1/2),
+/// to 0.71 of itself per doubling; with hardening it falls geometrically.
+pub const ESCAPE_SPEED: f64 = 0.9;
+
 #[typetag::serde(name = "uzawa")]
 impl Solver for Uzawa {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
@@ -202,6 +216,12 @@ struct Watch {
     first_step: f64,
     /// The last step length.
     last_step: f64,
+    /// The Euclidean path length Σ‖xᵏ⁺¹ − xᵏ‖ since the last escape mark.
+    path: f64,
+    /// The step length at the last escape mark.
+    mark_step: f64,
+    /// The interval before the last mark was a straight line at undiminished speed.
+    escaping: bool,
 }
 
 /// What an Uzawa run counts for its report.
@@ -227,11 +247,15 @@ struct Scratch {
     v_prev: Vec<f64>,
     /// Hᵀμ (unused).
     ht_mu: Vec<f64>,
+    /// The iterate (u, V) at the last escape mark.
+    u_mark: Vec<f64>,
+    v_mark: Vec<f64>,
 }
 
 impl Scratch {
-    /// The scratch of the stages for `l`.
-    fn new(l: &Lagrangian<'_>) -> Self {
+    /// The scratch of the stages for `l`, the escape mark at the iterate `start` (zero if
+    /// `None`).
+    fn new(l: &Lagrangian<'_>, start: Option<&Start>) -> Self {
         let (n, ne) = (l.n_dofs(), l.n_extras());
         Self {
             ws: Workspace::new(l),
@@ -239,6 +263,8 @@ impl Scratch {
             u_prev: vec![0.0; n],
             v_prev: vec![0.0; ne],
             ht_mu: vec![0.0; ne],
+            u_mark: start.map_or_else(|| vec![0.0; n], |s| s.u.clone()),
+            v_mark: start.map_or_else(|| vec![0.0; ne], |s| s.extras.clone()),
         }
     }
 }
@@ -303,9 +329,17 @@ impl<'a> Run<'a> {
             rho,
             projector,
             state: Self::start(l, start, rho),
-            watch: Watch { best: (f64::INFINITY, 0), smallest_step: f64::INFINITY, first_step: 0.0, last_step: 0.0 },
+            watch: Watch {
+                best: (f64::INFINITY, 0),
+                smallest_step: f64::INFINITY,
+                first_step: 0.0,
+                last_step: 0.0,
+                path: 0.0,
+                mark_step: f64::INFINITY,
+                escaping: false,
+            },
             count,
-            work: Scratch::new(l),
+            work: Scratch::new(l, start),
             timer,
             history: History::new("uzawa", settings.tol),
         })
@@ -403,6 +437,7 @@ impl<'a> Run<'a> {
             wt.best = (r, it);
         }
         self.divergence_guard(r)?;
+        self.escape_guard(r)?;
         Ok(if it >= self.settings.max_iter {
             Some(StopReason::MaxIterations)
         } else if it - self.watch.best.1 > STAGNATION_WINDOW.max(it / 4) {
@@ -428,6 +463,43 @@ impl<'a> Run<'a> {
                 hint: self.settings.divergence_hint(),
             });
         }
+        Ok(())
+    }
+
+    /// The escape guard (theory §4.6): at iterations n = 2ᵏ, whether the iterates moved from
+    /// xⁿᐟ² to xⁿ along a straight line ([`ESCAPE_STRAIGHTNESS`]) at undiminished speed
+    /// ([`ESCAPE_SPEED`]); the mark moves to xⁿ. Twice running from [`ESCAPE_START`], on a plastic
+    /// body under prescribed forces, the iterates run away along a collapse mechanism:
+    /// [`SolveError::BeyondCollapse`].
+    fn escape_guard(&mut self, r: f64) -> Result<(), SolveError> {
+        let (l, it, s, w, wt) = (self.l, self.state.it, &self.state, &mut self.work, &mut self.watch);
+        if it < ESCAPE_START / 4 || !it.is_power_of_two() {
+            return Ok(());
+        }
+        let comm = l.comm();
+        let chord = comm.sum(s.u.iter().zip(&w.u_mark).map(|(a, b)| (a - b).powi(2)).sum::<f64>())
+            + s.v.iter().zip(&w.v_mark).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        let (chord, path) = (chord.sqrt(), wt.path);
+        let escaping = path > 0.0 && chord >= ESCAPE_STRAIGHTNESS * path && wt.last_step >= ESCAPE_SPEED * wt.mark_step;
+        if escaping && wt.escaping && it >= ESCAPE_START && l.data.plasticity().is_some() && l.forced() {
+            return Err(SolveError::BeyondCollapse {
+                solver: "uzawa".into(),
+                evidence: format!(
+                    "from iteration {} to {it} the iterates ran along a straight line at undiminished speed (step \
+                     length {:.3e} in the metric, {:.3e} at iteration {}; chord {:.4} of the path), the KKT residual \
+                     still {r:.3e}: the displacement runs away along a collapse mechanism",
+                    it / 4,
+                    wt.last_step,
+                    wt.mark_step,
+                    it / 2,
+                    chord / path
+                ),
+            });
+        }
+        wt.escaping = escaping;
+        (wt.path, wt.mark_step) = (0.0, wt.last_step);
+        w.u_mark.copy_from_slice(&s.u);
+        w.v_mark.copy_from_slice(&s.v);
         Ok(())
     }
 
@@ -491,6 +563,9 @@ impl<'a> Run<'a> {
         };
         let dv_m_dv: f64 = weights.iter().zip(s.v.iter().zip(&w.v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
         wt.last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
+        let du2: f64 = s.u.iter().zip(&w.u_prev).map(|(a, b)| (a - b).powi(2)).sum();
+        let dv2: f64 = s.v.iter().zip(&w.v_prev).map(|(a, b)| (a - b).powi(2)).sum();
+        wt.path += (self.l.comm().sum(du2) + dv2).sqrt();
         if s.it == 0 {
             wt.first_step = wt.last_step;
         } else {
@@ -536,9 +611,31 @@ impl<'a> Run<'a> {
             put("krylov_iterations", iterations as f64);
             put("krylov_unconverged", unconverged as f64);
         }
+        let slow = self.slow_convergence(stop, kkt.max());
         let State { u, v, lambda, stress, it, .. } = self.state;
-        let report = self.history.report(stop, it, kkt, self.timer.into_phases(), counters);
+        let mut report = self.history.report(stop, it, kkt, self.timer.into_phases(), counters);
+        report.warnings.extend(slow);
         Solution { u, extras: v, stress, lambda, report, undetermined: Vec::new() }
+    }
+
+    /// Why an iteration that stopped short (`stop`, last residual `r`) did not reach `tol`
+    /// (theory §4.1, the rate): its residual's contraction per iteration over the last quarter,
+    /// the iterations that rate still needs, and the solvers that converge where the tangent is
+    /// soft. `None` for a converged run or one without a measurable rate.
+    fn slow_convergence(&self, stop: StopReason, r: f64) -> Option<String> {
+        if stop == StopReason::Converged {
+            return None;
+        }
+        let q = self.history.contraction()?;
+        let more = (r / self.settings.tol).ln() / -q.ln();
+        Some(format!(
+            "uzawa converges too slowly here: its residual contracted by {q:.6} per iteration over the last quarter of \
+             the run, so reaching tol = {:e} would take about {more:.0} more iterations at that rate (more where it keeps falling, \
+             as with perfect plasticity); the projected gradient's rate \
+             is set by the softest direction of the tangent (theory §4.1: h/(h + 2G) in the energy metric, 0 with \
+             perfect plasticity): use newton, penalty or socp",
+            self.settings.tol
+        ))
     }
 }
 

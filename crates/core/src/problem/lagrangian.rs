@@ -164,6 +164,12 @@ impl<'a> Lagrangian<'a> {
         self.data.rows.n_rows()
     }
 
+    /// Forces are prescribed (on the extras or the body, on any rank): only then can a load
+    /// exceed what a perfectly plastic body carries (theory §4.6).
+    pub fn forced(&self) -> bool {
+        self.comm().any(self.data.load.iter().chain(self.data.nodal_load).any(|f| *f != 0.0))
+    }
+
     /// ε(u) = ε(w) + ε(u_D) of the displacement u whose free part is `w` (theory §14): the
     /// strain of the body, where [`ElementOperators::strain`] gives that of w.
     pub fn total_strain(&self, w: &[f64], eps: &mut [Sym]) {

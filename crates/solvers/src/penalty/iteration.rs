@@ -3,7 +3,9 @@
 //! update; then the honest report.
 
 use super::system::{Direction, PenaltySystem, Point};
-use super::{MAX_BACKTRACKS, Penalty, SHRINK_MAX, SHRINK_MIN, STUCK_STEP, non_finite};
+use super::{
+    COLLAPSE_SHARE, COLLAPSE_SHARE_PER_MU, MAX_BACKTRACKS, Penalty, SHRINK_MAX, SHRINK_MIN, STUCK_STEP, non_finite,
+};
 use crate::armijo::{ARMIJO, SLOPE_ROUND_OFF};
 use crate::residual::History;
 use crate::vector::{axpy, axpy_into, blend, dot};
@@ -38,6 +40,7 @@ impl Penalty {
             let kkt = run.residual(&mut timer);
             run.history.record(run.state.it, kkt.max(), monitor)?;
             run.gradient(&mut timer)?;
+            run.beyond_collapse()?;
             if let Some(end) = run.stop() {
                 break (end, kkt);
             }
@@ -87,6 +90,8 @@ struct State {
     grad_rel: f64,
     /// The Newton decrement −∇J_μ·d relative to |J_μ|, of the last line search.
     decrement_rel: f64,
+    /// The share of the loads' work taken by the regularisation (theory §4.6).
+    regularisation_share: f64,
 }
 
 /// What a penalty run counts for its report.
@@ -168,6 +173,7 @@ impl State {
             stuck: false,
             grad_rel: f64::NAN,
             decrement_rel: f64::NAN,
+            regularisation_share: 0.0,
         }
     }
 }
@@ -301,6 +307,27 @@ impl<'a> Run<'a> {
             return Err(non_finite("the gradient of J_μ", s.it));
         }
         Ok(())
+    }
+
+    /// Stage 3b (theory §4.6): the regularisation, meant to carry O(μ) of the load, takes
+    /// [`COLLAPSE_SHARE`] or more of the loads' work (and [`COLLAPSE_SHARE_PER_MU`] times μ) on
+    /// a plastic body under prescribed forces:
+    /// no admissible stress carries the load, [`SolveError::BeyondCollapse`].
+    fn beyond_collapse(&mut self) -> Result<(), SolveError> {
+        let (l, s) = (self.l, &mut self.state);
+        s.regularisation_share = self.sys.regularisation_share(l, &s.u, &s.v, &self.work.ws.eps);
+        let threshold = COLLAPSE_SHARE.max(COLLAPSE_SHARE_PER_MU * self.settings.mu);
+        if !(self.plastic && s.regularisation_share >= threshold && l.forced()) {
+            return Ok(());
+        }
+        Err(SolveError::BeyondCollapse {
+            solver: "penalty".into(),
+            evidence: format!(
+                "at iteration {} the regularisation (μ = {:e}), which carries O(μ) of any load the body can carry, \
+                 takes {:.3} of the loads' work: the displacement runs away along a collapse mechanism",
+                s.it, self.settings.mu, s.regularisation_share
+            ),
+        })
     }
 
     /// Stage 4 (theory §4.3, §4.5): J_μ minimised to round-off (relative gradient at most
@@ -472,6 +499,7 @@ impl<'a> Run<'a> {
         put("inner_gradient_relative", s.grad_rel);
         put("newton_decrement_relative", s.decrement_rel);
         put("approximation_limit", (stop == StopReason::ApproximationLimit) as u8 as f64);
+        put("regularisation_share", s.regularisation_share);
         let State { u, v, chi, stress, it, .. } = self.state;
         let report = self.history.report(stop, it, kkt, timer.into_phases(), counters);
         Solution { u, extras: v, stress, lambda: chi, report, undetermined: Vec::new() }

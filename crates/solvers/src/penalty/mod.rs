@@ -152,6 +152,17 @@ pub const SHRINK_MAX: f64 = 0.5;
 /// round-off of J_μ itself: the inner problem is then solved.
 pub const STUCK_STEP: f64 = 1e-8;
 
+/// The share of the loads' work taken by the regularisation beyond which the load exceeds what
+/// the body can carry (theory §4.6), at least. A carried load leaves the regularisation about μ
+/// times (displacement / elastic displacement) of it, while beyond collapse the share tends to
+/// 1 − F_lim/F whatever μ: 1e-3 flags loads more than 0.1 % above the limit.
+pub const COLLAPSE_SHARE: f64 = 1e-3;
+
+/// ... and at least this multiple of μ: a carried load would need a displacement this many
+/// times the elastic one to reach it (at μ = 1e-3, hardening h = 5, the default scene's share
+/// is 5μ).
+pub const COLLAPSE_SHARE_PER_MU: f64 = 1e3;
+
 /// `type = "penalty"`: the regularised Lagrangian L_μ of the existence proof (theory §4.3), solved
 /// by Newton's method.
 #[derive(Clone, Debug, Serialize, Deserialize)]

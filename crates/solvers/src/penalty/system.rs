@@ -9,13 +9,13 @@ use crate::linear::{self, InSolver};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use saddle_core::SymOp;
 use saddle_core::error::ParameterError;
 use saddle_core::linalg::SparseCholesky;
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::lagrangian::{Lagrangian, Workspace};
 use saddle_core::problem::operators::Material;
 use saddle_core::problem::solver::SolveError;
+use saddle_core::{Sym, SymOp};
 
 /// The penalty scales of J_μ and its Newton system.
 ///
@@ -172,13 +172,29 @@ impl PenaltySystem {
     /// J_μ(u, V) with the gaps `gap` = g(u, V); `ws.eps` holds ε(u) afterwards.
     pub(super) fn energy(&self, l: &Lagrangian<'_>, u: &[f64], v: &[f64], gap: &[f64], ws: &mut Workspace) -> f64 {
         let j = energy(l, u, v, ws);
-        let c = &self.c_el;
-        let reg: f64 = ws.eps.par_iter().zip(l.weights().par_iter()).map(|(e, w)| w * e.dot(&(c * e))).sum();
         let pen: f64 = gap.iter().zip(&self.k).map(|(g, k)| k * (-g).max(0.0).powi(2)).sum();
-        // a rank's points and rows summed over the ranks (theory §12; one process: themselves)
-        let (reg, pen) = (l.comm().sum(reg), l.comm().sum(pen));
-        let reg_v: f64 = self.k_v.iter().zip(v).map(|(k, v)| k * v * v).sum();
-        j + 0.5 * (self.mu * (reg + reg_v) + pen)
+        // a rank's rows summed over the ranks (theory §12; one process: themselves)
+        let pen = l.comm().sum(pen);
+        j + 0.5 * (self.mu * self.regularisation(l, v, &ws.eps) + pen)
+    }
+
+    /// uᵀK_el u + Σ k_V V² with `eps` = ε(u): twice the regularisation's energy over μ.
+    fn regularisation(&self, l: &Lagrangian<'_>, v: &[f64], eps: &[Sym]) -> f64 {
+        let c = &self.c_el;
+        let reg: f64 = eps.par_iter().zip(l.weights().par_iter()).map(|(e, w)| w * e.dot(&(c * e))).sum();
+        // a rank's points summed over the ranks (theory §12; one process: themselves)
+        l.comm().sum(reg) + self.k_v.iter().zip(v).map(|(k, x)| k * x * x).sum::<f64>()
+    }
+
+    /// The share of the loads' work f_u·u + f·V that the regularisation takes,
+    /// μ(uᵀK_el u + Σ k_V V²)/(f_u·u + f·V), with `eps` = ε(u) (theory §4.6): O(μ) when the
+    /// load is carried, the fraction of the load no admissible stress carries beyond collapse;
+    /// 0 while the loads do no work.
+    pub(super) fn regularisation_share(&self, l: &Lagrangian<'_>, u: &[f64], v: &[f64], eps: &[Sym]) -> f64 {
+        // a rank's dofs summed over the ranks (theory §12; one process: themselves)
+        let work_u = l.comm().sum(l.data.nodal_load.iter().zip(u).map(|(f, x)| f * x).sum());
+        let work = work_u + l.data.load.iter().zip(v).map(|(f, x)| f * x).sum::<f64>();
+        if work > 0.0 { self.mu * self.regularisation(l, v, eps) / work } else { 0.0 }
     }
 
     /// The Newton step of the contact model (module docs, step 6) with K' in `self.kprime`: an
