@@ -49,13 +49,37 @@ pub fn broadcast_bytes<C: Communicator>(comm: &C, root: usize, data: &mut Vec<u8
     broadcast(comm, root, data)
 }
 
+/// The longest message [`scatter_bytes`] sends (2³⁰ bytes): MPI counts are C `int`s, so a
+/// longer part goes in pieces of this size.
+pub const SCATTER_CHUNK: usize = 1 << 30;
+
 /// Every rank's own bytes from rank `root` (a rank's part of a problem): on `root`, `part(r)` is
 /// made for r = 0, 1, … in turn and sent to rank r before the next is made, so that `root` holds
 /// one other rank's part at a time; every rank returns its own (`part` is called on `root` only).
-/// A part must be shorter than 2³¹ bytes (MPI's count).
-pub fn scatter_bytes<C: Communicator>(comm: &C, root: usize, mut part: impl FnMut(usize) -> Vec<u8>) -> Vec<u8> {
+/// Any size: a part goes as its length, then in pieces of at most [`SCATTER_CHUNK`] bytes.
+pub fn scatter_bytes<C: Communicator>(comm: &C, root: usize, part: impl FnMut(usize) -> Vec<u8>) -> Vec<u8> {
+    scatter_bytes_in_chunks(comm, root, SCATTER_CHUNK, part)
+}
+
+/// [`scatter_bytes`] with pieces of at most `chunk` bytes (1 ≤ `chunk` < 2³¹; the same on
+/// every rank).
+pub fn scatter_bytes_in_chunks<C: Communicator>(
+    comm: &C,
+    root: usize,
+    chunk: usize,
+    mut part: impl FnMut(usize) -> Vec<u8>,
+) -> Vec<u8> {
+    assert!((1..=i32::MAX as usize).contains(&chunk), "scatter_bytes_in_chunks: chunk = {chunk} bytes");
+    let from = comm.process_at_rank(root as i32);
     if comm.rank() as usize != root {
-        return comm.process_at_rank(root as i32).receive_vec::<u8>().0;
+        let mut len = 0u64;
+        from.receive_into(&mut len);
+        let mut bytes = vec![0u8; len as usize];
+        // messages between two ranks arrive in the order they were sent
+        bytes.chunks_mut(chunk).for_each(|piece| {
+            from.receive_into(piece);
+        });
+        return bytes;
     }
     let mut own = Vec::new();
     for r in 0..comm.size() as usize {
@@ -63,7 +87,9 @@ pub fn scatter_bytes<C: Communicator>(comm: &C, root: usize, mut part: impl FnMu
         if r == root {
             own = bytes;
         } else {
-            comm.process_at_rank(r as i32).send(&bytes[..]);
+            let to = comm.process_at_rank(r as i32);
+            to.send(&(bytes.len() as u64));
+            bytes.chunks(chunk).for_each(|piece| to.send(piece));
         }
     }
     own

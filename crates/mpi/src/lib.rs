@@ -73,7 +73,10 @@ mod session;
 mod vector;
 
 #[cfg(feature = "petsc")]
-pub use collective::{agree, broadcast, broadcast_bytes, max, min, scatter_bytes, sum, sum_in_place};
+pub use collective::{
+    SCATTER_CHUNK, agree, broadcast, broadcast_bytes, max, min, scatter_bytes, scatter_bytes_in_chunks, sum,
+    sum_in_place,
+};
 #[cfg(feature = "petsc")]
 pub use error::{Error, PetscError, Result};
 #[cfg(feature = "petsc")]

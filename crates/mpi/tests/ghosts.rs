@@ -6,7 +6,10 @@
 mod common;
 
 use common::distributed::{Case, ensure, run};
-use saddle_mpi::{GhostVector, Index, Petsc, broadcast, broadcast_bytes, max, min, sum, sum_in_place};
+use saddle_mpi::{
+    GhostVector, Index, Petsc, broadcast, broadcast_bytes, max, min, scatter_bytes, scatter_bytes_in_chunks, sum,
+    sum_in_place,
+};
 use std::ops::Range;
 use std::process::ExitCode;
 
@@ -157,13 +160,43 @@ fn collectives(petsc: &Petsc) -> Result<(), String> {
     ensure(bytes == b"mesh", format!("broadcast bytes {bytes:?}"))
 }
 
+/// The bytes rank `r` is sent by the scatter: 10·r + 3 of them (rank 0 none at one rank), each
+/// a function of the rank and its position.
+fn part_of(r: usize) -> Vec<u8> {
+    (0..10 * r + 3).map(|i| (31 * r + 7 * i) as u8).collect()
+}
+
+/// The scatter sends each rank its own bytes whole, whether a part is shorter than a piece, a
+/// whole number of pieces, or a number and a remainder (pieces of 1, 4 and 13 bytes against
+/// parts of 3, 13, 23 … bytes; the part of the last rank, made last, is the longest); the root's
+/// `part` is called once per rank, in order.
+fn scatter_in_pieces(petsc: &Petsc) -> Result<(), String> {
+    let (rank, size) = (petsc.rank(), petsc.size());
+    let world = petsc.world();
+    for root in [0, size - 1] {
+        for chunk in [1, 4, 13] {
+            let mut made = Vec::new();
+            let got = scatter_bytes_in_chunks(world, root, chunk, |r| {
+                made.push(r);
+                part_of(r)
+            });
+            ensure(got == part_of(rank), format!("root {root}, pieces of {chunk}: rank {rank} got {got:?}"))?;
+            let expected: Vec<usize> = if rank == root { (0..size).collect() } else { Vec::new() };
+            ensure(made == expected, format!("root {root}: parts made {made:?}"))?;
+        }
+    }
+    let got = scatter_bytes(world, 0, part_of);
+    ensure(got == part_of(rank), format!("default pieces: rank {rank} got {got:?}"))
+}
+
 fn main() -> ExitCode {
     let petsc = Petsc::initialize().expect("MPI and PETSc initialise");
-    let cases: [Case; 4] = [
+    let cases: [Case; 5] = [
         ("reverse_add_counts_sharers", &reverse_add),
         ("forward_insert_copies_owners", &forward_insert),
         ("dot_and_norms_closed_form", &reductions),
         ("collectives_closed_form", &collectives),
+        ("scatter_in_pieces", &scatter_in_pieces),
     ];
     let code = run(&petsc, &cases);
     drop(petsc);

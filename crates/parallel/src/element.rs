@@ -156,7 +156,7 @@ impl ElementOperators for DistributedElement {
     }
     fn distributed_solver(&self) -> Option<Result<Box<dyn DistributedSpd>, DistributedError>> {
         Some(
-            PetscSpd::new(self.session.get(), self.layout.clone(), self.element.pattern())
+            PetscSpd::new(self.session.get(), self.layout.clone())
                 .map(|s| Box::new(s) as Box<dyn DistributedSpd>)
                 .map_err(|e| Box::new(e) as DistributedError),
         )

@@ -9,7 +9,6 @@
 use crate::funneled::{Funneled, Session};
 use crate::layout::Layout;
 use saddle_core::linalg::{DistributedError, DistributedSolve, DistributedSpd};
-use saddle_core::problem::pattern::SymmetricPattern;
 use saddle_mpi::{Error, GhostVector, Index, Ksp, Matrix, Method, Settings};
 use std::sync::Arc;
 
@@ -28,7 +27,6 @@ pub const DEFAULT_OPTIONS: &str = "-pc_gamg_use_sa_esteig false -mg_levels_ksp_c
 pub struct PetscSpd {
     session: Session,
     layout: Arc<Layout>,
-    pattern: SymmetricPattern,
     matrix: Funneled<Matrix>,
     ksp: Funneled<Ksp>,
     b: Funneled<GhostVector>,
@@ -42,16 +40,12 @@ fn boxed(e: Error) -> DistributedError {
 }
 
 impl PetscSpd {
-    /// The matrix of `layout` on the local `pattern`, preallocated exactly from the layout's
+    /// The matrix of `layout`, preallocated exactly from the layout's
     /// counts of every owned row's couplings, the other ranks' additions included (allowing new
     /// entries instead cost a reallocation of the matrix in the first assembly: rank 0, which owns
     /// the interface's nodes, peaked at 187 MB against rank 1's 118 MB on a 48k-dof P2 scene).
     /// Collective.
-    pub fn new(
-        session: &saddle_mpi::Petsc,
-        layout: Arc<Layout>,
-        pattern: &SymmetricPattern,
-    ) -> saddle_mpi::Result<Self> {
+    pub fn new(session: &saddle_mpi::Petsc, layout: Arc<Layout>) -> saddle_mpi::Result<Self> {
         let owned_rows = 3 * layout.n_owned_nodes;
         let [d_nnz, o_nnz] = &layout.row_nonzeros;
         let mut matrix = Matrix::new(session, owned_rows, 3, d_nnz, o_nnz)?;
@@ -66,7 +60,6 @@ impl PetscSpd {
         Ok(Self {
             session: Session(session),
             layout,
-            pattern: pattern.clone(),
             matrix: Funneled(matrix),
             ksp: Funneled(ksp),
             b: Funneled(b),
@@ -75,12 +68,12 @@ impl PetscSpd {
         })
     }
 
-    /// Adds this rank's lower-triangle `values` and their transposes at the global rows.
-    fn add(&mut self, values: &[f64]) -> saddle_mpi::Result<()> {
-        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+    /// Adds this rank's lower-triangle `values` on the local pattern (`cp`, `ri`: column
+    /// pointers and row indices) and their transposes at the global rows.
+    fn add(&mut self, cp: &[usize], ri: &[usize], values: &[f64]) -> saddle_mpi::Result<()> {
         let rows = &self.layout.dof_row;
         let mut global = Vec::new();
-        for j in 0..self.pattern.n() {
+        for j in 0..cp.len() - 1 {
             let range = cp[j]..cp[j + 1];
             global.clear();
             global.extend(ri[range.clone()].iter().map(|&i| rows[i]));
@@ -102,9 +95,15 @@ impl PetscSpd {
 }
 
 impl DistributedSpd for PetscSpd {
-    fn assemble(&mut self, values: &[f64], fixed: &[usize]) -> Result<(), DistributedError> {
+    fn assemble(
+        &mut self,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        values: &[f64],
+        fixed: &[usize],
+    ) -> Result<(), DistributedError> {
         self.matrix.0.zero_entries().map_err(boxed)?;
-        self.add(values).map_err(boxed)?;
+        self.add(col_ptr, row_idx, values).map_err(boxed)?;
         self.matrix.0.assemble().map_err(boxed)?;
         let mut rows: Vec<Index> = self.layout.dirichlet_rows.clone();
         rows.extend(fixed.iter().map(|&s| self.layout.dof_row[s]));
@@ -112,8 +111,7 @@ impl DistributedSpd for PetscSpd {
         self.ksp.0.set_operator(&self.matrix.0).map_err(boxed)
     }
 
-    fn diagonal(&mut self, values: &[f64], out: &mut [f64]) -> Result<(), DistributedError> {
-        let cp = self.pattern.col_ptr();
+    fn diagonal(&mut self, cp: &[usize], values: &[f64], out: &mut [f64]) -> Result<(), DistributedError> {
         let v = &mut self.sums.0;
         {
             let mut form = v.local_mut().map_err(boxed)?;

@@ -124,10 +124,10 @@ mod tests {
     }
 
     impl DistributedSpd for Mirror {
-        fn assemble(&mut self, _: &[f64], _: &[usize]) -> Result<(), DistributedError> {
+        fn assemble(&mut self, _: &[usize], _: &[usize], _: &[f64], _: &[usize]) -> Result<(), DistributedError> {
             unreachable!()
         }
-        fn diagonal(&mut self, _: &[f64], _: &mut [f64]) -> Result<(), DistributedError> {
+        fn diagonal(&mut self, _: &[usize], _: &[f64], _: &mut [f64]) -> Result<(), DistributedError> {
             unreachable!()
         }
         fn ghosted(&mut self, owned: &[f64], local: &mut [f64]) -> Result<(), DistributedError> {

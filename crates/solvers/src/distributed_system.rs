@@ -45,8 +45,8 @@ pub struct DistributedSystem {
     pub iterations: usize,
     /// Solves that stopped before their tolerance.
     pub unconverged: usize,
+    /// ε = B T y, then C_t ε in its place (one field per point).
     eps: Vec<Sym>,
-    sigma: Vec<Sym>,
     /// `TᵀKT` on the local pattern (empty when T = I everywhere).
     kt: Vec<f64>,
     /// Tᵀ∇E, T y and K T y at the owned dofs.
@@ -114,7 +114,6 @@ impl DistributedSystem {
             iterations: 0,
             unconverged: 0,
             eps: vec![Sym::zeros(); np],
-            sigma: vec![Sym::zeros(); np],
             grad_t: vec![0.0; n],
             ty: vec![0.0; n],
             kty: vec![0.0; n],
@@ -143,7 +142,7 @@ impl DistributedSystem {
     pub fn row_stiffness(&mut self, l: &Lagrangian<'_>, k_elastic: &[f64]) -> Result<Vec<f64>, SolveError> {
         let mut diag = vec![0.0; l.n_dofs()];
         let values = Self::transformed(&self.local, k_elastic, &mut self.kt);
-        self.spd.diagonal(values, &mut diag).map_err(|e| error(&self.solver, e))?;
+        self.spd.diagonal(l.pattern().col_ptr(), values, &mut diag).map_err(|e| error(&self.solver, e))?;
         Ok(self.basis.dof.iter().zip(&self.basis.coef).map(|(&s, a)| diag[s] / (a * a)).collect())
     }
 
@@ -152,11 +151,12 @@ impl DistributedSystem {
     pub fn tangent_times(&mut self, l: &Lagrangian<'_>, material: Material<'_>, y: &[f64], out: &mut [f64]) {
         self.ty.copy_from_slice(y);
         self.basis.displacement_from_coordinates(&mut self.ty);
+        // ε, then σ = C_t ε in its place
         l.strain(&self.ty, &mut self.eps);
-        for (i, (s, e)) in self.sigma.iter_mut().zip(&self.eps).enumerate() {
-            *s = material.at(i) * e;
+        for (i, e) in self.eps.iter_mut().enumerate() {
+            *e = material.at(i) * *e;
         }
-        l.divergence(&self.sigma, &mut self.kty);
+        l.divergence(&self.eps, &mut self.kty);
         self.basis.force_to_coordinates(&self.kty, out);
     }
 
@@ -180,11 +180,11 @@ impl DistributedSystem {
         }
         let n = l.n_dofs();
         let mut diag = vec![0.0; n];
-        self.spd.diagonal(&values, &mut diag).map_err(|e| error(&self.solver, e))?;
+        self.spd.diagonal(cp, &values, &mut diag).map_err(|e| error(&self.solver, e))?;
         let (lo, hi) = diag.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x)));
         let comm = l.comm();
         let condition = comm.max(hi) / comm.min(lo);
-        self.spd.assemble(&values, &[]).map_err(|e| error(&self.solver, e))?;
+        self.spd.assemble(cp, l.pattern().row_idx(), &values, &[]).map_err(|e| error(&self.solver, e))?;
         self.assemblies += 1;
         self.assembled = None;
         let mut x = vec![0.0; n];
@@ -221,7 +221,8 @@ impl DistributedSystem {
         // collective: assembled on every rank or on none
         if !self.constant_tangent || l.comm().any(self.assembled.as_ref() != Some(&fixed)) {
             let values = Self::transformed(&self.local, k, &mut self.kt);
-            self.spd.assemble(values, &fixed).map_err(|e| error(&self.solver, e))?;
+            let p = l.pattern();
+            self.spd.assemble(p.col_ptr(), p.row_idx(), values, &fixed).map_err(|e| error(&self.solver, e))?;
             self.assemblies += 1;
             self.assembled = Some(fixed.clone());
         }

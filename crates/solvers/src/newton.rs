@@ -805,11 +805,11 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// A fallback is possible: fewer than `max_fallbacks` so far, on one process (on a
-    /// distributed problem Newton keeps to its own steps, although the penalty method runs
-    /// there too, theory §12.4).
+    /// A fallback is possible: fewer than `max_fallbacks` so far (on a distributed problem too:
+    /// the penalty method runs there, theory §12.4, and the stall and the step's failure that
+    /// call for it are decided on reduced residuals and a collective solve, alike on every rank).
     fn can_fall_back(&self) -> bool {
-        self.count.fallbacks < self.settings.max_fallbacks && matches!(self.system, Systems::Serial(_))
+        self.count.fallbacks < self.settings.max_fallbacks
     }
 
     /// The globalisation (theory §4.2.1): a bounded run of the penalty method from the solve's

@@ -1,8 +1,9 @@
 //! One rank's part of a partitioned mesh and its dofs (theory §12).
 //!
-//! Elements belong to the rank the partition gives them. A node belongs to the lowest rank among
-//! its elements'; a rank's *owned* nodes come first in its local numbering (in the mesh's order),
-//! then its *ghost* nodes (touched by its elements, owned by another rank; in the partitioned
+//! Elements belong to the rank the partition gives them. A node belongs to one of the ranks among
+//! its elements' ([`owners`]: the only one inside a part; on an interface, the one owning the
+//! fewest nodes so far, so that the ranks' rows balance); a rank's *owned* nodes come first in
+//! its local numbering (in the mesh's order), then its *ghost* nodes (touched by its elements, owned by another rank; in the partitioned
 //! order). The *partitioned* node numbering puts rank 0's owned nodes first, then rank 1's, …, so
 //! that every rank owns a contiguous range: a dof's global row in distributed linear algebra is
 //! `3 · partitioned index + component`, fixed components included (they are identity rows).
@@ -44,7 +45,7 @@ pub struct Partition {
     pub ranks: usize,
     /// The rank of every element.
     pub element_rank: Vec<usize>,
-    /// The rank that owns every node: the lowest rank among its elements'.
+    /// The rank that owns every node: one among its elements' ([`owners`]).
     pub node_rank: Vec<usize>,
     /// Every node's index in the partitioned numbering.
     pub node_index: Vec<usize>,
@@ -67,12 +68,7 @@ impl Partition {
         if let Some(rank) = count.iter().position(|&c| c == 0) {
             return Err(PartitionError::EmptyRank { rank, ranks, elements });
         }
-        let mut node_rank = vec![usize::MAX; mesh.n_nodes()];
-        for (e, &r) in element_rank.iter().enumerate() {
-            for n in mesh.element_nodes(e) {
-                node_rank[n] = node_rank[n].min(r);
-            }
-        }
+        let node_rank = owners(mesh, &element_rank, ranks);
         let mut node_offsets = vec![0usize; ranks + 1];
         for &r in node_rank.iter().filter(|&&r| r < ranks) {
             node_offsets[r + 1] += 1;
@@ -138,6 +134,40 @@ impl Partition {
             })
             .collect()
     }
+}
+
+/// The rank owning every node of `mesh` whose elements are on `element_rank` (theory §12.1;
+/// `usize::MAX` at a node of no element): a node inside a part belongs to its rank; the nodes on
+/// the interfaces, in the mesh's order, each to the rank among its elements' that owns the
+/// fewest nodes so far (the lowest of those on a tie). The ranks' owned nodes — their rows of
+/// the distributed matrices — then differ by no more than the interfaces allow, where "the
+/// lowest rank" gave them all to one side. Deterministic: rank 0 computes it once for all.
+pub fn owners(mesh: &TetMesh, element_rank: &[usize], ranks: usize) -> Vec<usize> {
+    // the lowest and highest rank around every node: equal inside a part
+    let mut span = vec![[usize::MAX, 0]; mesh.n_nodes()];
+    for (e, &r) in element_rank.iter().enumerate() {
+        for n in mesh.element_nodes(e) {
+            span[n] = [span[n][0].min(r), span[n][1].max(r)];
+        }
+    }
+    let mut owned = vec![0usize; ranks];
+    let mut interface: Vec<(usize, usize)> = Vec::new();
+    for (e, &r) in element_rank.iter().enumerate() {
+        interface.extend(mesh.element_nodes(e).filter(|&n| span[n][0] != span[n][1]).map(|n| (n, r)));
+    }
+    interface.sort_unstable();
+    interface.dedup();
+    let mut node_rank: Vec<usize> = span.iter().map(|&[lo, hi]| if lo == hi { lo } else { usize::MAX }).collect();
+    for &r in node_rank.iter().filter(|&&r| r < ranks) {
+        owned[r] += 1;
+    }
+    for around in interface.chunk_by(|a, b| a.0 == b.0) {
+        let (n, _) = around[0];
+        let r = around.iter().map(|&(_, r)| r).min_by_key(|&r| (owned[r], r)).expect("a node of an element");
+        node_rank[n] = r;
+        owned[r] += 1;
+    }
+    node_rank
 }
 
 /// One rank's part of a partitioned mesh and its dof numbering (module docs).
@@ -346,6 +376,47 @@ mod tests {
                 let err = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
                 assert!(err(&f_sum, &f) < 1e-12, "{} ranks: Bᵀσ off by {:e}", ranks, err(&f_sum, &f));
                 assert!(err(&diag_sum, &diag) < 1e-10, "{} ranks: diagonal off by {:e}", ranks, err(&diag_sum, &diag));
+            }
+        }
+    }
+
+    /// Every node is owned by a rank among its elements', and on two ranks the interface evens
+    /// out the owned nodes: with d the difference of the parts' inner nodes and m the interface
+    /// nodes, the owned counts differ by d − m when m < d, else by the parity of m − d ("the
+    /// lowest rank" gave rank 0 the whole interface: d + m).
+    #[test]
+    fn interface_nodes_balance_the_owned_nodes() {
+        let mesh = BoxMesh::new([0.0; 3], [1.0, 1.0, 0.5], [6, 5, 4]).mesh().unwrap();
+        for (ranks, cut) in [(2, 0.5), (2, 0.3), (3, 0.5)] {
+            let n = mesh.n_elements();
+            // slabs, the first `cut` of the elements on rank 0, the rest evenly on the others
+            let first = (cut * n as f64) as usize;
+            let element_rank: Vec<usize> =
+                (0..n).map(|e| if e < first { 0 } else { 1 + (e - first) * (ranks - 1) / (n - first) }).collect();
+            let owner = owners(&mesh, &element_rank, ranks);
+            let mut around = vec![Vec::new(); mesh.n_nodes()];
+            for (e, &r) in element_rank.iter().enumerate() {
+                mesh.element_nodes(e).for_each(|m| around[m].push(r));
+            }
+            let (mut inner, mut interface, mut owned) = (vec![0usize; ranks], 0, vec![0usize; ranks]);
+            for (m, ranks_around) in around.iter().enumerate() {
+                assert!(ranks_around.contains(&owner[m]), "node {m}: owner {} not among {ranks_around:?}", owner[m]);
+                owned[owner[m]] += 1;
+                if ranks_around.iter().all(|&r| r == ranks_around[0]) {
+                    inner[ranks_around[0]] += 1;
+                } else {
+                    interface += 1;
+                }
+            }
+            assert_eq!(owned.iter().sum::<usize>(), mesh.n_nodes());
+            if ranks == 2 {
+                let d = inner[0].abs_diff(inner[1]);
+                let expected = if interface < d { d - interface } else { (interface - d) % 2 };
+                assert_eq!(
+                    owned[0].abs_diff(owned[1]),
+                    expected,
+                    "cut {cut}: inner {inner:?}, {interface} on the interface"
+                );
             }
         }
     }

@@ -22,14 +22,22 @@ pub struct DistributedSolve {
 /// solver. Vectors are a rank's owned dofs, or its local dofs (owned, then ghosts: the local
 /// pattern's numbering) where said. Every method is collective.
 pub trait DistributedSpd {
-    /// The matrix from this rank's `values` on the local pattern, summed over the ranks, with
-    /// the rows and columns of the owned dofs `fixed` (every rank its own) replaced by those of
-    /// the identity. The nonzero structure is kept from one call to the next.
-    fn assemble(&mut self, values: &[f64], fixed: &[usize]) -> Result<(), DistributedError>;
+    /// The matrix from this rank's `values` on the local pattern (lower triangle by columns:
+    /// column j's rows are `row_idx[col_ptr[j]..col_ptr[j + 1]]`, the diagonal first; the
+    /// caller's, so that the solver keeps no copy of it), summed over the ranks, with the rows
+    /// and columns of the owned dofs `fixed` (every rank its own) replaced by those of the
+    /// identity. The nonzero structure is kept from one call to the next.
+    fn assemble(
+        &mut self,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        values: &[f64],
+        fixed: &[usize],
+    ) -> Result<(), DistributedError>;
 
     /// The diagonal of the matrix `values` would assemble (summed over the ranks, nothing
-    /// fixed), at the owned dofs.
-    fn diagonal(&mut self, values: &[f64], out: &mut [f64]) -> Result<(), DistributedError>;
+    /// fixed), at the owned dofs; `col_ptr` as in [`DistributedSpd::assemble`].
+    fn diagonal(&mut self, col_ptr: &[usize], values: &[f64], out: &mut [f64]) -> Result<(), DistributedError>;
 
     /// `local` = the vector `owned` (at the owned dofs) at every local dof, the ghosts' values
     /// from their owners: what a rank needs to know of data other ranks hold at its ghost dofs

@@ -6,10 +6,16 @@
 //! the small default scene (theory §6), the same with P2 elements, a tilting punch loaded off
 //! centre, two named punches, Drucker–Prager, a three-step load path (load, hold, unload;
 //! theory §11), and a rigid sphere pushed 15° off the axis, whose rows act on all three dofs of
-//! their nodes (general rows: theory §8.1, §12.2).
+//! their nodes (general rows: theory §8.1, §12.2). Newton's fallbacks on the penalty method
+//! (theory §4.2.1) are counted alike. [`agree_with_serial_on`] takes other scenes, such as the
+//! perfectly plastic strip on which Newton falls back ([`Geometry::Strip`]).
 
-use saddle_contact::{Paraboloid, RigidPunch, RigidSphere, TiltingPunch};
+// shared by the test binaries, each of which uses a part
+#![allow(dead_code)]
+
+use saddle_contact::{Flat, Paraboloid, RigidPunch, RigidPunchDisplacement, RigidSphere, TiltingPunch};
 use saddle_core::fem::FiniteElement;
+use saddle_core::mesh::dofs::Component;
 use saddle_core::problem::comm::Comm;
 use saddle_core::{
     AdmissibleStresses, BoxMesh, Dirichlet, DiscreteProblem, Elasticity, Evolution, Lagrangian, NamedObstacle,
@@ -19,32 +25,63 @@ use saddle_parallel::distribute;
 use saddle_parallel::saddle_mpi::Petsc;
 use saddle_yield::{DruckerPrager, VonMises};
 
-/// A scene: mesh cells, element, yield surface, obstacles.
-struct Scene {
-    name: &'static str,
-    cells: [usize; 3],
-    element: Box<dyn FiniteElement>,
-    stresses: Box<dyn AdmissibleStresses>,
-    obstacles: Obstacles,
+/// A scene: its geometry, element, yield surface, obstacles.
+pub struct Scene {
+    pub name: &'static str,
+    pub geometry: Geometry,
+    pub element: Box<dyn FiniteElement>,
+    pub stresses: Box<dyn AdmissibleStresses>,
+    pub obstacles: Obstacles,
     /// Load factors of a path (empty: one stationary solve).
-    path: Vec<f64>,
+    pub path: Vec<f64>,
 }
 
-fn mesh(cells: [usize; 3]) -> TetMesh {
-    BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], cells)
-        .graded([0.0; 3], 3.0)
-        .aligned(0, &[-0.75, 0.75])
-        .aligned(1, &[-0.75, 0.75])
-        .mesh()
-        .unwrap()
+/// A mesh of so many cells and its supports.
+#[derive(Clone, Copy)]
+pub enum Geometry {
+    /// The default scene's block [−1, 1]² × [0, 1] graded toward the punch, clamped but on the
+    /// bottom face's middle (theory §6).
+    Block([usize; 3]),
+    /// `examples/strip_punch.toml`'s plane-strain strip [−2, 2] × [0, 0.25] × [0, 2]: rollers on
+    /// the faces y = const, clamped at the top and the sides; the punch on |x| ≤ 0.5.
+    Strip([usize; 3]),
 }
 
-fn dirichlet() -> Vec<Dirichlet> {
-    let gamma1 = Region::All(vec![
+fn mesh(geometry: Geometry) -> TetMesh {
+    match geometry {
+        Geometry::Block(cells) => BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], cells)
+            .graded([0.0; 3], 3.0)
+            .aligned(0, &[-0.75, 0.75])
+            .aligned(1, &[-0.75, 0.75]),
+        Geometry::Strip(cells) => BoxMesh::new([-2.0, 0.0, 0.0], [2.0, 0.25, 2.0], cells).aligned(0, &[-0.5, 0.5]),
+    }
+    .mesh()
+    .unwrap()
+}
+
+fn dirichlet(geometry: Geometry) -> Vec<Dirichlet> {
+    let group = |g: &str| Region::Group(g.into());
+    match geometry {
+        Geometry::Block(_) => {
+            let gamma1 =
+                Region::All(vec![group("zmin"), Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] }]);
+            vec![Dirichlet::clamped(Region::Not(Box::new(gamma1)))]
+        }
+        Geometry::Strip(_) => vec![
+            Dirichlet::roller(group("ymin"), Component::Y),
+            Dirichlet::roller(group("ymax"), Component::Y),
+            Dirichlet::clamped(Region::Any(vec![group("zmax"), group("xmin"), group("xmax")])),
+        ],
+    }
+}
+
+/// The strip's flat punch on |x| ≤ 0.5 of the bottom face, moved by `u`.
+pub fn strip_punch(u: f64) -> Obstacles {
+    let zone = Region::All(vec![
         Region::Group("zmin".into()),
-        Region::Box { min: [-0.75, -0.75, -1.0], max: [0.75, 0.75, 1.0] },
+        Region::Box { min: [-0.5, -1.0, -1e-9], max: [0.5, 1.0, 1e-9] },
     ]);
-    vec![Dirichlet::clamped(Region::Not(Box::new(gamma1)))]
+    Obstacles::one(Box::new(RigidPunchDisplacement::new(u, zone, Box::new(Flat::default())).unwrap()))
 }
 
 fn disc(x: f64, r: f64) -> Region {
@@ -55,11 +92,11 @@ fn punch(force: f64) -> Obstacles {
     Obstacles::one(Box::new(RigidPunch::new(force, disc(0.0, 0.5), Box::new(Paraboloid::new(5.0))).unwrap()))
 }
 
-fn law() -> Elasticity {
+pub fn law() -> Elasticity {
     Elasticity::new(100.0, 0.3).unwrap()
 }
 
-fn von_mises() -> Box<dyn AdmissibleStresses> {
+pub fn von_mises() -> Box<dyn AdmissibleStresses> {
     Box::new(VonMises::new(1.0, 5.0).unwrap())
 }
 
@@ -75,7 +112,7 @@ fn scenes() -> Vec<Scene> {
     vec![
         Scene {
             name: "default (p1)",
-            cells: [12, 12, 6],
+            geometry: Geometry::Block([12, 12, 6]),
             element: Box::new(P1::default()),
             stresses: von_mises(),
             obstacles: punch(0.3),
@@ -83,7 +120,7 @@ fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "default, p2",
-            cells: [6, 6, 3],
+            geometry: Geometry::Block([6, 6, 3]),
             element: Box::new(P2::default()),
             stresses: von_mises(),
             obstacles: punch(0.3),
@@ -91,7 +128,7 @@ fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "tilting punch off centre",
-            cells: [12, 12, 6],
+            geometry: Geometry::Block([12, 12, 6]),
             element: Box::new(P1::default()),
             stresses: von_mises(),
             obstacles: Obstacles::one(Box::new(tilting)),
@@ -99,7 +136,7 @@ fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "two named punches",
-            cells: [12, 12, 6],
+            geometry: Geometry::Block([12, 12, 6]),
             element: Box::new(P1::default()),
             stresses: von_mises(),
             obstacles: Obstacles::new(vec![two("left", 0.1, -0.35), two("right", 0.25, 0.35)]).unwrap(),
@@ -107,7 +144,7 @@ fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "Drucker-Prager",
-            cells: [12, 12, 6],
+            geometry: Geometry::Block([12, 12, 6]),
             element: Box::new(P1::default()),
             stresses: Box::new(DruckerPrager::new(1.0, 0.1, 5.0).unwrap()),
             obstacles: punch(0.3),
@@ -115,7 +152,7 @@ fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "load path 1, 1, 0",
-            cells: [12, 12, 6],
+            geometry: Geometry::Block([12, 12, 6]),
             element: Box::new(P1::default()),
             stresses: von_mises(),
             obstacles: punch(0.3),
@@ -123,7 +160,7 @@ fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "rigid sphere 15° off the axis",
-            cells: [12, 12, 6],
+            geometry: Geometry::Block([12, 12, 6]),
             element: Box::new(P1::default()),
             stresses: von_mises(),
             obstacles: Obstacles::one(Box::new(sphere)),
@@ -144,16 +181,18 @@ fn contact(comm: &dyn Comm, lambda: &[f64]) -> (usize, f64) {
 /// order), whether it is plastic and whether its trial stress lies within 1e-6 of the yield
 /// surface (where round-off decides the flag).
 #[derive(Debug)]
-struct Numbers {
+pub struct Numbers {
     extras: Vec<Option<f64>>,
     j: f64,
     force: f64,
     contact: usize,
-    plastic: usize,
+    pub plastic: usize,
     kkt: f64,
     iterations: usize,
     /// Solves of the distributed linear solver (the counter `distributed_solves`; 0 without).
     distributed_solves: usize,
+    /// Newton's fallbacks on the penalty method (the counter `fallbacks`; 0 without).
+    pub fallbacks: usize,
     flags: Vec<(bool, bool)>,
 }
 
@@ -187,6 +226,7 @@ fn numbers(l: &Lagrangian<'_>, s: &Solution, global_point: &dyn Fn(usize) -> usi
         kkt: kkt(l, &s.iterate(), &mut Workspace::new(l)).max(),
         iterations: s.report.iterations,
         distributed_solves: s.report.counters.get("distributed_solves").map_or(0, |x| *x as usize),
+        fallbacks: s.report.counters.get("fallbacks").map_or(0, |x| *x as usize),
         flags: plastic.iter().zip(&near).map(|(a, b)| (*a > 0.5, *b > 0.5)).collect(),
     }
 }
@@ -222,11 +262,18 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 /// `solver` on every scene of the matrix, distributed over the session's ranks, against the
 /// same solver on one process (the module docs' comparisons); rank 0 prints a line per step.
 pub fn agree_with_serial(session: &Petsc, solver: &dyn Solver) {
+    agree_with_serial_on(session, solver, scenes());
+}
+
+/// [`agree_with_serial`] on `scenes`; the serial numbers of every scene's steps.
+pub fn agree_with_serial_on(session: &Petsc, solver: &dyn Solver, scenes: Vec<Scene>) -> Vec<Vec<Numbers>> {
     let name = solver.name();
     let rank = session.rank();
-    for scene in scenes() {
-        let m = mesh(scene.cells);
-        let element = scene.element.build(m.clone(), &dirichlet()).unwrap();
+    let mut serial_numbers = Vec::new();
+    for scene in scenes {
+        let m = mesh(scene.geometry);
+        let dirichlet = dirichlet(scene.geometry);
+        let element = scene.element.build(m.clone(), &dirichlet).unwrap();
         let serial =
             DiscreteProblem::new(element, law(), Some(scene.stresses.clone()), scene.obstacles.clone(), &[]).unwrap();
         let n_points = serial.element.n_points();
@@ -235,7 +282,7 @@ pub fn agree_with_serial(session: &Petsc, solver: &dyn Solver) {
             session,
             (rank == 0).then_some(m),
             scene.element.as_ref(),
-            &dirichlet(),
+            &dirichlet,
             law(),
             Some(scene.stresses.clone()),
             scene.obstacles.clone(),
@@ -258,7 +305,7 @@ pub fn agree_with_serial(session: &Petsc, solver: &dyn Solver) {
                     d.extras.iter().zip(&r.extras).filter_map(|(a, b)| Some(rel((*a)?, (*b)?))).fold(0.0, f64::max);
                 println!(
                     "{name}, {size} ranks, {}, step {k}: extras {:?} (serial, largest difference {worst:.1e}), J {:.12e} ({:.1e}), \
-                     force {:.12e}, contact {} ({}), plastic {} ({}), KKT {:.1e}, iterations {} ({})",
+                     force {:.12e}, contact {} ({}), plastic {} ({}), KKT {:.1e}, iterations {} ({}), fallbacks {} ({})",
                     scene.name,
                     r.extras,
                     d.j,
@@ -270,7 +317,9 @@ pub fn agree_with_serial(session: &Petsc, solver: &dyn Solver) {
                     r.plastic,
                     d.kkt,
                     d.iterations,
-                    r.iterations
+                    r.iterations,
+                    d.fallbacks,
+                    r.fallbacks
                 );
             }
             assert_eq!(d.extras.len(), r.extras.len());
@@ -303,6 +352,9 @@ pub fn agree_with_serial(session: &Petsc, solver: &dyn Solver) {
                 assert_eq!(d.plastic, r.plastic, "{}: plastic points", scene.name);
             }
             assert!(d.kkt <= solver.tolerance(), "{}: recomputed KKT {}", scene.name, d.kkt);
+            assert_eq!(d.fallbacks, r.fallbacks, "{}: fallbacks", scene.name);
         }
+        serial_numbers.push(reference);
     }
+    serial_numbers
 }
