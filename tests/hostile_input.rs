@@ -709,4 +709,11 @@ fn bad_inclined_supports_are_errors_naming_the_field_and_the_value() {
         }
     });
     assert_rejected(&parallel, &["dirichlet", "rigid-body motion free"]);
+    // the roller on x = 0 of homogeneous compression inclined: its nodes on z = 0 carry the
+    // punch's contact rows, which are written on the axes' dofs
+    let mut t = example("homogeneous.toml");
+    let d = t.get_mut("dirichlet").and_then(|d| d.as_array_mut()).unwrap()[0].as_table_mut().unwrap();
+    d.remove("components");
+    d.insert("normal".into(), value("[1.0, 0.0, 0.2]"));
+    assert_rejected(&text(&t), &["dirichlet[0].normal", "contact row", "inclined support"]);
 }

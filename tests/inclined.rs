@@ -150,6 +150,16 @@ fn a_support_inclined_at_30_degrees_gives_the_axis_aligned_answer_rotated_on_eve
                         er / sr
                     );
                     assert_eq!(rotated.reactions.len(), 3);
+                    // the reactions balance the loads: the traction on the unit face zmax and
+                    // the pressure 0.2 on the face ymax of area 2, F = t − (0, 0.4, 0), turned
+                    let load = turn(r, [0.3, 0.1 - 0.4, 1.5]);
+                    let total: Vec<f64> =
+                        (0..3).map(|c| rotated.reactions.iter().map(|x| x.force[c]).sum::<f64>() + load[c]).collect();
+                    // measured ≤ 2e-11 (|F| = 1.6) over the solvers: their equilibrium residuals
+                    assert!(
+                        total.iter().all(|x| x.abs() <= 1e-9),
+                        "{element} {solver}: Σ reactions + loads = {total:?}"
+                    );
                     // measured ≤ 3e-14 relative (P2 elastic), ≤ 1e-14 the others: the frames are
                     // exact, the solves agree to round-off; 1e-9 is the bound
                     assert!(
