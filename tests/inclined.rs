@@ -171,3 +171,41 @@ fn a_support_inclined_at_30_degrees_gives_the_axis_aligned_answer_rotated_on_eve
         }
     }
 }
+
+/// The conformance kit's bar (theory §14.4): where the grip u₁ = 0.1 meets the support inclined
+/// along n = (½, 0, 1), the lifting meets both, u₁ = 0.1 and n·u = 0; every node of the inclined
+/// face has n·u = 0; its reaction is along n and balances the grip, the rollers and the pressure.
+#[test]
+fn a_grip_meeting_an_inclined_support_holds_both() {
+    let problem = saddle::solvers::conformance::supported_bar(None).problem().unwrap();
+    let sol =
+        saddle::solvers::Newton { tol: 1e-12, ..Default::default() }.solve(&problem.lagrangian(), &mut Silent).unwrap();
+    assert!(sol.report.converged);
+    let view = problem.view();
+    let u = view.displacements(&sol.u);
+    let n = [0.5, 0.0, 1.0];
+    let (mut edge, mut face) = (0, 0);
+    for (x, d) in problem.element.mesh().nodes.iter().zip(&u) {
+        if x[2] == 0.0 {
+            // round-off of the frame and the lifting: measured ≤ 1.4e-17 (both checks)
+            assert!((n[0] * d[0] + n[2] * d[2]).abs() <= 1e-15, "{x:?}: {d:?}");
+            face += 1;
+            if x[0] == 2.0 {
+                assert!((d[0] - 0.1).abs() <= 1e-15, "{x:?}: {d:?}");
+                edge += 1;
+            }
+        }
+    }
+    assert_eq!((edge, face), (3, 15));
+    let reactions = view.reactions(&sol.stress.sigma);
+    let inclined = &reactions[2];
+    // along n: F × n = 0 (measured 0: each node's part is α n exactly)
+    let along =
+        [inclined.force[1] * n[2], inclined.force[2] * n[0] - inclined.force[0] * n[2], -inclined.force[1] * n[0]];
+    assert!(along.iter().all(|x| x.abs() <= 1e-12 * inclined.force[2].abs()), "{inclined:?}");
+    // Σ reactions = −(the pressure 0.5 on the face y = 1 of area 2) = (0, 1, 0); measured ≤ 6e-15
+    for (c, want) in [0.0, 1.0, 0.0].iter().enumerate() {
+        let sum: f64 = reactions.iter().map(|r| r.force[c]).sum();
+        assert!((sum - want).abs() <= 1e-10, "Σ F_{c} = {sum}");
+    }
+}
