@@ -672,3 +672,48 @@ fn bad_supports_are_errors_naming_the_field_and_the_value() {
     set(&mut t, "load_path.plot", value("[\"factor\", \"clamp.Fx\"]"));
     assert_rejected(&text(&t), &["load_path.plot", "clamp.Fx", "grip.Fx"]);
 }
+
+#[test]
+fn bad_inclined_supports_are_errors_naming_the_field_and_the_value() {
+    // the roller on z = 0 made an inclined support with `normal = n` and `extra` keys
+    let inclined = |n: &str, extra: &[(&str, &str)]| {
+        tensile_with(|d| {
+            let e = d[2].as_table_mut().unwrap();
+            e.remove("components");
+            e.insert("normal".into(), value(n));
+            for (k, v) in extra {
+                e.insert((*k).into(), value(v));
+            }
+        })
+    };
+    assert_rejected(&inclined("[0.0, 0.0, 0.0]", &[]), &["dirichlet[2].normal = [0.0, 0.0, 0.0]", "is zero"]);
+    assert_rejected(&inclined("[0.0, 1.0]", &[]), &["dirichlet[2].normal = [0.0, 1.0]", "has 2 entries"]);
+    assert_rejected(&inclined("[0.0, 1.0, 0.0, 1.0]", &[]), &["dirichlet[2].normal", "has 4 entries"]);
+    assert_rejected(&inclined("[0.0, nan, 1.0]", &[]), &["dirichlet[2].normal[1]", "NaN"]);
+    assert_rejected(&inclined("[0.0, 1.0, inf]", &[]), &["dirichlet[2].normal[2]", "inf"]);
+    assert_rejected(
+        &inclined("[0.0, 0.0, 1.0]", &[("components", "[\"z\"]")]),
+        &["dirichlet[2].components = [Z]", "cannot go with `normal`"],
+    );
+    assert_rejected(
+        &inclined("[0.0, 0.0, 1.0]", &[("value", "[0.1]")]),
+        &["dirichlet[2].value = [0.1]", "cannot go with `normal`"],
+    );
+    // every roller made a support along the one inclined normal (1, 0, 1): the bar may slide
+    // along y and in the plane, and the check along the held directions names it
+    let parallel = tensile_with(|d| {
+        for e in d.iter_mut().take(3) {
+            let e = e.as_table_mut().unwrap();
+            e.remove("components");
+            e.insert("normal".into(), value("[1.0, 0.0, 1.0]"));
+        }
+    });
+    assert_rejected(&parallel, &["dirichlet", "rigid-body motion free"]);
+    // the roller on x = 0 of homogeneous compression inclined: its nodes on z = 0 carry the
+    // punch's contact rows, which are written on the axes' dofs
+    let mut t = example("homogeneous.toml");
+    let d = t.get_mut("dirichlet").and_then(|d| d.as_array_mut()).unwrap()[0].as_table_mut().unwrap();
+    d.remove("components");
+    d.insert("normal".into(), value("[1.0, 0.0, 0.2]"));
+    assert_rejected(&text(&t), &["dirichlet[0].normal", "contact row", "inclined support"]);
+}

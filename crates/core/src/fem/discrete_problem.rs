@@ -61,10 +61,21 @@ impl DiscreteProblem {
 
     /// The problem with its supports `dirichlet` (the entries the element's dofs were made
     /// with) and the loads `loads` it was made with: prescribed displacements as a lifting, and
-    /// reactions (theory §14). A prescribed value at a node an obstacle's row acts on is an
-    /// error: the rows see w only.
+    /// reactions (theory §14). A prescribed value, or an inclined support, at a node an
+    /// obstacle's row acts on is an error: the rows see w only, on the axes.
     pub fn with_supports(mut self, dirichlet: &[Dirichlet], loads: &[Load]) -> Result<Self, SceneError> {
         let supports = Supports::new(&*self.element, dirichlet, loads)?;
+        let dofs = self.element.dofs();
+        if let Some(&n) = self.obstacles.rows().node.iter().find(|&&n| dofs.frame(n).is_some()) {
+            let i = supports.inclined_entry(n).unwrap_or(0);
+            return Err(SceneError::Region {
+                field: format!("dirichlet[{i}].normal"),
+                message: format!(
+                    "holds node {n} on an inclined plane, where an obstacle's contact row acts: contact at nodes of \
+                     an inclined support is not supported"
+                ),
+            });
+        }
         if supports.is_lifted() {
             let rows = self.obstacles.rows();
             let lifted: Vec<usize> = supports.lifted_nodes().collect();

@@ -129,10 +129,11 @@ pub fn nodal_loads(mesh: &TetMesh, dofs: &DofMap, loads: &[Load]) -> Result<Vec<
     // adds a share of `force` to the free dofs of `node`; true when a nonzero component landed
     let mut add = |node: usize, force: [f64; 3], share: f64| {
         let mut landed = false;
-        for (c, fc) in force.iter().enumerate() {
-            if let Some(j) = dofs.free(node, c) {
-                f[j] += share * fc;
-                landed |= *fc != 0.0;
+        // the force's components in the node's dofs (its frame, theory §14.4)
+        for (k, fk) in dofs.to_local(node, force).iter().enumerate() {
+            if let Some(j) = dofs.free(node, k) {
+                f[j] += share * fk;
+                landed |= *fk != 0.0;
             }
         }
         landed

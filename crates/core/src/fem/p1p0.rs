@@ -69,7 +69,8 @@ impl P1P0Element {
         for &(e, lb) in &self.parts.adj[self.parts.adj_ptr[b]..self.parts.adj_ptr[b + 1]] {
             let e = e as usize;
             let g = &self.parts.grads[e];
-            let cb = material.at(e) * strain_of_unit(&g[lb as usize], c) * self.weights[e];
+            let dofs = &self.parts.dofs;
+            let cb = material.at(e) * dofs.along(b, c, |c| strain_of_unit(&g[lb as usize], c)) * self.weights[e];
             for (a, &na) in self.parts.mesh.tets[e].iter().enumerate() {
                 let da = self.parts.dofs.dof[na];
                 // the free dofs of node a that are ≥ j are consecutive rows of the column
@@ -77,7 +78,7 @@ impl P1P0Element {
                 let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
                 for (k, &dk) in da.iter().enumerate().skip(first) {
                     if dk != FIXED {
-                        col[pos] += strain_of_unit_dot(&g[a], k, &cb);
+                        col[pos] += dofs.along(na, k, |k| strain_of_unit_dot(&g[a], k, &cb));
                         pos += 1;
                     }
                 }
@@ -178,13 +179,16 @@ impl ElementOperators for P1P0Element {
     fn divergence(&self, sigma: &[Sym], f: &mut [f64]) {
         f.par_iter_mut().enumerate().for_each(|(j, fj)| {
             let (n, c) = (self.parts.dof_node[j] as usize, self.parts.dof_comp[j] as usize);
-            *fj = self.parts.adj[self.parts.adj_ptr[n]..self.parts.adj_ptr[n + 1]]
-                .iter()
-                .map(|&(e, a)| {
-                    self.weights[e as usize]
-                        * strain_of_unit_dot(&self.parts.grads[e as usize][a as usize], c, &sigma[e as usize])
-                })
-                .sum();
+            let of_axis = |c: usize| -> f64 {
+                self.parts.adj[self.parts.adj_ptr[n]..self.parts.adj_ptr[n + 1]]
+                    .iter()
+                    .map(|&(e, a)| {
+                        self.weights[e as usize]
+                            * strain_of_unit_dot(&self.parts.grads[e as usize][a as usize], c, &sigma[e as usize])
+                    })
+                    .sum()
+            };
+            *fj = self.parts.dofs.along(n, c, of_axis);
         });
     }
 
@@ -194,7 +198,7 @@ impl ElementOperators for P1P0Element {
             for (a, &n) in t.iter().enumerate() {
                 for c in 0..3 {
                     let Some(j) = self.parts.dofs.free(n, c) else { continue };
-                    let col = strain_of_unit(&self.parts.grads[e][a], c);
+                    let col = self.parts.dofs.along(n, c, |c| strain_of_unit(&self.parts.grads[e][a], c));
                     out.extend((0..6).filter(|&k| col[k] != 0.0).map(|k| (e, k, j, col[k])));
                 }
             }
@@ -245,18 +249,81 @@ mod tests {
         assert!(eps.iter().all(|e| (e - exact).norm() < 1e-14));
     }
 
+    /// The element of [`problem`] with an inclined support on ymin and another on xmax
+    /// meeting it along an edge (nodal frames, theory §14.4).
+    fn inclined() -> P1P0Element {
+        let mesh = BoxMesh::new([0.0; 3], [1.0, 2.0, 1.0], [3, 4, 2]).mesh().unwrap();
+        let bc = [
+            Dirichlet::clamped(Region::Group("zmax".into())),
+            Dirichlet::inclined(Region::Group("ymin".into()), [0.3, -1.0, 0.2]),
+            Dirichlet::inclined(Region::Group("xmax".into()), [1.0, 0.4, 0.0]),
+        ];
+        let mesh = super::super::FiniteElement::prepare_mesh(&P1::default(), mesh);
+        P1P0Element::with_dofs(mesh.clone(), DofMap::with_values(&mesh, &bc).unwrap())
+    }
+
     #[test]
     fn divergence_is_the_transpose_of_strain() {
         operator_checks::divergence_is_the_transpose_of_strain(&problem());
+        operator_checks::divergence_is_the_transpose_of_strain(&inclined());
     }
 
     #[test]
     fn strain_entries_reproduce_the_strain() {
         operator_checks::strain_entries_reproduce_the_strain(&problem(), 1e-13);
+        operator_checks::strain_entries_reproduce_the_strain(&inclined(), 1e-13);
     }
 
     #[test]
     fn assembled_stiffness_matches_the_operator() {
         operator_checks::assembled_stiffness_matches_the_operator(&problem());
+        operator_checks::assembled_stiffness_matches_the_operator(&inclined());
+    }
+
+    #[test]
+    fn a_frame_holds_the_normal_component_and_keeps_the_others() {
+        // a nodal field from free values has no component along the normal at the supported
+        // nodes, and the rigid-body modes are the motions' components in the nodes' frames
+        let l = inclined();
+        assert!(l.parts.dofs.has_frames());
+        let n = [0.3, -1.0, 0.2];
+        let norm = (0.09f64 + 1.0 + 0.04).sqrt();
+        let u: Vec<f64> = (0..l.n_dofs()).map(|j| (j as f64 * 0.37).sin()).collect();
+        let modes = l.rigid_body_modes().unwrap();
+        let rot: Vec<f64> = (0..modes.n()).map(|d| modes.modes[6 * d + 5]).collect();
+        let (nodal, rot_nodal) = (l.nodal_vectors(&u), l.nodal_vectors(&rot));
+        let mut on_plane = 0;
+        for f in Region::Group("ymin".into()).facets(&l.parts.mesh) {
+            for v in l.parts.mesh.facet_nodes(f) {
+                let un: f64 = (0..3).map(|c| nodal[v][c] * n[c]).sum::<f64>() / norm;
+                assert!(un.abs() < 1e-15, "node {v}: n·u = {un}");
+                on_plane += 1;
+            }
+        }
+        assert!(on_plane > 0);
+        // at a node free of supports the rotation about z is (−y, x, 0) about the centroid of
+        // the free dofs' nodes: its differences between two free nodes are exact
+        let dofs = &l.parts.dofs;
+        let free: Vec<usize> =
+            (0..l.parts.mesh.n_nodes()).filter(|&v| dofs.dof[v].iter().all(|&d| d != FIXED)).collect();
+        let (a, b) = (free[0], free[free.len() - 1]);
+        let (xa, xb) = (l.parts.mesh.nodes[a], l.parts.mesh.nodes[b]);
+        assert!((rot_nodal[a][0] - rot_nodal[b][0] + (xa[1] - xb[1])).abs() < 1e-14);
+        // at a framed node the mode is the motion's projection on the free directions
+        // a node of ymin only: held along n alone
+        let only_ymin = |v: &usize| {
+            let x = l.parts.mesh.nodes[*v];
+            x[1] == 0.0 && x[0] < 1.0 && x[2] < 1.0
+        };
+        let v = (0..l.parts.mesh.n_nodes()).find(only_ymin).unwrap();
+        assert!(dofs.frame(v).is_some());
+        let x = l.parts.mesh.nodes[v];
+        let m: [f64; 3] = std::array::from_fn(|c| [-(x[1] - xb[1]), x[0] - xb[0], 0.0][c] + rot_nodal[b][c]);
+        let un: f64 = (0..3).map(|c| rot_nodal[v][c] * n[c]).sum::<f64>() / norm;
+        let mn: f64 = (0..3).map(|c| m[c] * n[c]).sum::<f64>() / norm;
+        for c in 0..3 {
+            let want = m[c] - mn * n[c] / norm;
+            assert!((rot_nodal[v][c] - want).abs() < 1e-14 && un.abs() < 1e-15, "{:?} vs {m:?}", rot_nodal[v]);
+        }
     }
 }

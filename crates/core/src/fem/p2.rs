@@ -115,6 +115,17 @@ fn column(g: &[[f64; 3]; 4], a: usize, c: usize, q: usize, mean_dilatation: bool
     (ga, delta)
 }
 
+/// The B̄ column of dof (a, c) at point q as a strain: ε(N_a e_c) + δ I ([`column`]).
+#[inline]
+fn column_strain(g: &[[f64; 3]; 4], a: usize, c: usize, q: usize, mean_dilatation: bool) -> Sym {
+    let (ga, delta) = column(g, a, c, q, mean_dilatation);
+    let mut col = strain_of_unit(&ga, c);
+    for k in 0..3 {
+        col[k] += delta;
+    }
+    col
+}
+
 impl P2Element {
     /// The element on the second-order mesh of `mesh` (a first-order mesh gets a node at the
     /// midpoint of every edge, [`TetMesh::second_order`]) with the Dirichlet conditions
@@ -162,11 +173,7 @@ impl P2Element {
             let mut cb = [Sym::zeros(); POINTS];
             let mut tr = [0.0; POINTS];
             for q in 0..POINTS {
-                let (gb, delta) = column(g, lb as usize, c, q, md);
-                let mut bq = strain_of_unit(&gb, c);
-                for k in 0..3 {
-                    bq[k] += delta;
-                }
+                let bq = self.parts.dofs.along(b, c, |c| column_strain(g, lb as usize, c, q, md));
                 cb[q] = material.at(POINTS * e + q) * bq * self.weights[POINTS * e + q];
                 tr[q] = cb[q][0] + cb[q][1] + cb[q][2];
             }
@@ -176,16 +183,19 @@ impl P2Element {
                 let mut pos = rows.binary_search(&(da[first] as usize)).expect("pattern holds every element coupling");
                 let ga: [[f64; 3]; POINTS] = std::array::from_fn(|q| shape_gradient(g, a, q));
                 let mean = mean_gradient(g, a);
+                let of_axis = |k: usize| -> f64 {
+                    let mut v = 0.0;
+                    for q in 0..POINTS {
+                        v += strain_of_unit_dot(&ga[q], k, &cb[q]);
+                        if md {
+                            v += (mean[k] - ga[q][k]) / 3.0 * tr[q];
+                        }
+                    }
+                    v
+                };
                 for (k, &dk) in da.iter().enumerate().skip(first) {
                     if dk != FIXED {
-                        let mut v = 0.0;
-                        for q in 0..POINTS {
-                            v += strain_of_unit_dot(&ga[q], k, &cb[q]);
-                            if md {
-                                v += (mean[k] - ga[q][k]) / 3.0 * tr[q];
-                            }
-                        }
-                        col[pos] += v;
+                        col[pos] += self.parts.dofs.along(self.nodes[e][a], k, of_axis);
                         pos += 1;
                     }
                 }
@@ -294,14 +304,17 @@ impl ElementOperators for P2Element {
                 .map(|&(e, a)| {
                     let (e, a) = (e as usize, a as usize);
                     let g = &self.parts.grads[e];
-                    (0..POINTS)
-                        .map(|q| {
-                            let p = POINTS * e + q;
-                            let (ga, delta) = column(g, a, c, q, md);
-                            let s = &sigma[p];
-                            self.weights[p] * (strain_of_unit_dot(&ga, c, s) + delta * (s[0] + s[1] + s[2]))
-                        })
-                        .sum::<f64>()
+                    let of_axis = |c: usize| -> f64 {
+                        (0..POINTS)
+                            .map(|q| {
+                                let p = POINTS * e + q;
+                                let (ga, delta) = column(g, a, c, q, md);
+                                let s = &sigma[p];
+                                self.weights[p] * (strain_of_unit_dot(&ga, c, s) + delta * (s[0] + s[1] + s[2]))
+                            })
+                            .sum::<f64>()
+                    };
+                    self.parts.dofs.along(n, c, of_axis)
                 })
                 .sum();
         });
@@ -314,11 +327,8 @@ impl ElementOperators for P2Element {
                 for (a, &n) in t.iter().enumerate() {
                     for c in 0..3 {
                         let Some(j) = self.parts.dofs.free(n, c) else { continue };
-                        let (ga, delta) = column(&self.parts.grads[e], a, c, q, self.mean_dilatation);
-                        let mut col = strain_of_unit(&ga, c);
-                        for k in 0..3 {
-                            col[k] += delta;
-                        }
+                        let md = self.mean_dilatation;
+                        let col = self.parts.dofs.along(n, c, |c| column_strain(&self.parts.grads[e], a, c, q, md));
                         out.extend((0..6).filter(|&k| col[k] != 0.0).map(|k| (POINTS * e + q, k, j, col[k])));
                     }
                 }
@@ -417,11 +427,27 @@ mod tests {
         }
     }
 
+    /// The element of [`problem`] with inclined supports on ymin and xmax, meeting along an
+    /// edge (nodal frames, theory §14.4).
+    fn inclined(mean_dilatation: bool) -> P2Element {
+        let mesh = BoxMesh::new([0.0; 3], [1.0, 2.0, 1.0], [2, 3, 2]).mesh().unwrap().second_order();
+        let bc = [
+            Dirichlet::clamped(Region::Group("zmax".into())),
+            Dirichlet::inclined(Region::Group("ymin".into()), [0.3, -1.0, 0.2]),
+            Dirichlet::inclined(Region::Group("xmax".into()), [1.0, 0.4, 0.0]),
+        ];
+        let dofs = DofMap::with_values(&mesh, &bc).unwrap();
+        assert!(dofs.has_frames());
+        P2Element::with_dofs(mesh, dofs).with_mean_dilatation(mean_dilatation)
+    }
+
     #[test]
     fn divergence_is_the_transpose_of_strain_and_entries_reproduce_it() {
         for md in [false, true] {
-            operator_checks::divergence_is_the_transpose_of_strain(&problem(md));
-            operator_checks::strain_entries_reproduce_the_strain(&problem(md), 1e-12);
+            for l in [problem(md), inclined(md)] {
+                operator_checks::divergence_is_the_transpose_of_strain(&l);
+                operator_checks::strain_entries_reproduce_the_strain(&l, 1e-12);
+            }
         }
     }
 
@@ -429,6 +455,7 @@ mod tests {
     fn assembled_stiffness_matches_the_operator_and_the_energy() {
         for md in [false, true] {
             operator_checks::assembled_stiffness_matches_the_operator(&problem(md));
+            operator_checks::assembled_stiffness_matches_the_operator(&inclined(md));
         }
     }
 

@@ -6,7 +6,8 @@
 use crate::error::SceneError;
 use crate::fem::Discretisation;
 use crate::fem::loads::{Load, nodal_loads};
-use crate::mesh::dofs::{Dirichlet, DofMap, FREE, fixing_entries};
+use crate::mesh::dofs::{Dirichlet, DofMap, nodal_supports};
+use crate::mesh::frames::NodalSupport;
 use crate::problem::fields::PlasticState;
 use crate::problem::tensor::Sym;
 use std::sync::OnceLock;
@@ -30,8 +31,8 @@ pub struct Reaction {
 #[derive(Debug)]
 pub struct Supports {
     entries: Vec<Dirichlet>,
-    /// The first entry fixing each node's component ([`FREE`]: none).
-    owner: Vec<[u32; 3]>,
+    /// The directions held at each node, each with the first entry holding it (theory §14.4).
+    held: Vec<NodalSupport>,
     /// u_D per node at factor 1 (empty for homogeneous conditions).
     lifting: Vec<[f64; 3]>,
     /// ε(u_D) per point at factor 1 (empty as `lifting`).
@@ -47,12 +48,12 @@ impl Supports {
     /// prescribed value the element cannot carry (a distributed part).
     pub fn new(element: &dyn Discretisation, entries: &[Dirichlet], loads: &[Load]) -> Result<Self, SceneError> {
         let mesh = element.mesh();
-        let owner = fixing_entries(mesh, entries)?;
+        let held = nodal_supports(mesh, entries)?;
         let all_free = DofMap::from_fixed(&vec![[false; 3]; mesh.n_nodes()]);
         let load = if loads.is_empty() { Vec::new() } else { nodal_loads(mesh, &all_free, loads)? };
         let mut s = Self {
             entries: entries.to_vec(),
-            owner,
+            held,
             lifting: Vec::new(),
             lifting_strain: Vec::new(),
             load,
@@ -60,14 +61,16 @@ impl Supports {
         };
         if let Some(i) = entries.iter().position(Dirichlet::is_inhomogeneous) {
             let values: Vec<[Option<f64>; 3]> = entries.iter().map(Dirichlet::prescribed).collect();
-            s.lifting = vec![[0.0; 3]; mesh.n_nodes()];
-            for (n, o) in s.owner.iter().enumerate() {
-                for c in 0..3 {
-                    if o[c] != FREE {
-                        s.lifting[n][c] = values[o[c] as usize][c].unwrap_or(0.0);
-                    }
-                }
-            }
+            // each held direction's value: a component's, or 0 along a normal
+            let value = |e: u32, d: &[f64; 3]| (0..3).find(|&c| d[c] == 1.0).and_then(|c| values[e as usize][c]);
+            s.lifting = (s.held.iter())
+                .map(|h| {
+                    let v: [f64; 3] = std::array::from_fn(|i| {
+                        if i < h.n as usize { value(h.entry[i], &h.direction[i]).unwrap_or(0.0) } else { 0.0 }
+                    });
+                    h.lift(v)
+                })
+                .collect();
             let full = s.unconstrained(element).ok_or_else(|| SceneError::Region {
                 field: format!("dirichlet[{i}].value"),
                 message: "prescribed displacements other than zero are not available for this element yet".into(),
@@ -108,14 +111,21 @@ impl Supports {
         state
     }
 
+    /// The first entry with a `normal` holding a direction at `node`.
+    pub fn inclined_entry(&self, node: usize) -> Option<usize> {
+        let inclined = |e: u32| self.entries[e as usize].normal.is_some();
+        self.held[node].directions().map(|(e, _)| e).find(|&e| inclined(e)).map(|e| e as usize)
+    }
+
     /// The mesh nodes where a prescribed value is not zero.
     pub fn lifted_nodes(&self) -> impl Iterator<Item = usize> + '_ {
         self.lifting.iter().enumerate().filter(|(_, d)| d.iter().any(|x| *x != 0.0)).map(|(n, _)| n)
     }
 
     /// The reaction of every entry (theory §14) to the stresses `sigma` at load factor `factor`:
-    /// r = Bᵀσ − factor·f on every dof, summed over the dofs each entry fixes first. `None` when
-    /// the element cannot give its unconstrained form (a distributed part).
+    /// r = Bᵀσ − factor·f on every dof, split at each node onto the directions held there
+    /// (theory §14.4) and summed per entry holding them first. `None` when the element cannot
+    /// give its unconstrained form (a distributed part).
     pub fn reactions(&self, element: &dyn Discretisation, sigma: &[Sym], factor: f64) -> Option<Vec<Reaction>> {
         let full = self.unconstrained(element)?;
         let mut r = vec![0.0; full.n_dofs()];
@@ -127,17 +137,17 @@ impl Supports {
         let mut out: Vec<Reaction> = (self.entries.iter().enumerate())
             .map(|(i, d)| Reaction { key: d.key(i), force: [0.0; 3], moment: [0.0; 3] })
             .collect();
-        for (n, o) in self.owner.iter().enumerate() {
-            for c in 0..3 {
-                if o[c] == FREE {
-                    continue;
+        for (n, h) in self.held.iter().enumerate() {
+            let x = nodes[n];
+            let alpha = h.split([r[3 * n], r[3 * n + 1], r[3 * n + 2]]);
+            for (i, (e, d)) in h.directions().enumerate() {
+                let (f, e) = (d.map(|dc| alpha[i] * dc), &mut out[e as usize]);
+                for c in 0..3 {
+                    let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                    e.force[c] += f[c];
+                    // (x × f)_c
+                    e.moment[c] += x[a] * f[b] - x[b] * f[a];
                 }
-                let (x, rc, e) = (nodes[n], r[3 * n + c], &mut out[o[c] as usize]);
-                e.force[c] += rc;
-                // x × (rc e_c)
-                let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-                e.moment[a] += x[b] * rc;
-                e.moment[b] -= x[a] * rc;
             }
         }
         Some(out)

@@ -3,7 +3,7 @@
 //! stiffness, for elements of N nodes each: 4 for P1, 10 for P2), and column assembly.
 
 use crate::mesh::TetMesh;
-use crate::mesh::dofs::{DofMap, FIXED};
+use crate::mesh::dofs::DofMap;
 use crate::problem::operators::RigidBodyModes;
 use crate::problem::pattern::SymmetricPattern;
 use nalgebra::Matrix3;
@@ -145,15 +145,19 @@ impl NodalParts {
         (Self { mesh, dofs, grads, adj_ptr, adj, dof_node, dof_comp, pattern }, volumes)
     }
 
-    /// The displacement of node `n` from the free dofs `u` (fixed components 0).
+    /// The displacement of node `n` on the axes from the free dofs `u` (fixed components 0; a
+    /// node's frame applied, theory §14.4).
     #[inline]
     pub fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
-        self.dofs.dof[n].map(|d| if d == FIXED { 0.0 } else { u[d as usize] })
+        self.dofs.displacement(u, n)
     }
 
-    /// The rigid-body motions at the nodes of the free dofs.
+    /// The rigid-body motions at the nodes of the free dofs, along their directions.
     pub fn rigid_body_modes(&self) -> RigidBodyModes {
-        RigidBodyModes::new(self.dof_node.clone(), &self.dof_comp, &self.mesh.nodes)
+        let directions: Vec<[f64; 3]> = (self.dof_node.iter().zip(&self.dof_comp))
+            .map(|(&n, &k)| self.dofs.direction(n as usize, k as usize))
+            .collect();
+        RigidBodyModes::along(self.dof_node.clone(), &directions, &self.mesh.nodes)
     }
 }
 

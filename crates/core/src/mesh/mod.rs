@@ -6,6 +6,7 @@
 
 pub mod box_mesh;
 pub mod dofs;
+pub mod frames;
 #[cfg(feature = "gmsh")]
 pub mod gmsh;
 pub mod inline;

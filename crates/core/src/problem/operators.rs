@@ -26,6 +26,14 @@ pub struct RigidBodyModes {
 impl RigidBodyModes {
     /// The modes of the free dofs with nodes `node` and components `comp`, the nodes at `coords`.
     pub fn new(node: Vec<u32>, comp: &[u8], coords: &[[f64; 3]]) -> Self {
+        let directions: Vec<[f64; 3]> =
+            comp.iter().map(|&c| std::array::from_fn(|k| (k == c as usize) as u8 as f64)).collect();
+        Self::along(node, &directions, coords)
+    }
+
+    /// The modes of the free dofs with nodes `node` along the unit `directions` (e_c, or a row of
+    /// the node's frame, theory §14.4), the nodes at `coords`.
+    pub fn along(node: Vec<u32>, directions: &[[f64; 3]], coords: &[[f64; 3]]) -> Self {
         let n = node.len();
         let mut centroid = [0.0; 3];
         for &nd in &node {
@@ -37,12 +45,12 @@ impl RigidBodyModes {
         for (d, row) in modes.chunks_exact_mut(RIGID_BODY_MODES).enumerate() {
             let x = coords[node[d] as usize];
             let [x, y, z] = [x[0] - centroid[0], x[1] - centroid[1], x[2] - centroid[2]];
-            let c = comp[d] as usize;
-            row[c] = 1.0;
-            // ω × x for ω = e_x, e_y, e_z: (0, −z, y), (z, 0, −x), (−y, x, 0)
-            row[3] = [0.0, -z, y][c];
-            row[4] = [z, 0.0, -x][c];
-            row[5] = [-y, x, 0.0][c];
+            let v = directions[d];
+            row[..3].copy_from_slice(&v);
+            // v·(ω × x) for ω = e_x, e_y, e_z: ω × x = (0, −z, y), (z, 0, −x), (−y, x, 0)
+            row[3] = -z * v[1] + y * v[2];
+            row[4] = z * v[0] - x * v[2];
+            row[5] = -y * v[0] + x * v[1];
         }
         Self { node, modes }
     }
