@@ -118,7 +118,8 @@ pub struct Newton {
     pub stall_window: usize,
     /// Fallbacks on the penalty method per solve (theory §4.2.1; 0: none).
     pub max_fallbacks: usize,
-    /// Penalty iterations per fallback (the penalty method's own default budget).
+    /// Penalty iterations per fallback: 400, since a perfectly plastic Tresca P2 punch needs
+    /// 53–172 of them (theory §10.3); a hopeless one stops earlier on its collapse check (§4.6).
     pub fallback_max_iter: usize,
     /// The linear system's set-up kept between the warm-started solves of a load path
     /// ([`SetupCache`]); not a setting.
@@ -215,7 +216,7 @@ impl Default for Newton {
             amg_refresh_cg: AMG_REFRESH_CG,
             stall_window: 8,
             max_fallbacks: 2,
-            fallback_max_iter: 50,
+            fallback_max_iter: 400,
             setup_cache: SetupCache::default(),
         }
     }
