@@ -110,6 +110,10 @@ enum Command {
         /// Clarabel's gap and feasibility tolerance.
         #[arg(long, default_value_t = 1e-5)]
         tol: f64,
+        /// Print Clarabel's iteration log and its timers (factorisation `kkt update`, solves
+        /// `kkt solve`) to stdout.
+        #[arg(long)]
+        verbose: bool,
     },
     /// Cost against problem size: the scene's box mesh scaled to each size; per-phase times,
     /// one elastic linear solve as the baseline, every solver's total and its ratio to that
@@ -402,11 +406,16 @@ fn sweep(
 }
 
 #[cfg(feature = "socp")]
-fn limit(scene: PathBuf, out: PathBuf, element: Option<String>, tol: f64) -> Result<ExitCode, String> {
+fn limit(
+    scene: PathBuf,
+    out: PathBuf,
+    element: Option<String>,
+    (tol, verbose): (f64, bool),
+) -> Result<ExitCode, String> {
     use saddle::app::limit;
     use saddle_solvers::LimitAnalysis;
     eprintln!("{}: limit analysis into {}", scene.display(), out.display());
-    let settings = LimitAnalysis { tol, ..LimitAnalysis::default() };
+    let settings = LimitAnalysis { tol, verbose, ..LimitAnalysis::default() };
     let o = limit::run(&scene, &out, element.as_deref(), &settings).map_err(|e| e.to_string())?;
     let s = &o.summary;
     println!("  multiplier (kinematic)  {:.8e}", s.multiplier);
@@ -426,7 +435,7 @@ fn limit(scene: PathBuf, out: PathBuf, element: Option<String>, tol: f64) -> Res
 }
 
 #[cfg(not(feature = "socp"))]
-fn limit(_: PathBuf, _: PathBuf, _: Option<String>, _: f64) -> Result<ExitCode, String> {
+fn limit(_: PathBuf, _: PathBuf, _: Option<String>, _: (f64, bool)) -> Result<ExitCode, String> {
     Err("limit analysis needs the conic solver: build with the `socp` feature".into())
 }
 
@@ -476,7 +485,9 @@ fn main() -> ExitCode {
         Command::Sweep { scene, out, factors, solver, discretisation, x, y } => {
             sweep(scene, out, factors, (solver, discretisation), (x, y))
         }
-        Command::Limit { scene, out, discretisation, tol } => limit(scene, out, discretisation, tol),
+        Command::Limit { scene, out, discretisation, tol, verbose } => {
+            limit(scene, out, discretisation, (tol, verbose))
+        }
         Command::Bench { scene, out, meshes, peer, .. } if !meshes.is_empty() => bench_meshes(scene, out, meshes, peer),
         Command::Bench { scene, out, sizes, solvers, direct_max_dofs, .. } => {
             bench(scene, out, sizes, solvers, direct_max_dofs)

@@ -74,6 +74,8 @@ pub struct LimitSummary {
     pub cones: usize,
     /// Variables of the programme.
     pub variables: usize,
+    /// Its stress unknowns (coordinates per point and merged per element, theory §13.3).
+    pub stress_unknowns: usize,
     /// Obstacle rows closed in the reference configuration.
     pub closed_rows: usize,
     /// The element (`p1`, `p2`) and the yield surface's `type`.
@@ -116,6 +118,7 @@ impl LimitSummary {
             dofs: c.dofs,
             cones: c.cones,
             variables: c.variables,
+            stress_unknowns: c.stress_unknowns,
             closed_rows: c.closed_rows,
             discretisation: problem.element.name().into(),
             yield_surface: problem.stresses.as_ref().map_or("none".into(), |p| p.name().into()),

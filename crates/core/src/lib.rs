@@ -57,5 +57,7 @@ pub use problem::pattern::SymmetricPattern;
 pub use problem::solver::{
     Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason, one_rank,
 };
-pub use problem::stresses::{AdmissibleStresses, ConeDescription, SocBlock, StepInput, StepOutput};
+pub use problem::stresses::{
+    AdmissibleStresses, ConeDescription, PsdBlock, SemidefiniteDescription, SocBlock, StepInput, StepOutput,
+};
 pub use problem::tensor::{Sym, SymOp};

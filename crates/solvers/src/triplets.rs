@@ -40,7 +40,7 @@ impl Triplets {
 /// A cone programme `minimise ½xᵀPx + qᵀx subject to Ax + s = b, s in the cones` as JSON, for
 /// other conic solvers (`examples/export_cone.rs`, the cvxpy comparison of `examples/peers/`):
 /// `{"n", "m", "P": {"colptr", "rowval", "nzval"} (upper triangle, CSC), "q", "A": {…} (m × n,
-/// CSC), "b", "cones": [["zero" | "nonneg" | "soc", dim], …]}`.
+/// CSC), "b", "cones": [["zero" | "nonneg" | "soc" | "psd_triangle", dim or n], …]}`.
 pub(crate) fn programme_json(
     p: &CscMatrix<f64>,
     q: &[f64],
@@ -55,6 +55,8 @@ pub(crate) fn programme_json(
             SupportedConeT::ZeroConeT(d) => ("zero", *d),
             SupportedConeT::NonnegativeConeT(d) => ("nonneg", *d),
             SupportedConeT::SecondOrderConeT(d) => ("soc", *d),
+            #[cfg(feature = "sdp")]
+            SupportedConeT::PSDTriangleConeT(n) => ("psd_triangle", *n),
             _ => ("other", 0),
         })
         .collect();

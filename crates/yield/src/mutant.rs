@@ -24,7 +24,9 @@
 
 use saddle_core::error::ParameterError;
 use saddle_core::problem::elasticity::Elasticity;
-use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, StepInput, StepOutput};
+use saddle_core::problem::stresses::{
+    AdmissibleStresses, ConeDescription, SemidefiniteDescription, StepInput, StepOutput,
+};
 use saddle_core::problem::tensor::Sym;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
@@ -231,6 +233,9 @@ impl AdmissibleStresses for Mutant {
             Some(f) => f(self),
             None => self.inner.cone(),
         }
+    }
+    fn semidefinite_cone(&self) -> Option<SemidefiniteDescription> {
+        self.inner.semidefinite_cone()
     }
     fn cone_unavailable(&self) -> String {
         self.inner.cone_unavailable()

@@ -66,7 +66,9 @@ use nalgebra::{Matrix3, Vector3};
 use saddle_core::error::{ParameterError, check};
 use saddle_core::problem::elasticity::Elasticity;
 use saddle_core::problem::return_mapping::elastic_step;
-use saddle_core::problem::stresses::{AdmissibleStresses, ConeDescription, StepInput, StepOutput};
+use saddle_core::problem::stresses::{
+    AdmissibleStresses, ConeDescription, PsdBlock, SemidefiniteDescription, StepInput, StepOutput,
+};
 use saddle_core::problem::tensor::{SQRT2, Sym, SymOp, from_matrix, identity, to_matrix, trace, volumetric_projector};
 use serde::{Deserialize, Serialize};
 
@@ -399,6 +401,28 @@ impl AdmissibleStresses for Tresca {
     /// [`AdmissibleStresses::cone_unavailable`].
     fn cone(&self) -> Option<ConeDescription> {
         None
+    }
+
+    /// The semidefinite form (theory §13.1): (σ, ξ) ∈ D iff ∃a: σ − aI ⪰ 0 and
+    /// (a + σ₀ + ξ)I − σ ⪰ 0 — all principal stresses in [a, a + σ₀ + ξ], a spread σ₁ − σ₃ ≤ σ₀ + ξ.
+    /// Two 3 × 3 blocks on (σ, ξ, a); Mandel's √2 on shears is the blocks' √2 off the diagonal.
+    fn semidefinite_cone(&self) -> Option<SemidefiniteDescription> {
+        // the Mandel component of each entry of the scaled upper triangle (X₁₁, √2X₁₂, X₂₂, …)
+        const MANDEL: [usize; 6] = [0, 5, 1, 4, 3, 2];
+        const DIAGONAL: [bool; 6] = [true, false, true, false, false, true];
+        let block = |sign: f64, offset: f64| {
+            let mut map = vec![0.0; 6 * 8];
+            for (r, (&m, &diag)) in MANDEL.iter().zip(&DIAGONAL).enumerate() {
+                map[8 * r + m] = sign;
+                if diag {
+                    map[8 * r + 6] = (sign < 0.0) as usize as f64; // ξ widens the upper bound
+                    map[8 * r + 7] = -sign; // a
+                }
+            }
+            let offset = DIAGONAL.iter().map(|&d| if d { offset } else { 0.0 }).collect();
+            PsdBlock { n: 3, offset, map }
+        };
+        Some(SemidefiniteDescription { auxiliary: 1, blocks: vec![block(1.0, 0.0), block(-1.0, self.sigma0)] })
     }
 
     /// D is a hexagonal prism in principal-stress space, not an intersection of second-order
@@ -797,6 +821,7 @@ mod tests {
         let w = Tresca::new(1.0, 0.0).unwrap().warnings();
         assert!(w.len() == 1 && w[0].contains("yield.h = 0") && w[0].contains("unique"), "{w:?}");
         assert!(ok.cone().is_none());
+        semidefinite_blocks_bound_the_principal_spread(&ok);
         let why = ok.cone_unavailable();
         assert!(why.contains("polyhedral") && why.contains("semidefinite"), "{why}");
         assert_eq!(ok.hardening_fields(), vec![("xi", 1)]);
@@ -815,5 +840,32 @@ mod tests {
             .unwrap_err();
         assert!(err.to_string().contains("unknown field"), "{err}");
         assert!(toml::from_str::<Box<dyn AdmissibleStresses>>("type = \"tresca\"\nsigma0 = 1.0").is_err());
+    }
+
+    /// The two blocks of [`Tresca::semidefinite_cone`] at a point (σ, ξ) and auxiliary a: their
+    /// smallest eigenvalues are those of σ − aI and (a + σ₀ + ξ)I − σ, from the principal stresses.
+    fn semidefinite_blocks_bound_the_principal_spread(t: &Tresca) {
+        let d = t.semidefinite_cone().unwrap();
+        assert_eq!((d.auxiliary, d.blocks.len()), (1, 2));
+        let matrix = |v: &[f64]| {
+            let s = 1.0 / SQRT2;
+            Matrix3::new(v[0], s * v[1], s * v[3], s * v[1], v[2], s * v[4], s * v[3], s * v[4], v[5])
+        };
+        let smallest = |sigma: &Sym, xi: f64, a: f64| -> [f64; 2] {
+            let z: Vec<f64> = sigma.iter().copied().chain([xi, a]).collect();
+            std::array::from_fn(|k| {
+                let b = &d.blocks[k];
+                let v: Vec<f64> =
+                    (0..6).map(|r| b.offset[r] + (0..8).map(|j| b.map[8 * r + j] * z[j]).sum::<f64>()).collect();
+                matrix(&v).symmetric_eigenvalues().min()
+            })
+        };
+        // a rotated tensor with principal stresses 1, 0.5, −0.9: σ − aI has the eigenvalues
+        // σᵢ − a, (a + σ₀ + ξ)I − σ the eigenvalues a + σ₀ + ξ − σᵢ
+        let r = nalgebra::Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+        let m = r.matrix() * Matrix3::from_diagonal(&Vector3::new(1.0, 0.5, -0.9)) * r.matrix().transpose();
+        let sigma = from_matrix(&m);
+        let [lo, hi] = smallest(&sigma, 0.25, -0.9);
+        assert!((lo - 0.0).abs() < 1e-12 && (hi - (-0.9 + t.sigma0 + 0.25 - 1.0)).abs() < 1e-12, "{lo} {hi}");
     }
 }

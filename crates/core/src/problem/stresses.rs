@@ -109,6 +109,30 @@ pub struct ConeDescription {
     pub blocks: Vec<SocBlock>,
 }
 
+/// One positive-semidefinite block of a semidefinite description: `offset + map · (σ, q, a)` is
+/// the scaled upper triangle of a symmetric n × n matrix that must be ⪰ 0 (stacked by columns,
+/// off-diagonal entries times √2: for n = 3 `(X₁₁, √2X₁₂, X₂₂, √2X₁₃, √2X₂₃, X₃₃)`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PsdBlock {
+    /// The matrix size n (the block has n(n + 1)/2 entries).
+    pub n: usize,
+    /// Constant part, n(n + 1)/2 entries.
+    pub offset: Vec<f64>,
+    /// Linear part, n(n + 1)/2 × (6 + hardening_dim + auxiliary) row-major, acting on (σ Mandel,
+    /// q, the auxiliary variables a).
+    pub map: Vec<f64>,
+}
+
+/// D as the projection of a set of semidefinite blocks: (σ, q) ∈ D iff some auxiliary
+/// variables a make every block hold (theory §13.1: Tresca, ∃a: aI ⪯ σ ⪯ (a + σ₀)I).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SemidefiniteDescription {
+    /// Number of auxiliary variables per point.
+    pub auxiliary: usize,
+    /// The blocks; D = {(σ, q) : ∃a, every block holds}.
+    pub blocks: Vec<PsdBlock>,
+}
+
 /// P: a pointwise closed convex set D of generalised stresses with its energy metric, chosen
 /// by `type` in the `[yield]` table of a scene.
 #[typetag::serde(tag = "type")]
@@ -192,6 +216,12 @@ pub trait AdmissibleStresses: Debug + Send + Sync + dyn_clone::DynClone {
 
     /// D as second-order cones, for conic solvers; `None` if D has no such description.
     fn cone(&self) -> Option<ConeDescription> {
+        None
+    }
+
+    /// D as semidefinite blocks with auxiliary variables, for conic solvers with semidefinite
+    /// cones (limit analysis, theory §13.1); `None` if D has none or has a second-order-cone one.
+    fn semidefinite_cone(&self) -> Option<SemidefiniteDescription> {
         None
     }
 

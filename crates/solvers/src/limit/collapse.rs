@@ -41,6 +41,8 @@ pub struct Collapse {
     pub dofs: usize,
     /// Variables of the programme.
     pub variables: usize,
+    /// Its stress unknowns: coordinates per point and merged per element (theory §13.3).
+    pub stress_unknowns: usize,
     /// Second-order cones.
     pub cones: usize,
     /// Rows of K_h closed in the reference configuration (constraining the mechanism).
@@ -75,7 +77,12 @@ impl Collapse {
         let velocity: Vec<f64> = z[..lay.n_dofs].iter().map(|z| -z / f).collect();
         let n_extras = loads.extras.len();
         let extras_velocity: Vec<f64> = z[lay.n_dofs..lay.n_dofs + n_extras].iter().map(|z| -z / f).collect();
-        let stress: Vec<Sym> = (0..lay.n_points).map(|t| Sym::from_fn(|c, _| s * x[lay.sigma_col(t, c)])).collect();
+        let stress: Vec<Sym> = (0..lay.n_points)
+            .map(|t| {
+                let sigma = prog.stress(x, t);
+                Sym::from_fn(|c, _| s * sigma[c])
+            })
+            .collect();
         let mut lambda = vec![0.0; problem.obstacles.rows().n_rows()];
         for (k, &i) in loads.closed.iter().enumerate() {
             lambda[i] = s * l * l * x[lay.lambda_col(k)];
@@ -105,6 +112,7 @@ impl Collapse {
             residuals: [ipm.r_prim, ipm.r_dual],
             dofs: lay.n_dofs,
             variables: prog.n_variables(),
+            stress_unknowns: prog.n_stress_unknowns(),
             cones: prog.n_cones(),
             closed_rows: lay.n_closed,
             phases: Vec::new(),

@@ -12,7 +12,9 @@
 //! 1. [`ReferenceLoads::new`] (`loads.rs`): the reference loads ℓ — forces on u, loads on the
 //!    extras, the rates of prescribed displacements — and the rows in contact in the reference
 //!    configuration;
-//! 2. [`StaticProgramme::build`] (`programme.rs`): the static problem in Clarabel's form;
+//! 2. [`StaticProgramme::build`] (`programme.rs`): the static problem in Clarabel's form — the
+//!    yield surface's cones (`cones.rs`), the stress coordinates with B̄'s pressure merged per
+//!    element (`lineality.rs`), the columns and rows;
 //! 3. [`StaticProgramme::solve`]: Clarabel's interior point;
 //! 4. [`Collapse::recover`] (`collapse.rs`): both bounds and the gap, the collapse stresses and
 //!    contact forces (from x), the mechanism and its dissipation (from the dual z).
@@ -22,6 +24,8 @@
 //! set, with a warning naming the hardening ignored.
 
 mod collapse;
+mod cones;
+mod lineality;
 mod loads;
 mod programme;
 
@@ -152,11 +156,14 @@ pub struct LimitAnalysis {
     pub fallback_regularisation: f64,
     /// Clarabel's threads (0: Clarabel chooses).
     pub threads: usize,
+    /// Clarabel's iteration log and, after the solve, its timers (`kkt update`: the
+    /// factorisation; `kkt solve`: the triangular solves) on stdout.
+    pub verbose: bool,
 }
 
 impl Default for LimitAnalysis {
     fn default() -> Self {
-        Self { tol: 1e-5, max_iter: 200, fallback_regularisation: 1e-4, threads: 1 }
+        Self { tol: 1e-5, max_iter: 200, fallback_regularisation: 1e-4, threads: 1, verbose: false }
     }
 }
 
