@@ -258,7 +258,7 @@ fn print_summary(s: &Summary) {
         ("iterations".into(), s.iterations.to_string()),
         ("wall time".into(), format!("{:.2} s", s.wall_s)),
         ("end to end".into(), {
-            let phases: Vec<String> = ["read", "setup", "solve", "summary", "write"]
+            let phases: Vec<String> = ["read", "setup", "solve", "summary", "estimate", "write"]
                 .iter()
                 .filter_map(|k| s.end_to_end.get(*k).map(|t| format!("{k} {t:.2}")))
                 .collect();
@@ -266,6 +266,20 @@ fn print_summary(s: &Summary) {
         }),
         ("dofs / elements".into(), format!("{} / {}", s.dofs, s.elements)),
     ]);
+    // the a posteriori estimate (theory §15) and its cost
+    if let Some(e) = &s.error_estimate {
+        let extras: Vec<String> = e.extras.iter().filter_map(|(k, v)| v.map(|v| format!(", {k} ± {v:.2e}"))).collect();
+        rows.push((
+            "error estimate".into(),
+            format!(
+                "{:.3e} energy ({:.2} % of the stress){}; cost {:.1} % of the solve",
+                e.energy,
+                100.0 * e.energy_relative,
+                extras.concat(),
+                100.0 * e.cost_share
+            ),
+        ));
+    }
     for (k, v) in rows {
         println!("  {k:<22} {v}");
     }

@@ -55,7 +55,7 @@ fn run_writes_summary_and_vtu() {
     let e2e = summary["end_to_end"].as_object().expect("end_to_end");
     let phase = |k: &str| e2e.get(k).and_then(|v| v.as_f64()).unwrap_or_else(|| panic!("end_to_end lacks {k}"));
     assert!(phase("solve") >= summary["wall_s"].as_f64().unwrap());
-    let sum: f64 = ["read", "setup", "solve", "summary", "write"].iter().map(|k| phase(k)).sum();
+    let sum: f64 = ["read", "setup", "solve", "summary", "estimate", "write"].iter().map(|k| phase(k)).sum();
     assert!((sum - summary["end_to_end_s"].as_f64().unwrap()).abs() <= 1e-9 * sum.max(1.0));
     assert!(stdout.contains("end to end"), "{stdout}");
     let vtu = std::fs::read(out.join("solution.vtu")).unwrap();

@@ -29,6 +29,7 @@ fn scene_of(setup: &Setup) -> Scene {
         load_path: None,
         base_dir: PathBuf::new(),
         petsc_options: None,
+        output: Default::default(),
     }
 }
 

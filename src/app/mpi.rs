@@ -11,7 +11,7 @@ use super::setup::{Loaded, RunError, solver_by_type};
 use crate::io::outdir::{OutDir, OutError};
 use crate::io::scene::{Scene, element_by_type};
 use crate::io::summary::{RankSummary, Summary, Whole, complete_reports, imprints};
-use crate::io::vtu::{write_piece, write_pvtu};
+use crate::io::vtu::{CellField, write_piece, write_pvtu};
 use saddle_core::problem::comm::Comm;
 use saddle_core::{P1, ParameterError, PhaseTimer, ProblemView, SceneError, Solution, Solver};
 use saddle_parallel::distribute::{RankProblem, Whole as WholeProblem, whole_rows};
@@ -105,10 +105,11 @@ impl Ranks for MpiRanks {
         stem: &str,
         view: ProblemView<'_>,
         sol: &Solution,
+        cells: &[CellField<'_>],
     ) -> std::io::Result<Vec<String>> {
         let piece = |r: usize| format!("{stem}_r{r:04}.vtu");
         let mut declarations = String::new();
-        write_in_place(dir, &piece(self.comm.rank()), |p| write_piece(p, view, sol).map(|d| declarations = d))?;
+        write_in_place(dir, &piece(self.comm.rank()), |p| write_piece(p, view, sol, cells).map(|d| declarations = d))?;
         if !self.is_root() {
             return Ok(vec![piece(self.comm.rank())]);
         }
@@ -272,5 +273,6 @@ pub fn load(
         load_path: scene.load_path.clone(),
         timer,
         ranks: Box::new(ranks),
+        output: scene.output.clone(),
     })
 }

@@ -145,7 +145,7 @@ pub fn solve_and_write(
             if writes_step_file(k, factors.len()) || !converged {
                 let stem = format!("solution_{k:04}");
                 let view = step.problem.view();
-                let files = timer.time("write", || ranks.write_solution(out.dir(), &stem, view, &step.solution));
+                let files = timer.time("write", || ranks.write_solution(out.dir(), &stem, view, &step.solution, &[]));
                 let files = RunError::agree(ranks, files.map_err(io(&out.path(&stem))))?;
                 for f in &files {
                     out.wrote(f)?;
@@ -213,7 +213,7 @@ pub fn solve_and_write(
     summary.steps = steps;
     // solution.vtu: the last step solved, as a one-step run writes it
     let files =
-        timer.time("write", || ranks.write_solution(out.dir(), "solution", step.problem.view(), &step.solution));
+        timer.time("write", || ranks.write_solution(out.dir(), "solution", step.problem.view(), &step.solution, &[]));
     let files = RunError::agree(ranks, files.map_err(io(&out.path("solution"))))?;
     #[cfg(feature = "report")]
     if ranks.is_root() && plot(&summary, path, out.dir())? {

@@ -6,7 +6,7 @@
 
 use crate::io::outdir::{OutDir, OutError};
 use crate::io::summary::Summary;
-use crate::io::vtu::write_vtu;
+use crate::io::vtu::{CellField, write_piece};
 use saddle_core::{ProblemView, Solution};
 use std::path::Path;
 
@@ -38,16 +38,18 @@ pub trait Ranks {
     /// Writes the solution as `<stem>.vtu` (one machine) or `<stem>.pvtu` with a piece per rank
     /// (each rank writes its own): the files' names, the one a series names first; on the root
     /// every rank's files, so that the manifest lists them. Each file is written under a
-    /// temporary name and then moved into place. Collective.
+    /// temporary name and then moved into place; `cells` are further cell fields (one value per
+    /// element of the rank's part). Collective.
     fn write_solution(
         &self,
         dir: &Path,
         stem: &str,
         view: ProblemView<'_>,
         sol: &Solution,
+        cells: &[CellField<'_>],
     ) -> std::io::Result<Vec<String>> {
         let name = format!("{stem}.vtu");
-        write_in_place(dir, &name, |path| write_vtu(path, view, sol))?;
+        write_in_place(dir, &name, |path| write_piece(path, view, sol, cells).map(drop))?;
         Ok(vec![name])
     }
 

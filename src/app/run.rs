@@ -4,6 +4,8 @@
 
 use super::path;
 use super::setup::{Loaded, Outcome, RunError, finish};
+use crate::io::summary::estimate::EstimateSummary;
+use crate::io::vtu::CellField;
 use saddle_core::{Evolution, Monitor, PathError};
 use std::path::Path;
 
@@ -51,10 +53,18 @@ pub fn solve_and_write_with(
     let view = step.problem.view();
     let mut summary = timer.time("summary", || ranks.summary(view, &step.solution, loaded.title.clone()));
     summary.warnings.extend(step.warnings.iter().cloned());
-    let files = timer.time("write", || ranks.write_solution(out_dir, "solution", view, &step.solution));
+    // the a posteriori estimate (theory §15), on one machine
+    let estimate = (loaded.output.error_estimate && ranks.size() == 1)
+        .then(|| timer.time("estimate", || saddle_core::estimate(view.element, &view.l, &step.solution.stress)));
+    let cells: Vec<CellField<'_>> = estimate.iter().map(|e| ("error_indicator", &e.indicators[..])).collect();
+    let files = timer.time("write", || ranks.write_solution(out_dir, "solution", view, &step.solution, &cells));
     let files = RunError::agree(ranks, files.map_err(io_error(&out_dir.join("solution"))))?;
     summary.end_to_end = timer.into_phases().into_iter().collect();
     summary.end_to_end_s = summary.end_to_end.values().sum();
+    summary.error_estimate = estimate.map(|e| {
+        let phase = |k: &str| summary.end_to_end.get(k).copied().unwrap_or(0.0);
+        EstimateSummary::new(&e, view.extra_names(), phase("estimate"), phase("solve"))
+    });
     ranks.describe(&mut summary);
     let written = finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })

@@ -4,7 +4,7 @@
 
 use super::ranks::{OneMachine, Ranks, write_in_place};
 use crate::io::outdir::{OutDir, OutError};
-use crate::io::scene::{LoadPath, Scene};
+use crate::io::scene::{LoadPath, OutputSettings, Scene};
 use crate::io::summary::Summary;
 use saddle_core::{DiscreteProblem, PhaseTimer, SceneError, Solution, SolveError, Solver};
 use std::path::{Path, PathBuf};
@@ -79,6 +79,8 @@ pub struct Loaded {
     pub timer: PhaseTimer,
     /// Where the problem lives: this process ([`OneMachine`]) or the ranks of `mpirun`.
     pub ranks: Box<dyn Ranks>,
+    /// The scene's `[output]` settings.
+    pub output: OutputSettings,
 }
 
 /// Reads a scene, applies a `--solver` override, and assembles L.
@@ -102,10 +104,11 @@ pub fn load_with(
     })?;
     let title = scene.title.clone();
     let load_path = scene.load_path.clone();
+    let output = scene.output.clone();
     let override_solver = solver_override.map(solver_by_type).transpose()?;
     let (problem, solver) = timer.time("setup", || scene.assemble(mesh))?;
     let solver = override_solver.or(solver).unwrap_or_else(default_solver);
-    Ok(Loaded { problem, solver, title, load_path, timer, ranks: Box::new(OneMachine) })
+    Ok(Loaded { problem, solver, title, load_path, timer, ranks: Box::new(OneMachine), output })
 }
 
 /// The result of a run.

@@ -16,16 +16,27 @@ use std::path::Path;
 /// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises` (of the mean stress), the
 /// hardening variables under the names the yield surface gives them (`xi` for von Mises),
 /// `plastic` (0/1: one of the element's points is plastic), and with plasticity
-/// `plastic_strain` (tensor, ε(u) − Aσ) and `equivalent_plastic_strain` (√(2/3)|ε_p|).
+/// `plastic_strain` (tensor, ε(u) − Aσ) and `equivalent_plastic_strain` (√(2/3)|ε_p|). A run adds
+/// `error_indicator` (theory §15) through [`write_piece`]'s `cells`.
 pub fn write_vtu(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Result<()> {
-    write_piece(path, p, sol).map(drop)
+    write_piece(path, p, sol, &[]).map(drop)
 }
+
+/// A cell field computed outside the solution (the error indicators of theory §15): its name
+/// and one value per element.
+pub type CellField<'a> = (&'static str, &'a [f64]);
 
 /// [`write_vtu`] for a rank's part of a distributed problem (theory §12): its elements on its
 /// nodes, ghosts included. Returns the declarations of the data arrays, for the `.pvtu` file
 /// that lists the pieces ([`write_pvtu`]). Collective (the ghosts' displacements come from their
 /// owners).
-pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::Result<String> {
+/// `cells`: further cell fields, one value per element (`error_indicator`).
+pub fn write_piece(
+    path: &Path,
+    p: ProblemView<'_>,
+    sol: &Solution,
+    cells: &[CellField<'_>],
+) -> std::io::Result<String> {
     let (l, element) = (&p.l, p.element);
     let mesh = element.mesh();
     let k = element.points_per_element();
@@ -65,6 +76,9 @@ pub fn write_piece(path: &Path, p: ProblemView<'_>, sol: &Solution) -> std::io::
         arrays.push(("cell", "plastic_strain", 6, f64_bytes(mean.iter().flat_map(to_vtk))));
         let eq = ep.chunks(k).map(|s| s.iter().map(|p| (2.0f64 / 3.0).sqrt() * p.norm()).sum::<f64>() / k as f64);
         arrays.push(("cell", "equivalent_plastic_strain", 1, f64_bytes(eq.into_iter())));
+    }
+    for (name, values) in cells {
+        arrays.push(("cell", name, 1, f64_bytes(values.iter().copied())));
     }
     write_grid(path, element, arrays)
 }

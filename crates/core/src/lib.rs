@@ -16,6 +16,7 @@
 //! | [`mesh`] | tetrahedral meshes, their sources (box, inline, Gmsh), regions, dof numbering and Dirichlet conditions | `error` |
 //! | [`problem`] | the contracts: **P** [`AdmissibleStresses`], **K** [`AdmissibleDisplacements`] (several: [`Obstacles`], theory §8), the element's operators [`ElementOperators`], **L** [`Lagrangian`] (operators and data) with its energies and KKT residuals, the [`Solver`] interface | `error`, `mesh` |
 //! | [`fem`] | the elements [`P1P0Element`], [`P2Element`]; loads as nodal forces; [`DiscreteProblem`], an element with the problem's data | `error`, `mesh`, `problem` |
+//! | [`estimate`] | a posteriori error estimates of a solution (theory §15): averaging recovery of the stresses, indicators per element, the extras' estimates | `mesh`, `problem`, `fem` |
 //! | [`distributed`] | a problem split over ranks (theory §12): partitions, a rank's part of the mesh and dofs — plain data, no MPI | `mesh`, `problem` |
 //! | [`evolution`] | load paths (theory §11): [`LoadStep`] (L at a load factor from a [`PlasticState`]), [`Evolution`] (the steps one after another) | `problem`, `fem` |
 //!
@@ -26,6 +27,7 @@
 
 pub mod distributed;
 pub mod error;
+pub mod estimate;
 pub mod evolution;
 pub mod fem;
 pub mod linalg;
@@ -33,6 +35,7 @@ pub mod mesh;
 pub mod problem;
 
 pub use error::{MeshError, ParameterError, SceneError};
+pub use estimate::{ErrorEstimate, estimate};
 pub use evolution::{Evolution, Increment, LoadStep, PathError, StepCutting, StepSolution, step_factors};
 pub use fem::loads::Load;
 pub use fem::p1p0::{P1, P1P0Element};

@@ -6,6 +6,7 @@
 //! name under `extras`. The older keys `U`, `force`, `contact_nodes`, `contact_radius` and
 //! `contact` are filled from the obstacle's report when the scene has exactly one.
 
+pub mod estimate;
 pub mod locking;
 
 use saddle_core::fem::supports::Reaction;
@@ -109,6 +110,9 @@ pub struct Summary {
     pub residual_history: Vec<f64>,
     /// Warnings from the plugins and the solver.
     pub warnings: Vec<String>,
+    /// The a posteriori error estimate (theory §15): `energy`, one entry per extra by name, its
+    /// cost; null when `[output] error_estimate = false`, under `mpirun` and for load paths.
+    pub error_estimate: Option<estimate::EstimateSummary>,
     /// With a `[load_path]`: one entry per step solved (theory §11); the keys above describe
     /// the last step. Absent for a one-step solve.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -588,6 +592,7 @@ impl Summary {
             counters: sol.report.counters.clone(),
             residual_history: sol.report.residual_history.clone(),
             warnings,
+            error_estimate: None,
             steps: Vec::new(),
             load_path: None,
             ranks: None,

@@ -85,6 +85,11 @@ pub trait Discretisation: ElementOperators {
     fn points_per_element(&self) -> usize {
         1
     }
+    /// The barycentric coordinates of an element's stress points, in their order (the same in
+    /// every element; theory §15): the centroid for one point per element.
+    fn point_barycentrics(&self) -> Vec<[f64; 4]> {
+        vec![[0.25; 4]; self.points_per_element()]
+    }
     /// Whether the element locks where the response is nearly incompressible (theory §10):
     /// true for P1 tetrahedra, false for P2 with B̄. Reports warn about a locked answer by it.
     fn locks(&self) -> bool {

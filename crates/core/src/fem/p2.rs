@@ -231,6 +231,11 @@ impl Discretisation for P2Element {
         POINTS
     }
 
+    /// The four Gauss points: `A` at vertex q, `B` at the other three.
+    fn point_barycentrics(&self) -> Vec<[f64; 4]> {
+        (0..POINTS).map(|q| std::array::from_fn(|a| if a == q { A } else { B })).collect()
+    }
+
     /// Plain P2 (without B̄) locks as ν → ½; with B̄ it does not.
     fn locks(&self) -> bool {
         !self.mean_dilatation
