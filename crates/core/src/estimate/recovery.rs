@@ -157,14 +157,19 @@ pub fn indicators(
     (0..mesh.n_elements())
         .into_par_iter()
         .map(|e| {
-            let nodes: Vec<usize> = mesh.element_nodes(e).collect();
+            let mut nodes = [0usize; 10];
+            let mut count = 0;
+            for (slot, node) in nodes.iter_mut().zip(mesh.element_nodes(e)) {
+                *slot = node;
+                count += 1;
+            }
             let (mut discrete, mut n) = ([0.0; 6 + crate::problem::stresses::MAX_HARDENING_DIM], [0.0; 10]);
             let mut sum = 0.0;
             for lambda in &rule {
                 field.at(e, lambda, &mut discrete[..m]);
                 shape(lambda, second_order, &mut n);
                 let mut d = [0.0; 6 + crate::problem::stresses::MAX_HARDENING_DIM];
-                for (a, &node) in nodes.iter().enumerate() {
+                for (a, &node) in nodes[..count].iter().enumerate() {
                     for c in 0..m {
                         d[c] += n[a] * recovered.nodal[node * m + c];
                     }
