@@ -33,6 +33,8 @@
 //! type = "uzawa"
 //! [load_path]                  # optional: load steps (Prandtl–Reuss, theory §11)
 //! factors = [0.0, 1.0, 0.0]
+//! [output]                     # optional: the a posteriori estimate (theory §15), on by default
+//! error_estimate = true
 //! ```
 //!
 //! Several obstacles (K = K₁ ∩ K₂ ∩ …, theory §8) are an array of tables, each with a unique

@@ -168,14 +168,15 @@ pub fn indicators(
             for lambda in &rule {
                 field.at(e, lambda, &mut discrete[..m]);
                 shape(lambda, second_order, &mut n);
+                // d = σ̂* − σ̂_h at the point
                 let mut d = [0.0; 6 + crate::problem::stresses::MAX_HARDENING_DIM];
-                for (a, &node) in nodes[..count].iter().enumerate() {
-                    for c in 0..m {
-                        d[c] += n[a] * recovered.nodal[node * m + c];
-                    }
+                for (x, y) in d[..m].iter_mut().zip(&discrete[..m]) {
+                    *x = -y;
                 }
-                for c in 0..m {
-                    d[c] -= discrete[c];
+                for (a, &node) in nodes[..count].iter().enumerate() {
+                    for (x, r) in d[..m].iter_mut().zip(&recovered.nodal[node * m..(node + 1) * m]) {
+                        *x += n[a] * r;
+                    }
                 }
                 let s = Sym::from_column_slice(&d[..6]);
                 sum += energy_inner(p, &law, &s, &d[6..m], &s, &d[6..m]);
