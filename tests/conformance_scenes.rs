@@ -2,7 +2,7 @@
 //! saddle-core's types; they are the example files' problems: the same data, field for field, as
 //! the facade reads them from the files, and the same assembled problems.
 
-use saddle::core::DiscreteProblem;
+use saddle::core::{DiscreteProblem, P1};
 use saddle::io::scene::Scene;
 use saddle::solvers::conformance::{Johnson, Setup, hertz, homogeneous};
 use std::path::{Path, PathBuf};
@@ -19,7 +19,8 @@ fn scene_of(setup: &Setup) -> Scene {
     Scene {
         title: None,
         mesh: Box::new(s.mesh),
-        discretisation: s.element,
+        // the kit's default element is P1, a scene's P2: the scene states it
+        discretisation: Some(s.element.unwrap_or_else(|| Box::new(P1::default()))),
         material: s.elasticity,
         yield_surface: s.stresses,
         dirichlet: s.dirichlet,

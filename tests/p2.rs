@@ -150,6 +150,55 @@ fn the_multigrid_that_follows_the_plastic_tangent_needs_fewer_cg_iterations_for_
     assert!(cg_follow < 0.6 * cg_elastic, "{cg_follow} against {cg_elastic}");
 }
 
+#[test]
+fn auto_above_its_size_threshold_prices_the_plastic_tangent_and_factorises_it() {
+    // `auto` above `auto_amg_dofs` takes the multigrid unanalysed; on the perfectly plastic
+    // strip (quasi-2D: a cheap factor) CG spends the iterations the size rule stood for, and
+    // the deferred analysis prices the direct path below what CG already spent (theory §4.2)
+    let (l, _) = build(&strip("p2", 0.02));
+    let solve = |linear, auto_amg_dofs| {
+        let newton = saddle::solvers::Newton { linear, auto_amg_dofs, max_iter: 200, ..Default::default() };
+        let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();
+        assert!(sol.report.converged, "{linear:?}: {:?}", sol.report.stop_reason);
+        let c = sol.report.counters.clone();
+        (Summary::new(l.view(), &sol, None).force.unwrap(), move |k: &str| c.get(k).copied())
+    };
+    let (f_direct, _) = solve(saddle::solvers::LinearSolver::Direct, 0);
+    let (f_amg, amg) = solve(saddle::solvers::LinearSolver::Amg, 0);
+    let (f_auto, auto) = solve(saddle::solvers::LinearSolver::Auto, 1000);
+    let cg = |c: &dyn Fn(&str) -> Option<f64>| c("pcg_iterations").unwrap();
+    println!(
+        "force: direct {f_direct:.10}, amg {f_amg:.10}, auto {f_auto:.10}; CG amg {}, auto {}",
+        cg(&amg),
+        cg(&auto)
+    );
+    // the stresses, hence the force, are unique at h = 0 (theory §1): Newton's tol 1e-10
+    assert!((f_auto - f_direct).abs() <= 1e-8 * f_direct, "{f_auto} vs {f_direct}");
+    assert_eq!(auto("symbolic_analyses"), Some(1.0), "analysed once, when due");
+    assert_eq!(auto("auto_switched_to_direct"), Some(1.0));
+    let (direct, multigrid) = (auto("auto_direct_cost").unwrap(), auto("auto_amg_cost").unwrap());
+    assert!(direct < multigrid, "the factor of a quasi-2D strip is cheap: {direct:e} against {multigrid:e}");
+    // not before the iterations of the size rule's multigrid solve …
+    assert!(cg(&auto) >= saddle::solvers::active_set::analysis_due(0.3), "{}", cg(&auto));
+    // … and it stops renting the multigrid there (measured: 349 CG iterations against 626)
+    assert!(cg(&auto) < 0.8 * cg(&amg), "{} against {}", cg(&auto), cg(&amg));
+}
+
+#[test]
+fn auto_above_its_size_threshold_never_analyses_a_tangent_the_multigrid_approximates() {
+    // the default scene with P2 (the kit's 6×6×3 cells, hardening h = 5): CG stays far below the
+    // iterations of the size rule's multigrid solve, so the analysis is never paid for
+    let l = saddle::solvers::conformance::johnson_p2().problem();
+    let newton = saddle::solvers::Newton { auto_amg_dofs: 100, ..Default::default() };
+    let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();
+    assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
+    let c = &sol.report.counters;
+    println!("CG {:?}, analyses {:?}", c.get("pcg_iterations"), c.get("symbolic_analyses"));
+    assert!(c["pcg_iterations"] > 0.0 && c["pcg_iterations"] < saddle::solvers::active_set::analysis_due(0.3));
+    assert_eq!(c["symbolic_analyses"], 0.0);
+    assert_eq!(c["auto_switched_to_direct"], 0.0);
+}
+
 /// Uzawa on the perfectly plastic P2 strip at 5× (U = 0.05): the projected gradient contracts
 /// by 0.99966 per iteration at the end of its 20,000 (KKT 5.7e-6; theory §4.1, the rate), too
 /// slowly for any budget; stopped after 2,000 iterations it says so, with the rate and the

@@ -119,6 +119,9 @@ fn confined_cube(k0: f64, alpha: f64, h: f64, p: f64, f: f64, zone: &str, cells:
     let text = format!(
         r#"
 title = "Laterally confined cube in tension against a punch (theory §9.1)"
+# P1–P0, stated: the closed forms count one stress point per element (`apex_elements`)
+[discretisation]
+type = "p1"
 [mesh]
 type = "box"
 min = [0.0, 0.0, 0.0]

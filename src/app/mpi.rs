@@ -9,11 +9,11 @@
 use super::ranks::{Ranks, write_in_place};
 use super::setup::{Loaded, RunError, solver_by_type};
 use crate::io::outdir::{OutDir, OutError};
-use crate::io::scene::{Scene, element_by_type};
+use crate::io::scene::{Scene, default_element, element_by_type};
 use crate::io::summary::{RankSummary, Summary, Whole, complete_reports, imprints};
 use crate::io::vtu::{CellField, write_piece, write_pvtu};
 use saddle_core::problem::comm::Comm;
-use saddle_core::{P1, ParameterError, PhaseTimer, ProblemView, SceneError, Solution, Solver};
+use saddle_core::{ParameterError, PhaseTimer, ProblemView, SceneError, Solution, Solver};
 use saddle_parallel::distribute::{RankProblem, Whole as WholeProblem, whole_rows};
 use saddle_parallel::saddle_mpi::{self, Petsc};
 use saddle_parallel::{MpiComm, distribute};
@@ -241,7 +241,7 @@ pub fn load(
         });
         RunError::agree(&ranks, inserted)?;
     }
-    let element = scene.discretisation.clone().unwrap_or_else(|| Box::new(P1::default()));
+    let element = scene.discretisation.clone().unwrap_or_else(default_element);
     let rp = timer.time("setup", || {
         distribute(
             session,

@@ -3,7 +3,7 @@
 //!
 //! ```toml
 //! title = "Johnson 1977: elasto-plastic punch"
-//! [discretisation]             # optional: "p1" (default) or "p2" (quadratic, B̄; theory §10)
+//! [discretisation]             # optional: "p2" (quadratic, B̄; the default; theory §10) or "p1"
 //! type = "p1"
 //! [mesh]                       # MeshSource: "box", "inline", "gmsh" (feature `gmsh`)
 //! type = "box"
@@ -61,7 +61,7 @@ use super::scene_de::TypeFirst;
 use saddle_core::StepCutting;
 use saddle_core::error::ParameterError;
 use saddle_core::{
-    AdmissibleStresses, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P1,
+    AdmissibleStresses, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P2,
     SceneError, Solver, TetMesh,
 };
 use serde::{Deserialize, Serialize};
@@ -82,7 +82,7 @@ pub struct Scene {
     pub title: Option<String>,
     /// Where the mesh comes from.
     pub mesh: Box<dyn MeshSource>,
-    /// The finite element (`[discretisation] type = "p1"` or `"p2"`); absent: `p1`.
+    /// The finite element (`[discretisation] type = "p1"` or `"p2"`); absent: [`default_element`].
     #[serde(default)]
     pub discretisation: Option<Box<dyn FiniteElement>>,
     /// Elasticity.
@@ -245,7 +245,7 @@ impl Scene {
     /// pattern, the obstacles' rows, the loads), with the scene's solver. A scene whose
     /// Dirichlet conditions leave a rigid-body motion free is an error here.
     pub fn assemble(self, mesh: TetMesh) -> Result<Assembled, SceneError> {
-        let element = self.discretisation.unwrap_or_else(|| Box::new(P1::default()));
+        let element = self.discretisation.unwrap_or_else(default_element);
         let element = element.build(mesh, &self.dirichlet)?;
         element.dofs().check_rigid_motions(element.mesh())?;
         let problem = DiscreteProblem::new(element, self.material, self.yield_surface, self.obstacle, &self.load)?
@@ -253,15 +253,22 @@ impl Scene {
         Ok((problem, self.solver))
     }
 
-    /// The `type` of the scene's finite element (`p1` when the scene names none).
+    /// The `type` of the scene's finite element ([`default_element`]'s when the scene names none).
     pub fn element_name(&self) -> &'static str {
-        self.discretisation.as_ref().map_or("p1", |d| d.name())
+        self.discretisation.as_ref().map_or_else(|| default_element().name(), |d| d.name())
     }
 
     /// The same scene with another finite element.
     pub fn with_element(&self, element: Box<dyn FiniteElement>) -> Self {
         Self { discretisation: Some(element), ..self.clone() }
     }
+}
+
+/// The finite element of a scene without `[discretisation]`: P2 with B̄ (theory §10), the one
+/// users should use — it reaches limit loads and nearly incompressible responses where P1 locks
+/// (docs/locking.md); a scene that wants P1–P0 (the paper's, `examples/johnson.toml`) says so.
+pub fn default_element() -> Box<dyn FiniteElement> {
+    Box::new(P2::default())
 }
 
 /// Takes `[solver.petsc]` out of the parsed scene (the solvers know no PETSc): its `options`, a

@@ -120,6 +120,18 @@ pub fn direct_is_cheaper(
     (direct <= amg, direct, amg)
 }
 
+/// When `auto` picked the multigrid without analysing (above `auto_amg_dofs`), the CG
+/// iterations after which it analyses the pattern after all (theory §4.2): those of the whole
+/// multigrid solve its size rule stood for, [`AMG_CG_ITERATIONS_PER_SOLVE`] times
+/// [`incompressibility_factor`]`(nu)`, provided CG also took more per solve than the
+/// hierarchy takes on elastic tangents (Newton's `amg_refresh_cg`). A tangent the elastic
+/// hierarchy approximates never spends them (the default scene: about 11 per solve at any
+/// size); one it does not (perfect plasticity: 72–76 per solve) is then priced as a direct
+/// solve too.
+pub fn analysis_due(nu: f64) -> f64 {
+    AMG_CG_ITERATIONS_PER_SOLVE * incompressibility_factor(nu)
+}
+
 impl LinearSolver {
     /// Direct or AMG as far as the size decides: `auto` is AMG above `auto_amg_dofs` free dofs
     /// times [`incompressibility_factor`]`(nu)`, and stays `Auto` below (the cost rule decides
@@ -185,13 +197,19 @@ pub struct IterativeSolve {
     built_on: Vec<f64>,
     /// CG iterations of the last solve.
     last_iterations: usize,
-    /// CG iterations since the set-up (kept across warm solves, unlike `iterations`).
+    /// CG iterations and solves since the set-up (kept across warm solves, unlike `iterations`).
     spent: usize,
+    spent_solves: usize,
     /// Solves that stopped at the budget before the tolerance.
     pub unconverged: usize,
     /// `auto`'s direct path in reserve, analysed, and the CG iterations after which it is taken
     /// ([`direct_budget`]); taken once, it solves every later system.
     reserve: Option<(Box<SparseCholesky>, f64)>,
+    /// `auto` above `auto_amg_dofs`, which picked the multigrid unanalysed: the CG iterations
+    /// after which the pattern is analysed and the reserve kept ([`analysis_due`]).
+    analyse_after: Option<f64>,
+    /// The cost rule's estimates (direct, multigrid) of the deferred analysis, once done.
+    pub cost_estimates: Option<(f64, f64)>,
     /// The reserve has been taken.
     pub switched: bool,
     /// The last solutions of the extras' columns (W = K⁻¹(−K δ_V)): they change little from
@@ -501,9 +519,12 @@ impl ActiveSetSystem {
             tangent: Csr::default(),
             built_on: Vec::new(),
             reserve: None,
+            analyse_after: None,
+            cost_estimates: None,
             switched: false,
             last_iterations: 0,
             spent: 0,
+            spent_solves: 0,
             unconverged: 0,
             previous: Vec::new(),
         };
@@ -517,6 +538,35 @@ impl ActiveSetSystem {
             it.reserve = Some((chol, budget));
         }
         self.symbolic_analyses += direct.symbolic_analyses;
+    }
+
+    /// `auto`'s multigrid chosen without an analysis (above `auto_amg_dofs`): the pattern is
+    /// analysed, and the direct path kept in reserve by [`direct_budget`], once CG has spent
+    /// `after` iterations ([`analysis_due`]) at more than `refresh_above` per solve.
+    pub fn analyse_when_due(&mut self, after: f64) {
+        if let LinearBackend::Amg(it) = &mut self.backend {
+            it.analyse_after = Some(after);
+        }
+    }
+
+    /// The deferred analysis of `auto` (theory §4.2), when CG has spent its iterations: the
+    /// symbolic analysis of the pattern, the cost rule's estimates, and the direct path in
+    /// reserve with its budget (counted from the set-up, so a budget already spent takes it at
+    /// once).
+    fn analyse_if_due(&mut self, l: &Lagrangian<'_>) -> Result<(), SolveError> {
+        let LinearBackend::Amg(it) = &mut self.backend else { return Ok(()) };
+        let slow = it.spent > it.refresh_above.saturating_mul(it.spent_solves);
+        if !(slow && it.analyse_after.is_some_and(|after| it.spent as f64 >= after)) {
+            return Ok(());
+        }
+        it.analyse_after = None;
+        let p = self.basis.pattern(l.pattern());
+        let chol = linear::analyse(p, "tangent stiffness", &self.solver, &mut self.symbolic_analyses)?;
+        let nu = l.data.elasticity.poisson;
+        let (_, direct, amg) = direct_is_cheaper(&chol, l.data.rows.n_rows(), l.pattern().nnz(), nu);
+        it.cost_estimates = Some((direct, amg));
+        it.reserve = Some((Box::new(chol), direct_budget(direct, l.pattern().nnz())));
+        Ok(())
     }
 
     /// The system for the rows' coordinates `basis` on `backend`.
@@ -583,6 +633,7 @@ impl ActiveSetSystem {
         gap: &[f64],
         cg_tol: f64,
     ) -> Result<Step, SolveError> {
+        self.analyse_if_due(l)?;
         let rows = l.data.rows;
         let (n, ne, nr) = (l.n_dofs(), l.n_extras(), rows.n_rows());
         let basis = &self.basis;
@@ -657,6 +708,7 @@ impl ActiveSetSystem {
                     built_on,
                     last_iterations,
                     spent,
+                    spent_solves,
                     ..
                 } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
@@ -683,6 +735,7 @@ impl ActiveSetSystem {
                         })?;
                     *iterations += report.iterations;
                     *spent += report.iterations;
+                    *spent_solves += 1;
                     *last_iterations = report.iterations;
                     *unconverged += !report.converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(col);

@@ -101,7 +101,7 @@ pub struct SceneResult {
 pub struct Setup {
     /// The box mesh.
     pub mesh: BoxMesh,
-    /// The finite element (`None`: P1, a scene's default).
+    /// The finite element (`None`: P1, the kit's default; a scene's is P2).
     pub element: Option<Box<dyn FiniteElement>>,
     /// Elasticity.
     pub elasticity: Elasticity,
@@ -197,7 +197,7 @@ pub struct Johnson {
     /// The unit of length: the block, Γ₁, the contact disc and the aligned grid lines scale
     /// with it (1; stresses and forces are given as they are).
     pub length: f64,
-    /// The finite element (`None`: the scene's default, P1).
+    /// The finite element (`None`: the kit's default, P1; a scene's is P2).
     pub element: Option<Box<dyn FiniteElement>>,
 }
 

@@ -41,8 +41,8 @@
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{
-    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, direct_budget, direct_is_cheaper, primal_dual_update,
-    touch_loaded_extras,
+    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, analysis_due, direct_budget, direct_is_cheaper,
+    primal_dual_update, touch_loaded_extras,
 };
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
@@ -648,6 +648,12 @@ impl<'a> Run<'a> {
             })
         };
         Ok(match linear {
+            // `auto` above `auto_amg_dofs`: the analysis deferred until CG shows the tangent
+            LinearSolver::Amg if settings.linear == LinearSolver::Auto && l.rigid_body_modes().is_some() => {
+                let mut amg = multigrid(timer)?;
+                amg.analyse_when_due(analysis_due(nu));
+                amg
+            }
             LinearSolver::Amg => multigrid(timer)?,
             LinearSolver::Direct => timer.time("analysis", || ActiveSetSystem::new(l, name))?,
             LinearSolver::Auto => {
@@ -885,6 +891,10 @@ impl<'a> Run<'a> {
     /// The solution and its report (theory §5): the iterate, `stop` and the last residuals
     /// `kkt`, the counters, and the phases of `timer`.
     fn finish(mut self, stop: StopReason, kkt: KktResiduals, timer: &mut PhaseTimer) -> Solution {
+        // `auto`'s deferred analysis, if it ran, priced the direct path only now
+        if let Some(e) = self.system.serial().and_then(|s| s.iterative()).and_then(|it| it.cost_estimates) {
+            self.count.cost_estimates = Some(e);
+        }
         let c = &self.count;
         let elastic_factorisations = (c.elastic_contact_solves > 0) as usize;
         let mut counters = BTreeMap::new();

@@ -22,7 +22,8 @@ use std::fmt::Debug;
 pub use discrete_problem::{DiscreteProblem, ProblemView};
 
 /// The finite element of a scene, chosen by `type` in its `[discretisation]` table: `p1`
-/// (P1 displacements, P0 stresses; the default) or `p2` (P2 displacements with B̄, theory §10).
+/// (P1 displacements, P0 stresses) or `p2` (P2 displacements with B̄, theory §10; a scene
+/// without the table gets it).
 /// It builds the element's operators on a mesh; [`DiscreteProblem`] adds the problem's data.
 #[typetag::serde(tag = "type")]
 pub trait FiniteElement: Debug + Send + Sync + dyn_clone::DynClone {

@@ -17,7 +17,8 @@ use crate::problem::pattern::SymmetricPattern;
 use crate::problem::tensor::{SQRT2, Sym};
 use rayon::prelude::*;
 
-/// The P1–P0 element as a scene's choice: `[discretisation] type = "p1"` (the default).
+/// The P1–P0 element as a scene's choice: `[discretisation] type = "p1"` (the paper's; a scene
+/// without the table gets P2).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct P1 {}
