@@ -37,7 +37,7 @@ pub fn p2_levels(p1: &[[usize; 3]]) -> Vec<[usize; 3]> {
 /// [`p2_levels`] within a mesh family of base `family`: the P1 levels with an even multiple
 /// 2k of the base give P2 level k (the same nodes); the others have no P2 level of the family.
 pub fn p2_family_levels(p1: &[[usize; 3]], family: [usize; 3]) -> Vec<[usize; 3]> {
-    p1.iter().filter(|c| (c[0] / family[0].max(1)) % 2 == 0).map(|c| c.map(|n| n / 2)).collect()
+    p1.iter().filter(|c| (c[0] / family[0].max(1)).is_multiple_of(2)).map(|c| c.map(|n| n / 2)).collect()
 }
 
 /// The cells of the P1 levels with the nodes of the P2 levels `p2` (twice the cells).
