@@ -9,7 +9,9 @@ use saddle::core::{BoxMesh, DiscreteProblem, Elasticity, Silent, Solver, Sym};
 use saddle::io::csv::csv_field;
 use saddle::io::scene::Scene;
 use saddle::solvers::Newton;
-use saddle::studies::report::convergence::{fitted_rate, observed_rate, refinement_levels, richardson};
+use saddle::studies::report::convergence::{
+    GCI_SAFETY, extrapolate, family_levels, fitted_rate, observed_rate, refinement_levels, richardson,
+};
 use saddle::studies::report::runs::{Errors, RunRecord, errors, strain_distance};
 use saddle::studies::report::tables::{CONVERGENCE_HEADER, WORK_PRECISION_HEADER, convergence_csv, work_precision_csv};
 use saddle::studies::report::transfer::{
@@ -217,6 +219,41 @@ fn richardson_recovers_a_synthetic_power_law() {
 }
 
 #[test]
+fn the_extrapolations_uncertainty_covers_its_true_error() {
+    // a pure power law: the GCI is F_s times the correction of the finest level, exactly
+    let h = [0.4, 0.2, 0.1];
+    let r = extrapolate(&h, &h.map(|h: f64| 2.0 + 0.3 * h.powf(1.2))).unwrap();
+    assert!((r.uncertainty - GCI_SAFETY * 0.3 * 0.1f64.powf(1.2)).abs() < 1e-12, "{r:?}");
+    // a leading power and a higher-order term a quarter to a half of it on the coarsest level
+    // (not yet asymptotic): the true error of v* lies within the uncertainty, with three and
+    // four levels (the uncertainty exceeds the error by 6 to 24 times on these)
+    for (p, c, d) in [(1.0, 0.5, 0.6), (1.5, -0.2, 0.2), (2.0, 1.0, -1.0), (0.7, 0.05, 0.03)] {
+        let exact = 8.4e-3;
+        let f = |h: f64| exact + c * h.powf(p) + d * h.powf(p + 1.0);
+        for hs in [&[0.25, 0.125, 0.0625][..], &[0.25, 0.125, 0.25 / 3.0, 0.0625][..]] {
+            let v: Vec<f64> = hs.iter().map(|&h| f(h)).collect();
+            let r = extrapolate(hs, &v).unwrap();
+            assert!((r.value - exact).abs() <= r.uncertainty, "p = {p}, {} levels: {r:?}", hs.len());
+        }
+    }
+    // with four levels the uncertainty is at least the change of v* between the two triples
+    let hs = [0.25, 0.125, 0.25 / 3.0, 0.0625];
+    let v: Vec<f64> = hs.iter().map(|&h| 1.0 + h + h * h).collect();
+    let (r4, r3) = (extrapolate(&hs, &v).unwrap(), richardson([hs[0], hs[1], hs[2]], [v[0], v[1], v[2]]).unwrap());
+    assert!(r4.uncertainty >= (r4.value - r3.value).abs());
+    assert!(extrapolate(&hs[..2], &v[..2]).is_none());
+}
+
+#[test]
+fn levels_of_a_mesh_family_are_multiples_of_its_base() {
+    // the default scene as level 4 of the family of base 8×8×4: 8, 16, 24, 32, 48 cells
+    assert_eq!(
+        family_levels([8, 8, 4], [32, 32, 16], &[0.25, 0.375, 0.5, 0.6875, 1.0, 1.375]),
+        vec![[8, 8, 4], [16, 16, 8], [24, 24, 12], [32, 32, 16], [48, 48, 24]]
+    );
+}
+
+#[test]
 fn observed_and_fitted_rates_of_synthetic_sequences() {
     let h = [0.2, 0.1, 0.07, 0.05];
     let e: Vec<f64> = h.iter().map(|h: &f64| 3.0 * h.powf(0.5)).collect();
@@ -247,6 +284,11 @@ fn a_mesh_that_is_not_a_box_has_no_convergence_study() {
     let refined = src.scene(Some([4, 4, 2])).unwrap();
     assert_eq!(refined.mesh.cells(), Some([4, 4, 2]));
     assert_eq!(refined.title, src.scene.title);
+    // on a mesh family (`base`) a level outside it is refused, naming the field and levels
+    let src = SceneSource::read(&repo("examples/johnson_family.toml")).unwrap();
+    assert_eq!(src.scene(Some([24, 24, 12])).unwrap().mesh.cells(), Some([24, 24, 12]));
+    let e = src.scene(Some([22, 22, 11])).unwrap_err().to_string();
+    assert!(e.contains("mesh.cells") && e.contains("[16, 16, 8]") && e.contains("[24, 24, 12]"), "{e}");
 }
 
 /// The whole command on the homogeneous scene: every file, with its header, and non-empty images.

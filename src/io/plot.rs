@@ -61,6 +61,8 @@ pub struct Series {
     pub open: Vec<(f64, f64)>,
     /// A dashed reference line without markers.
     pub dashed: bool,
+    /// Error bars: vertical segments (x, y_low, y_high), e.g. a value's uncertainty.
+    pub bars: Vec<(f64, f64, f64)>,
 }
 
 /// One panel: a log–log chart.
@@ -264,6 +266,11 @@ fn draw_panel<DB: DrawingBackend>(panel: &Panel, area: &DrawingArea<DB, Shift>) 
         draw_markers(&mut chart, &filled, se.marker, style).map_err(s)?;
         let open: Vec<(f64, f64)> = se.open.iter().filter(inside).copied().collect();
         draw_markers(&mut chart, &open, se.marker, ShapeStyle { filled: false, ..style }).map_err(s)?;
+        let bars = se.bars.iter().filter(|b| b.0 >= x0 && b.0 <= x1).map(|&(x, lo, hi)| {
+            let (lo, hi) = (lo.clamp(y0, y1), hi.clamp(y0, y1));
+            PathElement::new(vec![(x, lo), (x, hi)], ShapeStyle { stroke_width: 1, ..style })
+        });
+        chart.draw_series(bars).map_err(s)?;
     }
     Ok(())
 }
@@ -345,6 +352,7 @@ pub fn lines(
             line: pts.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect(),
             open: vec![],
             dashed: false,
+            bars: vec![],
         })
         .collect();
     if let Some((first, last)) =
@@ -357,6 +365,7 @@ pub fn lines(
             line: vec![first, (last.0, first.1 * last.0 / first.0)],
             open: vec![],
             dashed: true,
+            bars: vec![],
         });
     }
     let panel =

@@ -226,6 +226,8 @@ impl Scene {
             field: "mesh.cells".into(),
             message: format!("a `{}` mesh cannot be refined by cell counts; use a `box` mesh", self.mesh.name()),
         })?;
+        // a count outside the mesh's family (`base`) is refused here, naming `mesh.cells`
+        mesh.validate("mesh")?;
         Ok(Self { mesh, ..self.clone() })
     }
 

@@ -137,7 +137,8 @@ impl Punch<'_> {
         // contact pressures: each row's force over its share of the contact face
         let area = row_areas(mesh, rows);
         let force: f64 = lambda.iter().sum();
-        let peak = contact.iter().map(|&i| lambda[i] / area[i]).fold(0.0, f64::max);
+        // (rows without area — P2 vertices, ∫N = 0 — carry no pressure of their own)
+        let peak = contact.iter().filter(|&&i| area[i] > 0.0).map(|&i| lambda[i] / area[i]).fold(0.0, f64::max);
         let contact_area: f64 = contact.iter().map(|&i| area[i]).sum();
         let mean = if contact_area > 0.0 { force / contact_area } else { 0.0 };
         // the pressure concentration at the rim: mean pressure of the rim rows over the mean

@@ -193,10 +193,12 @@ fn norm(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
-/// Each row's share of the contact face: a third of every boundary facet facing the punch
-/// (outward normal n₃ < 0) at each of its row nodes — the nodal area that turns a contact force
-/// λ_i into a pressure. On a second-order mesh a facet is split into its four sub-triangles
-/// (corners and edge midpoints), a third of each going to its nodes.
+/// Each row's share of the contact face, ∫_Γ N_i over the boundary facets facing the punch
+/// (outward normal n₃ < 0) — the nodal area that turns a contact force λ_i, the consistent
+/// force ∫ N_i p of a pressure p, into that pressure. On a first-order mesh a third of every
+/// facet at each of its nodes; on a second-order one ∫N = 0 at a 6-node facet's vertices and a
+/// third of the facet at each edge node (theory §10.1): a vertex row carries no force under a
+/// smooth pressure and has no area, so its pressure is not defined (and not reported).
 pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
     let mut row_of = vec![usize::MAX; mesh.n_nodes()];
     for (i, &n) in rows.node.iter().enumerate() {
@@ -215,12 +217,8 @@ pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
         if n3 < -FACING_TOL * area2 {
             match &mesh.second_order {
                 None => f.iter().for_each(|&n| add(n, area2 / 6.0)),
-                // the 6-node triangle split into its four corner-and-midpoint triangles, a third
-                // of each to its nodes: 1/12 of the facet to a vertex, 1/4 to an edge node
-                Some(so) => {
-                    f.iter().for_each(|&n| add(n, area2 / 24.0));
-                    so.facet_edges[fi].iter().for_each(|&n| add(n, area2 / 8.0));
-                }
+                // ∫N of the 6-node triangle: 0 at the vertices, |F|/3 at the edge nodes
+                Some(so) => so.facet_edges[fi].iter().for_each(|&n| add(n, area2 / 6.0)),
             }
         }
     }

@@ -326,3 +326,41 @@ fn contact_pressures_of_a_uniform_force_field() {
     let smallest = areas.iter().copied().fold(f64::INFINITY, f64::min);
     assert!((r.get("peak_pressure").unwrap() - lambda[0] / smallest).abs() < 1e-12);
 }
+
+#[test]
+fn p2_pressures_are_the_consistent_forces_over_their_weights() {
+    // on a second-order mesh a uniform pressure p has the consistent forces ∫N p: 0 at a 6-node
+    // facet's vertices, p|F|/3 at its edge nodes (theory §10.1). The nodal areas are the same
+    // weights, so every edge row reads p back exactly and the vertex rows have no area; with
+    // the former 1/12–1/4 split the peak came out 4/3 p
+    let mesh = common::mesh().second_order();
+    let dofs = common::dofs(&mesh);
+    let punch =
+        saddle_contact::RigidPunch::new(1.0, common::disc(0.5), Box::new(saddle_contact::Flat::default())).unwrap();
+    let rows = saddle_core::AdmissibleDisplacements::discretise(&punch, &mesh, &dofs, "obstacle").unwrap();
+    let mut row_of = vec![usize::MAX; mesh.n_nodes()];
+    rows.node.iter().enumerate().for_each(|(i, &n)| row_of[n] = i);
+    let (p, so) = (2.5, mesh.second_order.as_ref().unwrap());
+    let mut lambda = vec![0.0; rows.n_rows()];
+    let mut vertex = vec![false; rows.n_rows()];
+    for &f in &mesh.groups["zmin"] {
+        let [a, b, c] = mesh.boundary[f].map(|i| mesh.nodes[i]);
+        let n = saddle_contact::zone::tri_normal(a, b, c);
+        let area = 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        mesh.boundary[f].iter().filter(|&&v| row_of[v] != usize::MAX).for_each(|&v| vertex[row_of[v]] = true);
+        for &e in so.facet_edges[f].iter().filter(|&&e| row_of[e] != usize::MAX) {
+            lambda[row_of[e]] += p * area / 3.0;
+        }
+    }
+    let areas = saddle_contact::zone::row_areas(&mesh, &rows);
+    for i in 0..rows.n_rows() {
+        if vertex[i] {
+            assert_eq!(areas[i], 0.0, "row {i}: a vertex has ∫N = 0");
+        } else {
+            assert!((lambda[i] / areas[i] - p).abs() < 1e-12 * p, "row {i}: {}", lambda[i] / areas[i]);
+        }
+    }
+    let r = saddle_core::AdmissibleDisplacements::report(&punch, &mesh, &rows, &[0.0], &lambda);
+    assert!((r.get("peak_pressure").unwrap() - p).abs() < 1e-12 * p, "{:?}", r.get("peak_pressure"));
+    assert!((r.get("mean_pressure").unwrap() - p).abs() < 1e-12 * p, "{:?}", r.get("mean_pressure"));
+}

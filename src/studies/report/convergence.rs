@@ -15,6 +15,18 @@
 
 use saddle_core::DiscreteProblem;
 
+/// The levels of a mesh family (`mesh.base`, theory §7.3): `family_base` times each factor of
+/// the scene's own multiple k (rounded, at least 1), ascending, repeats merged. Every level is a
+/// multiple of the base, so every level has the same grading and alignment.
+pub fn family_levels(family_base: [usize; 3], scene: [usize; 3], factors: &[f64]) -> Vec<[usize; 3]> {
+    let k = (scene[0] / family_base[0].max(1)).max(1) as f64;
+    let mut ks: Vec<usize> =
+        factors.iter().filter(|f| f.is_finite() && **f > 0.0).map(|f| ((k * f).round() as usize).max(1)).collect();
+    ks.sort_unstable();
+    ks.dedup();
+    ks.into_iter().map(|k| family_base.map(|n| k * n)).collect()
+}
+
 /// The cells of each refinement level: `base` scaled by each factor (rounded, at least 1),
 /// ascending, levels with the same cells merged.
 pub fn refinement_levels(base: [usize; 3], factors: &[f64]) -> Vec<[usize; 3]> {
@@ -105,6 +117,39 @@ pub struct Richardson {
     pub order: f64,
     /// C.
     pub constant: f64,
+    /// The uncertainty of v* (an absolute value): Roache's grid convergence index of the finest
+    /// level with the observed order, `F_s |v* − v₃|`, F_s = [`GCI_SAFETY`] (Roache 1994, J.
+    /// Fluids Eng. 116:405; Celik et al. 2008, J. Fluids Eng. 130:078001), and with a fourth
+    /// level at least the change of v* from the previous triple ([`extrapolate`]).
+    pub uncertainty: f64,
+}
+
+/// Roache's safety factor of the grid convergence index for three or more levels with the
+/// order observed from them (Roache 1998, Verification and Validation in Computational Science
+/// and Engineering, §5.6; Celik et al. 2008).
+pub const GCI_SAFETY: f64 = 1.25;
+
+/// The Richardson extrapolation of the three finest of `(h, v)` (any order), its uncertainty
+/// raised to the change of v* from the previous triple when there is a fourth level (the
+/// extrapolation's own dependence on the levels: a triple still outside the asymptotic range
+/// moves v* by more than the GCI). `None` when the finest triple admits no extrapolation.
+pub fn extrapolate(h: &[f64], v: &[f64]) -> Option<Richardson> {
+    let mut idx: Vec<usize> = (0..h.len().min(v.len())).collect();
+    idx.sort_by(|&a, &b| h[b].total_cmp(&h[a]));
+    let n = idx.len();
+    if n < 3 {
+        return None;
+    }
+    let triple = |t: &[usize]| richardson([h[t[0]], h[t[1]], h[t[2]]], [v[t[0]], v[t[1]], v[t[2]]]);
+    let mut r = triple(&idx[n - 3..])?;
+    if n >= 4 {
+        match triple(&idx[n - 4..n - 1]) {
+            Some(previous) => r.uncertainty = r.uncertainty.max((r.value - previous.value).abs()),
+            // the previous triple oscillates: the spread of the last three levels is the honest bound
+            None => r.uncertainty = r.uncertainty.max((v[idx[n - 3]] - v[idx[n - 1]]).abs()),
+        }
+    }
+    Some(r)
 }
 
 /// Fits v = v* + C h^p exactly through three levels (h₁ > h₂ > h₃ in any order of input, any
@@ -141,7 +186,8 @@ pub fn richardson(h: [f64; 3], v: [f64; 3]) -> Option<Richardson> {
     }
     let p = 0.5 * (lo + hi);
     let constant = d2 / (h[1].powf(p) - h[2].powf(p));
-    Some(Richardson { value: v[2] - constant * h[2].powf(p), order: p, constant })
+    let correction = constant * h[2].powf(p);
+    Some(Richardson { value: v[2] - correction, order: p, constant, uncertainty: GCI_SAFETY * correction.abs() })
 }
 
 /// One level of a convergence study.
@@ -169,7 +215,8 @@ pub struct LevelResult {
     pub u: f64,
     /// |U − U_finest| / |U_finest|.
     pub err_u: f64,
-    /// |U − U*| / |U*| against the Richardson extrapolation (NaN without one).
+    /// |U − U*| / |U*| against the Richardson extrapolation; NaN without one, and when the error
+    /// lies within the extrapolation's uncertainty (no error is claimed below it).
     pub err_u_richardson: f64,
     /// [σ̂ − σ̂_finest] / [σ̂_finest] in the energy norm on the finest mesh.
     pub err_stress: f64,
@@ -222,6 +269,13 @@ pub struct ConvergenceStudy {
 /// What h is (module docs).
 pub const H_MEAN: &str = "the mean element size (|Ω|/elements)^(1/3)";
 
+/// |v − v*| / |v*| when it exceeds the reference's relative uncertainty, else NaN: no error is
+/// claimed (or plotted) below what the reference itself is known to.
+pub fn error_above_uncertainty(v: f64, r: &Richardson) -> f64 {
+    let e = (v - r.value).abs();
+    if e > r.uncertainty { e / r.value.abs() } else { f64::NAN }
+}
+
 impl ConvergenceStudy {
     /// Completes a study from its levels (errors against the finest filled in): the Richardson
     /// extrapolation of U from the three finest converged levels, the errors against it, and
@@ -229,14 +283,12 @@ impl ConvergenceStudy {
     pub fn from_levels(mut levels: Vec<LevelResult>) -> Self {
         let hs: Vec<f64> = levels.iter().map(|l| l.size.h()).collect();
         let good: Vec<usize> = (0..levels.len()).filter(|&i| levels[i].converged && levels[i].u.is_finite()).collect();
-        let richardson = (good.len() >= 3)
-            .then(|| {
-                let t = &good[good.len() - 3..];
-                richardson([hs[t[0]], hs[t[1]], hs[t[2]]], [levels[t[0]].u, levels[t[1]].u, levels[t[2]].u])
-            })
-            .flatten();
+        let richardson = extrapolate(
+            &good.iter().map(|&i| hs[i]).collect::<Vec<_>>(),
+            &good.iter().map(|&i| levels[i].u).collect::<Vec<_>>(),
+        );
         for l in &mut levels {
-            l.err_u_richardson = richardson.map_or(f64::NAN, |r| (l.u - r.value).abs() / r.value.abs());
+            l.err_u_richardson = richardson.map_or(f64::NAN, |r| error_above_uncertainty(l.u, &r));
         }
         let rates = (0..levels.len().saturating_sub(1))
             .map(|i| {

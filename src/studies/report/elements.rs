@@ -19,6 +19,9 @@ pub struct ElementComparison {
     pub studies: Vec<(String, ConvergenceStudy)>,
     /// The reference U.
     pub reference_u: f64,
+    /// Its uncertainty (absolute; the Richardson extrapolation's, [`super::convergence::extrapolate`];
+    /// NaN for a finest level taken as the reference, whose error is unknown).
+    pub reference_uncertainty: f64,
     /// How the reference was made.
     pub reference: String,
 }
@@ -31,6 +34,12 @@ pub fn p2_levels(p1: &[[usize; 3]]) -> Vec<[usize; 3]> {
     out
 }
 
+/// [`p2_levels`] within a mesh family of base `family`: the P1 levels with an even multiple
+/// 2k of the base give P2 level k (the same nodes); the others have no P2 level of the family.
+pub fn p2_family_levels(p1: &[[usize; 3]], family: [usize; 3]) -> Vec<[usize; 3]> {
+    p1.iter().filter(|c| (c[0] / family[0].max(1)).is_multiple_of(2)).map(|c| c.map(|n| n / 2)).collect()
+}
+
 /// The cells of the P1 levels with the nodes of the P2 levels `p2` (twice the cells).
 pub fn p1_levels(p2: &[[usize; 3]]) -> Vec<[usize; 3]> {
     p2.iter().map(|c| c.map(|n| 2 * n)).collect()
@@ -41,19 +50,43 @@ impl ElementComparison {
     pub fn new(p1: ConvergenceStudy, p2: ConvergenceStudy) -> Self {
         // an extrapolation whose order is implausible for P2 (outside 0.25 to 4) is not trusted
         let richardson = p2.richardson.filter(|r| (0.25..=4.0).contains(&r.order));
-        let (reference_u, reference) = match (&richardson, p2.levels.last()) {
-            (Some(r), _) => {
-                (r.value, format!("the Richardson extrapolation of P2's three finest levels (order {:.2})", r.order))
-            }
-            (None, Some(l)) => (l.u, format!("P2's finest level ({}×{}×{} cells)", l.cells[0], l.cells[1], l.cells[2])),
-            (None, None) => (f64::NAN, "none (no P2 level)".into()),
+        let (reference_u, reference_uncertainty, reference) = match (&richardson, p2.levels.last()) {
+            (Some(r), _) => (
+                r.value,
+                r.uncertainty,
+                format!(
+                    "the Richardson extrapolation of P2's three finest levels (order {:.2}, uncertainty ±{:.1e} = {:.2} %)",
+                    r.order,
+                    r.uncertainty,
+                    100.0 * r.uncertainty / r.value.abs()
+                ),
+            ),
+            (None, Some(l)) => (
+                l.u,
+                f64::NAN,
+                format!("P2's finest level ({}×{}×{} cells; uncertainty unknown)", l.cells[0], l.cells[1], l.cells[2]),
+            ),
+            (None, None) => (f64::NAN, f64::NAN, "none (no P2 level)".into()),
         };
-        Self { studies: vec![("p1".into(), p1), ("p2".into(), p2)], reference_u, reference }
+        Self { studies: vec![("p1".into(), p1), ("p2".into(), p2)], reference_u, reference_uncertainty, reference }
     }
 
-    /// |U − U_ref| / |U_ref| of a level's U.
+    /// |U − U_ref| / |U_ref| of a level's U; NaN when it lies within the reference's
+    /// uncertainty (no error is claimed below it).
     pub fn err_u(&self, u: f64) -> f64 {
-        (u - self.reference_u).abs() / self.reference_u.abs()
+        let e = (u - self.reference_u).abs();
+        if e > self.reference_uncertainty || self.reference_uncertainty.is_nan() {
+            e / self.reference_u.abs()
+        } else {
+            f64::NAN
+        }
+    }
+
+    /// Whether U is within `accuracy` (relative) of the exact value for sure: its distance to the
+    /// reference plus the reference's uncertainty (an accuracy below that is never claimed).
+    fn within(&self, u: f64, accuracy: f64) -> bool {
+        let unc = if self.reference_uncertainty.is_nan() { 0.0 } else { self.reference_uncertainty };
+        ((u - self.reference_u).abs() + unc) / self.reference_u.abs() <= accuracy
     }
 
     /// The least wall time of a converged level of `element` whose U is within `accuracy` of
@@ -65,7 +98,7 @@ impl ElementComparison {
         let n = study.levels.len() - own_reference as usize;
         study.levels[..n]
             .iter()
-            .filter(|l| l.converged && self.err_u(l.u) <= accuracy)
+            .filter(|l| l.converged && self.within(l.u, accuracy))
             .map(|l| (l.wall_s, l.cells, l.dofs))
             .min_by(|a, b| a.0.total_cmp(&b.0))
     }

@@ -56,6 +56,7 @@ pub fn work_precision(report: &Report, png: &Path, svg: &Path) -> Result<(), Plo
                     line: pts(true),
                     open: pts(false),
                     dashed: false,
+                    bars: vec![],
                 }
             })
             .collect(),
@@ -105,6 +106,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
             line: pts(|l| l.err_stress),
             open: vec![],
             dashed: false,
+            bars: vec![],
         },
         Series {
             name: "stress (σ, ξ), difference to the next level".into(),
@@ -113,6 +115,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
             line: pts(|l| l.diff_stress_next),
             open: vec![],
             dashed: false,
+            bars: vec![],
         },
         Series {
             name: "strain ε(u), L², vs finest".into(),
@@ -121,21 +124,28 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
             line: pts(|l| l.err_strain),
             open: vec![],
             dashed: false,
+            bars: vec![],
         },
     ];
-    if study.richardson.is_some() {
+    if let Some(r) = study.richardson {
+        // errors within the extrapolation's uncertainty are NaN (not claimed); the bars span
+        // the error ± the uncertainty (relative)
+        let line: Vec<(f64, f64)> = study
+            .levels
+            .iter()
+            .map(|l| (l.size.h(), l.err_u_richardson))
+            .filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite())
+            .collect();
+        let u = r.uncertainty / r.value.abs();
+        let bars = line.iter().map(|&(h, e)| (h, (e - u).max(ERROR_FLOOR), e + u)).collect();
         series.push(Series {
-            name: "U vs Richardson extrapolation".into(),
+            name: format!("U vs Richardson extrapolation (bars: its uncertainty ±{:.1e})", u),
             color: COLORS[1],
             marker: Marker::Triangle,
-            line: study
-                .levels
-                .iter()
-                .map(|l| (l.size.h(), l.err_u_richardson))
-                .filter(|p| p.1 > ERROR_FLOOR && p.1.is_finite())
-                .collect(),
+            line,
             open: vec![],
             dashed: false,
+            bars,
         });
     } else {
         series.push(Series {
@@ -145,6 +155,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
             line: pts(|l| l.err_u),
             open: vec![],
             dashed: false,
+            bars: vec![],
         });
     }
     // the other element of the P1–P2 comparison: its σ̂ errors against its own finest level
@@ -164,6 +175,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
                     .collect(),
                 open: vec![],
                 dashed: true,
+                bars: vec![],
             });
         }
     }
@@ -179,6 +191,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
             line: vec![(h0, e0), (h_min, e0 * (h_min / h0).sqrt())],
             open: vec![],
             dashed: true,
+            bars: vec![],
         });
     }
     let x_desc = "h: mean element size (|Ω|/elements)^(1/3), length units";

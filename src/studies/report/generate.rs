@@ -2,7 +2,7 @@
 //! refined meshes, written as CSV files, images and `report.md` (the files of the module docs of
 //! [`super`]).
 
-use super::convergence::refinement_levels;
+use super::convergence::{family_levels, refinement_levels};
 use super::elements::{self, ElementComparison};
 #[cfg(feature = "report")]
 use super::figures;
@@ -29,7 +29,11 @@ pub fn generate(
     let base = source.box_cells();
     let levels: Result<Vec<[usize; 3]>, String> = base.clone().map(|base| {
         let factors: &[f64] = if options.quick { &QUICK_LEVELS } else { &LEVELS };
-        let mut levels = refinement_levels(base, factors);
+        // a mesh family's levels are multiples of its base (same grading and alignment)
+        let mut levels = match source.scene.mesh.family_base() {
+            Some(family) => family_levels(family, base, factors),
+            None => refinement_levels(base, factors),
+        };
         if !levels.contains(&base) {
             levels.push(base);
             levels.sort_by_key(|c| c[0] * c[1] * c[2]);
@@ -45,7 +49,12 @@ pub fn generate(
         .as_ref()
         .ok()
         .filter(|v| v.len() >= 2)
-        .map(|v| if other == "p2" { elements::p2_levels(v) } else { elements::p1_levels(v) });
+        .map(|v| match (other, source.scene.mesh.family_base()) {
+            ("p2", Some(family)) => elements::p2_family_levels(v, family),
+            ("p2", None) => elements::p2_levels(v),
+            _ => elements::p1_levels(v),
+        })
+        .filter(|v| !v.is_empty());
     let solves = 1
         + rungs.iter().filter(|r| !matches!(r.kind, RungKind::Reference)).count()
         + other_levels

@@ -5,7 +5,7 @@
 //! `_us` microseconds, `_rel` a dimensionless relative quantity; U and h are in the scene's
 //! length unit.
 
-use super::convergence::ConvergenceStudy;
+use super::convergence::{ConvergenceStudy, GCI_SAFETY};
 use super::measure::Report;
 use super::runs::RunRecord;
 use crate::io::csv::{csv_field, csv_num};
@@ -308,9 +308,15 @@ pub fn markdown(report: &Report) -> String {
                     };
                     let _ = writeln!(
                         s,
-                        "Richardson extrapolation of U from the three finest levels: U* = {:.9e}, observed order \
-                         p = {:.2} (U(h) ≈ U* + C h^p with C = {:.3e}); the U errors and rates above are against U*.{caution}",
-                        r.value, r.order, r.constant
+                        "Richardson extrapolation of U from the three finest levels: U* = {:.9e} ± {:.1e} ({:.2} %: \
+                         Roache's grid convergence index, safety factor {GCI_SAFETY}, at least the change of U* from the \
+                         previous triple), observed order p = {:.2} (U(h) ≈ U* + C h^p with C = {:.3e}); the U errors and \
+                         rates above are against U*, and an error within the uncertainty is not claimed (–).{caution}",
+                        r.value,
+                        r.uncertainty,
+                        100.0 * r.uncertainty / r.value.abs(),
+                        r.order,
+                        r.constant
                     );
                 }
                 None => {

@@ -34,6 +34,14 @@ pub struct BoxMesh {
     /// How each hexahedron is cut into tetrahedra (default `"kuhn"`).
     #[serde(default)]
     pub subdivision: Subdivision,
+    /// The coarsest level of a mesh family (theory §7.3): with `base`, `cells` must be `k·base`
+    /// (one k on every axis) and the grid is the base grid — graded and aligned — with each of
+    /// its cells cut into k equal ones. Every level of the family then has the same grading and
+    /// alignment (the same piecewise affine map of a uniform grid), and levels k and 2k are
+    /// nested. Without it, `cells` sets the grading and the alignment moves nodes anew at every
+    /// count, so two counts are different families.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<[usize; 3]>,
 }
 
 /// `subdivision = "kuhn" | "mirrored"`: the 6 tetrahedra of each hexahedron.
@@ -66,7 +74,23 @@ pub struct Grading {
 impl BoxMesh {
     /// An ungraded box.
     pub fn new(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> Self {
-        Self { min, max, cells, grading: None, align: Default::default(), subdivision: Subdivision::Kuhn }
+        Self { min, max, cells, grading: None, align: Default::default(), subdivision: Subdivision::Kuhn, base: None }
+    }
+
+    /// The same box as level `k` of the family whose coarsest level has `base` cells (the
+    /// `base` field): `cells = k·base`.
+    pub fn family(mut self, base: [usize; 3], k: usize) -> Self {
+        self.base = Some(base);
+        self.cells = base.map(|n| k * n);
+        self
+    }
+
+    /// The refinement factor k of a family level (`cells = k·base`); `None` without `base` or
+    /// when `cells` is not one multiple of `base` on every axis.
+    pub fn family_level(&self) -> Option<usize> {
+        let base = self.base?;
+        let k = self.cells[0] / base[0].max(1);
+        (k >= 1 && (0..3).all(|a| base[a] >= 1 && self.cells[a] == k * base[a])).then_some(k)
     }
 
     /// The same box graded toward `toward` with size ratio `ratio`.
@@ -87,8 +111,18 @@ impl BoxMesh {
         self
     }
 
-    /// The node coordinates along axis `k`.
+    /// The node coordinates along axis `k`: of the base grid cut k times with `base` (see
+    /// [`BoxMesh::base`]), else graded and aligned at `cells`.
     pub fn axis_nodes(&self, k: usize) -> Vec<f64> {
+        if let (Some(base), Some(m)) = (self.base, self.family_level()) {
+            let coarse = Self { cells: base, base: None, ..self.clone() }.axis_nodes(k);
+            let mut xs: Vec<f64> = coarse
+                .windows(2)
+                .flat_map(|w| (0..m).map(move |i| w[0] + (w[1] - w[0]) * i as f64 / m as f64))
+                .collect();
+            xs.push(self.max[k]);
+            return xs;
+        }
         let (a, b, n) = (self.min[k], self.max[k], self.cells[k]);
         let mut xs = match &self.grading {
             None => (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect(),
@@ -212,6 +246,10 @@ impl MeshSource for BoxMesh {
         Some(self.cells)
     }
 
+    fn family_base(&self) -> Option<[usize; 3]> {
+        self.base
+    }
+
     fn with_cells(&self, cells: [usize; 3]) -> Option<Box<dyn MeshSource>> {
         Some(Box::new(Self { cells, ..self.clone() }))
     }
@@ -240,6 +278,24 @@ impl MeshSource for BoxMesh {
                 format!("{:?}", self.cells),
                 format!("makes {elements:e} tetrahedra (6 per cell), more than the {MAX_ELEMENTS:e} a mesh may have"),
             ));
+        }
+        if let Some(base) = self.base {
+            for (a, &n) in base.iter().enumerate() {
+                check::at_least_one(path, &format!("base[{a}]"), n)?;
+            }
+            if self.family_level().is_none() {
+                let k = (self.cells[0] / base[0]).max(1);
+                return Err(ParameterError::new(
+                    join(path, "cells"),
+                    format!("{:?}", self.cells),
+                    format!(
+                        "is not a level of the mesh family with base = {base:?}: a level has k·base cells, one k on \
+                         every axis (e.g. {:?} or {:?}), so that every level has the same grading and alignment",
+                        base.map(|n| k * n),
+                        base.map(|n| (k + 1) * n)
+                    ),
+                ));
+            }
         }
         if let Some(g) = &self.grading {
             let p = join(path, "grading");
@@ -318,6 +374,45 @@ mod tests {
         // two coordinates competing for one node are an error naming the field
         let e = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).aligned(2, &[0.4, 0.6]).validate("mesh").unwrap_err();
         assert_eq!(e.field, "mesh.align[2]");
+    }
+
+    #[test]
+    fn levels_of_a_family_are_nested_and_keep_grading_and_alignment() {
+        let base = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [8, 8, 4])
+            .graded([0.0; 3], 4.0)
+            .aligned(0, &[-0.75, 0.75])
+            .aligned(1, &[-0.75, 0.75]);
+        let level = |k| base.clone().family([8, 8, 4], k);
+        let coarse = base.axis_nodes(0);
+        assert_eq!(level(1).axis_nodes(0), coarse, "level 1 is the base grid");
+        for k in [2, 3, 4] {
+            let b = level(k);
+            b.validate("mesh").unwrap();
+            let x = b.axis_nodes(0);
+            assert_eq!(x.len(), 8 * k + 1);
+            // every base node is a node of level k, at index k·i, and the cells between are equal
+            for (i, &c) in coarse.iter().enumerate() {
+                assert_eq!(x[k * i], c);
+            }
+            for w in x.chunks(k).zip(coarse.windows(2)) {
+                let h = (w.1[1] - w.1[0]) / k as f64;
+                assert!(w.0.windows(2).all(|p| ((p[1] - p[0]) - h).abs() < 1e-15));
+            }
+            assert!(x.contains(&0.75) && x.contains(&-0.75));
+            let m = b.mesh().unwrap();
+            let vol: f64 = (0..m.n_elements()).map(|e| m.volume(e)).sum();
+            // round-off of the sum of 6·256·k³ volumes (measured 1.0e-12 at k = 2)
+            assert!((vol - 4.0).abs() < 1e-10, "{vol}");
+        }
+        // levels 2 and 4 are nested: every node of level 2 is one of level 4
+        let (x2, x4) = (level(2).axis_nodes(1), level(4).axis_nodes(1));
+        assert!(x2.iter().all(|c| x4.contains(c)));
+        // a count that is not k·base is refused, naming the field, with levels that are
+        let e = BoxMesh { cells: [11, 11, 5], ..level(1) }.validate("mesh").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("mesh.cells", "[11, 11, 5]"));
+        assert!(e.requirement.contains("[8, 8, 4]") && e.requirement.contains("[16, 16, 8]"), "{}", e.requirement);
+        let e = BoxMesh { cells: [16, 16, 4], ..level(1) }.validate("mesh").unwrap_err();
+        assert_eq!(e.field, "mesh.cells");
     }
 
     #[test]

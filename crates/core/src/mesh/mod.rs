@@ -328,6 +328,11 @@ pub trait MeshSource: Debug + Send + Sync + dyn_clone::DynClone {
     fn cells(&self) -> Option<[usize; 3]> {
         None
     }
+    /// The coarsest level of the source's mesh family (theory §7.3), when its levels must be
+    /// multiples of it (`base` of a box); `None`: any cells.
+    fn family_base(&self) -> Option<[usize; 3]> {
+        None
+    }
     /// The same source with `cells` per axis, where [`MeshSource::cells`] is `Some`.
     fn with_cells(&self, _cells: [usize; 3]) -> Option<Box<dyn MeshSource>> {
         None
