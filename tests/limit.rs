@@ -276,14 +276,13 @@ fn tresca_strip_punch_lies_between_the_inscribed_and_circumscribed_von_mises() {
 #[test]
 #[ignore = "about 40 min on the loaded 2-core machine: cargo test --release --test limit -- --ignored shield"]
 fn circular_punch_mean_pressure_is_near_shields() {
-    // examples/circular_punch.toml (quarter model, P2 with B̄, von Mises with σ_y = 2): Shield
-    // (1955) gives the mean pressure 5.69 k under a smooth flat circular punch for a Tresca
-    // half-space, with a Haar–Kármán field (the hoop stress equal to a meridional principal
-    // stress: an edge of Tresca's prism, where von Mises with the same σ_y touches it), so von
-    // Mises' k = σ_y/2 = 1 and the quarter force tends to 5.69 π/4 (the example's header). The
-    // multiplier of the displacement-controlled punch is its collapse force. Measured at a92cf2f:
-    // 4.61744, mean pressure 5.879 k, +3.3 % (the issue's 3 % is not met on this mesh; the
-    // sweep's force on it is below, 4.5914 at U = 0.06 and rising), relative gap 2.2e-5
+    // examples/circular_punch.toml (quarter model, box mesh, P2 with B̄, von Mises with σ_y = 2):
+    // Shield's 5.69 k (1955) is Tresca's; von Mises with the same σ_y contains Tresca's prism,
+    // so its mean pressure is at least 5.69 σ_y/2 (theory §13.5; the comparison with Shield is
+    // `tresca_circular_punch_mean_pressure_is_shields_…`, with Tresca on a mesh fitted to the
+    // rim). The multiplier of the displacement-controlled punch is its collapse force. Measured
+    // at a92cf2f: 4.61744, mean pressure 5.879 k, +3.3 % over 5.69 k, relative gap 2.2e-5 (on the
+    // Gmsh meshes of examples/shield_punch.toml von Mises gives 6.03–6.06 k)
     let t = example("circular_punch.toml");
     let (problem, _) = build(&t);
     let c = LimitAnalysis::default().solve(&problem).unwrap();
@@ -294,4 +293,40 @@ fn circular_punch_mean_pressure_is_near_shields() {
     );
     assert!(c.relative_gap() < 1e-4, "{}", c.relative_gap());
     assert!(rel(pressure, 5.69) < 0.035 && pressure > 5.69, "{pressure}");
+}
+
+#[cfg(feature = "sdp")]
+#[test]
+fn tresca_circular_punch_mean_pressure_is_shields_and_von_mises_lies_between_the_hexagons() {
+    // examples/shield_punch.toml on its coarse mesh (tests/data/shield_coarse.msh, 7 422 dofs,
+    // the punch's rim on element edges): Shield (1955) gives the mean pressure 5.69 k under a
+    // smooth flat circular punch on a Tresca half-space, k = σ₀/2. With σ₀ = 2 the quarter force
+    // tends to 5.69 π/4. Measured +0.39 % here, +0.12 % on the example's 22 515-dof mesh (theory
+    // §13.5); the issue asks for 3 %.
+    let mut t = example("shield_punch.toml");
+    set(&mut t, "mesh.file", toml::Value::String(repo("tests/data/shield_coarse.msh").display().to_string()));
+    let solve = |yield_table: &str| {
+        let mut t = t.clone();
+        t.insert("yield".into(), toml::Value::Table(toml::from_str(yield_table).unwrap()));
+        LimitAnalysis::default().solve(&build(&t).0).unwrap()
+    };
+    let quarter = std::f64::consts::PI / 4.0;
+    let tresca = solve("type = \"tresca\"\nsigma0 = 2.0\nh = 0.0");
+    let pressure = tresca.multiplier / quarter;
+    println!(
+        "Shield, Tresca: {} {} gap {:e}, mean pressure {pressure} k against 5.69 k",
+        tresca.multiplier, tresca.dual_multiplier, tresca.gap
+    );
+    assert!(tresca.relative_gap().abs() < 1e-4, "{}", tresca.relative_gap());
+    assert!(rel(pressure, 5.69) < 0.03, "{pressure}");
+    // von Mises with σ_y = σ₀ circumscribes Tresca's prism and is inscribed in the prism with
+    // σ₀' = 2σ_y/√3, so on the same discretisation λ_T(σ₀) ≤ λ_vM ≤ (2/√3) λ_T(σ₀) exactly (the
+    // static feasible sets are nested; slack: the gaps, relative ≤ 1e-4). Shield's value is not
+    // von Mises' (measured 6.08 k here, 6.05 k on the example's mesh): Haar–Kármán fixes the
+    // stress on Tresca's edges, where the two surfaces touch, but not the flow rule there.
+    let mises = solve(&format!("type = \"von_mises\"\nk0 = {}\nh = 0.0", (2.0f64 / 3.0).sqrt() * 2.0));
+    println!("Shield, von Mises σ_y = 2: {} (mean pressure {} k)", mises.multiplier, mises.multiplier / quarter);
+    let slack = 1e-4 * mises.multiplier;
+    assert!(tresca.dual_multiplier <= mises.multiplier + slack, "{} {}", tresca.dual_multiplier, mises.multiplier);
+    assert!(mises.dual_multiplier <= 2.0 / 3f64.sqrt() * tresca.multiplier + slack);
 }

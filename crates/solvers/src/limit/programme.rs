@@ -181,6 +181,8 @@ impl StaticProgramme {
             .tol_gap_rel(s.tol)
             .tol_feas(s.tol)
             .max_iter(s.max_iter as u32)
+            .iterative_refinement_reltol(refinement_tol(s.tol))
+            .iterative_refinement_abstol((refinement_tol(s.tol) / 10.0).max(1e-12))
             .build()
             .map_err(|e| LimitError::Rejected { what: "the settings", message: e.to_string() })?;
         let (p, q) = (self.regularisation(delta), self.objective());
@@ -380,4 +382,13 @@ fn cones(blocks: &[YieldBlock], layout: &Layout) -> Vec<SupportedConeT<f64>> {
         cones.extend(blocks.iter().map(YieldBlock::cone));
     }
     cones
+}
+
+/// The iterative refinement of each KKT solve to `tol`·1e-5 (relative; absolute a tenth of it,
+/// at least Clarabel's 1e-12) instead of Clarabel's fixed 1e-13 (theory §13.3): refining the Newton directions far below the tolerance the
+/// interior point stops at buys nothing. On the 14k-dof strip punch at tol 1e-3 this halves the
+/// solves' time (8.3 s to 3.6 s), with the same 14 iterations and the multiplier within 3e-6
+/// (docs/limit_analysis.md).
+fn refinement_tol(tol: f64) -> f64 {
+    (tol * 1e-5).max(1e-13)
 }
