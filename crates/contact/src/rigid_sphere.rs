@@ -38,6 +38,7 @@ use crate::zone::node_areas_facing;
 use crate::zone::{Selection, candidate_nodes_with, rim_rows_facing, rim_warning};
 use saddle_core::error::{check, join};
 use saddle_core::mesh::signed_volume;
+use saddle_core::problem::friction::{ContactStatus, contact_status};
 use saddle_core::{
     AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionBlock, FrictionLaw, ParameterError, Region,
     SceneError, TetMesh, normal_contact_set,
@@ -101,9 +102,6 @@ pub struct RigidSphere {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub W: Option<[f64; 2]>,
 }
-
-/// Relative size (of |λ_t| against the disc's radius) above which a contact node slips.
-const SLIP_TOL: f64 = 1e-6;
 
 impl RigidSphere {
     /// A sphere pushed along `direction` by the force `force` (V unknown).
@@ -605,7 +603,8 @@ impl AdmissibleDisplacements for RigidSphere {
     /// the punch's (facets with n₃ < 0) this works whichever face the sphere touches; facets
     /// looking away from c never count. With friction also `Ux`, `Uy` (the motion across d),
     /// `force_x`, `force_y` = Σλ_i a_i·e₁, Σλ_i a_i·e₂ (= Q at a solution), `stick_nodes` and
-    /// `slip_nodes` (contact nodes with |λ_t| below, at the disc's radius; theory §8.3).
+    /// `slip_nodes` (contact nodes with |λ_t| below, at the disc's radius: [`contact_status`];
+    /// theory §8.3).
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport {
         debug_assert_eq!(lambda.len(), rows.n_rows());
         let d = self.d();
@@ -631,7 +630,9 @@ impl AdmissibleDisplacements for RigidSphere {
         if self.friction.is_some() {
             let (e1, e2) = self.tangential_axes();
             let w = self.across(extras);
-            let (stick, slip) = stick_and_slip(rows, lambda, &contact);
+            let status = contact_status(rows, lambda);
+            let count = |s: ContactStatus| status.iter().filter(|x| x.1 == s).count();
+            let (stick, slip) = (count(ContactStatus::Stick), count(ContactStatus::Slip));
             quantities.extend([
                 ("Ux".into(), dot(w, e1)),
                 ("Uy".into(), dot(w, e2)),
@@ -661,21 +662,4 @@ impl RigidSphere {
         }
         a
     }
-}
-
-/// The contact nodes (normal rows `contact`) that stick (|λ_t| below the disc's radius by more
-/// than [`SLIP_TOL`] of it) and that slip (theory §8.3).
-pub fn stick_and_slip(rows: &ConstraintRows, lambda: &[f64], contact: &[usize]) -> (usize, usize) {
-    let mut in_contact = vec![false; rows.n_rows()];
-    contact.iter().for_each(|&i| in_contact[i] = true);
-    let (mut stick, mut slip) = (0, 0);
-    for b in rows.friction.blocks.iter().filter(|b| in_contact[b.normal]) {
-        let r = rows.friction.law(b).radius(b.weight, lambda[b.normal]);
-        if lambda[b.tangent].hypot(lambda[b.tangent + 1]) < (1.0 - SLIP_TOL) * r {
-            stick += 1;
-        } else {
-            slip += 1;
-        }
-    }
-    (stick, slip)
 }

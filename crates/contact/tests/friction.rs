@@ -75,10 +75,10 @@ fn tangential_rows_in_closed_form() {
     let dir = [0.6, 0.0, 0.8];
     for (r, t) in [(b.tangent, t1.as_slice()), (b.tangent + 1, &t2[..])] {
         let (cols, vals) = rows.row(r);
-        for c in 0..3 {
+        for (c, tc) in t.iter().enumerate() {
             let j = d.free(node, c).unwrap();
             let v = cols.iter().position(|&x| x == j).map_or(0.0, |p| vals[p]);
-            assert!((v - t[c]).abs() < 1e-15, "row {r} component {c}: {v} against {}", t[c]);
+            assert!((v - tc).abs() < 1e-15, "row {r} component {c}: {v} against {tc}");
         }
         let td: f64 = (0..3).map(|c| t[c] * dir[c]).sum();
         assert!((rows.extra_row(r)[0] + td).abs() < 1e-15);

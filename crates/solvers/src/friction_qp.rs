@@ -68,9 +68,8 @@ impl FrictionQp {
 
     /// The minimiser for the linear term `q`, from the last one.
     pub fn solve(&mut self, q: &[f64], solver: &str) -> Result<&[f64], SolveError> {
-        let n = q.len();
-        for i in 0..n {
-            self.r[i] = q[i] + (0..n).map(|j| self.s[(i, j)] * self.mu[j]).sum::<f64>();
+        for (i, (r, qi)) in self.r.iter_mut().zip(q).enumerate() {
+            *r = qi + self.s.row(i).iter().zip(&self.mu).map(|(s, m)| s * m).sum::<f64>();
         }
         for sweep in 1..=MAX_SWEEPS {
             let mut change: f64 = 0.0;

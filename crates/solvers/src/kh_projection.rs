@@ -37,7 +37,7 @@ pub const SETUP_BLOCK: usize = 64;
 /// (frictionless rows), or over R₊ × discs (friction, theory §8.3).
 #[derive(Debug)]
 enum Dual {
-    Polyhedral(DenseQp),
+    Polyhedral(Box<DenseQp>),
     Friction(FrictionQp),
 }
 
@@ -144,7 +144,7 @@ impl MetricProjection {
         } else {
             let e_mat = DMatrix::from_fn(zero.len(), nr, |r, i| h[(i, zero[r])]);
             let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);
-            Dual::Polyhedral(DenseQp::new(s, e_mat, e_rhs).map_err(|e| qp_error(solver, e))?)
+            Dual::Polyhedral(Box::new(DenseQp::new(s, e_mat, e_rhs).map_err(|e| qp_error(solver, e))?))
         };
         let gtmu = if keep { vec![] } else { vec![0.0; n] };
         let step_load = f.iter().map(|fk| rho * fk).collect();

@@ -178,6 +178,42 @@ impl FrictionRows {
     }
 }
 
+/// Relative size (of |λ_t| against the disc's radius) above which a contact node slips.
+pub const SLIP_TOL: f64 = 1e-6;
+
+/// The status of a node with friction (theory §8.3): out of contact, sticking (|λ_t| below the
+/// disc's radius by more than [`SLIP_TOL`] of it) or slipping (on the rim).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactStatus {
+    /// Not in contact (its normal row not in [`crate::normal_contact_set`]): 0.
+    Separated = 0,
+    /// In contact, |λ_t| inside the disc: 1.
+    Stick = 1,
+    /// In contact, |λ_t| on the disc's rim: 2.
+    Slip = 2,
+}
+
+/// (node, status) of every friction block of `rows` for the multipliers `lambda`.
+pub fn contact_status(rows: &crate::ConstraintRows, lambda: &[f64]) -> Vec<(usize, ContactStatus)> {
+    let mut in_contact = vec![false; rows.n_rows()];
+    crate::normal_contact_set(rows, lambda).into_iter().for_each(|i| in_contact[i] = true);
+    let fr = &rows.friction;
+    fr.blocks
+        .iter()
+        .map(|b| {
+            let r = fr.law(b).radius(b.weight, lambda[b.normal]);
+            let status = if !in_contact[b.normal] {
+                ContactStatus::Separated
+            } else if lambda[b.tangent].hypot(lambda[b.tangent + 1]) < (1.0 - SLIP_TOL) * r {
+                ContactStatus::Stick
+            } else {
+                ContactStatus::Slip
+            };
+            (rows.node[b.normal], status)
+        })
+        .collect()
+}
+
 /// The friction part of the natural residual of an iterate (theory §8.3): for each block
 /// `|a − P_{D/λ_s}(a − b)|` with a = λ_t/λ_s, b = s/g_s (s the tangential rows' values in `gap`,
 /// λ_s and g_s the scales of the normal residual); it vanishes exactly when every λ_t ∈ D_i and

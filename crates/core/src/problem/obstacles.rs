@@ -439,12 +439,12 @@ impl DiscreteObstacles {
             .map(|part| {
                 let mut rows = ConstraintRows::new(part.rows.n_extras);
                 let mut new_row = vec![None; part.rows.n_rows()];
-                for i in 0..part.rows.n_rows() {
+                for (i, kept) in new_row.iter_mut().enumerate() {
                     let Some(node) = local_node(part.rows.node[i]) else { continue };
                     let (cols, vals) = part.rows.row(i);
                     let entries: Vec<(usize, f64)> =
                         cols.iter().map(|&j| column(j)).zip(vals.iter().copied()).collect();
-                    new_row[i] = Some(rows.n_rows());
+                    *kept = Some(rows.n_rows());
                     rows.push(&entries, part.rows.extra_row(i), part.rows.offset[i], node);
                 }
                 // a node's normal and tangential rows share its node: kept or dropped together
