@@ -12,7 +12,7 @@ use std::path::Path;
 /// Writes `solution.vtu`: a VTK XML unstructured grid with raw appended binary data, with
 /// linear tetrahedra (VTK type 10) for `p1` and quadratic ones (type 24, the edge nodes in
 /// VTK's order) on a second-order mesh. Point data: `displacement`, `contact_force` (Gᵀλ at the
-/// nodes). Cell data, the mean over the element's stress points when it has several: `stress`
+/// nodes), with friction `contact_status` (0 separated, 1 stick, 2 slip; theory §8.3). Cell data, the mean over the element's stress points when it has several: `stress`
 /// (symmetric tensor, VTK order xx yy zz xy yz xz), `von_mises` (of the mean stress), the
 /// hardening variables under the names the yield surface gives them (`xi` for von Mises),
 /// `plastic` (0/1: one of the element's points is plastic), and with plasticity
@@ -64,6 +64,14 @@ pub fn write_piece(
             arrays.push(("cell", name, comps, f64_bytes(field.into_iter())));
             first += comps;
         }
+    }
+    // with friction (theory §8.3): 0 separated, 1 stick, 2 slip at each node (0 off the rows)
+    if l.data.rows.has_friction() {
+        let mut status = vec![0.0; mesh.n_nodes()];
+        for (n, s) in saddle_core::problem::friction::contact_status(l.data.rows, &sol.lambda) {
+            status[n] = f64::from(s as u8);
+        }
+        arrays.push(("point", "contact_status", 1, f64_bytes(status.into_iter())));
     }
     arrays.push(("cell", "plastic", 1, plastic));
     // the plastic strain ε_p = ε(u) − Aσ (theory §11.1), element means: after unloading the

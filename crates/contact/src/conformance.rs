@@ -59,13 +59,22 @@
 //!   ([`AdmissibleDisplacements::rows_at_factor`]) are those of the scaled obstacle discretised
 //!   afresh, at factors 0, ½ and 2.
 //!
+//! * `friction` (g), for an obstacle with a friction law (theory §8.3): every block's two
+//!   tangential rows belong to its normal row's node, are orthonormal and orthogonal to the
+//!   normal row where the node's dofs are all free; the weights are finite and > 0; the law
+//!   validates under `obstacle.friction`, and its projection ([`saddle_core::FrictionLaw::project`])
+//!   lands in the disc of its radius, is idempotent, leaves the disc's points alone, and its
+//!   derivative matches central differences at random points. (The tangential rows are the
+//!   linearisation of `gap()`, the slips, in (a); (b) counts the normal rows' contact set; (c)
+//!   projects onto the normal rows alone, the tangential ones not being constraints on w.)
+//!
 //! Tolerances are relative: g is compared to 1e-9 × (max|c| + scale × the largest row norm).
 
 use crate::projection::{Projected, project_euclidean};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng, rngs::StdRng};
 use saddle_core::linalg::DenseQp;
-use saddle_core::{AdmissibleDisplacements, ConstraintRows, DofMap, TetMesh, contact_set};
+use saddle_core::{AdmissibleDisplacements, ConstraintRows, DofMap, TetMesh, normal_contact_set};
 use thiserror::Error;
 
 /// A failed conformance check: which (`check`, one of [`CHECKS`]) and what, with numbers.
@@ -79,7 +88,7 @@ pub struct KitFailure {
 }
 
 /// The names of the checks, in the order [`check_all`] runs them (see the module docs).
-pub const CHECKS: [&str; 15] = [
+pub const CHECKS: [&str; 16] = [
     "setup",
     "validate",
     "discretise",
@@ -95,6 +104,7 @@ pub const CHECKS: [&str; 15] = [
     "projection_vi",
     "scaled_load",
     "rows_at_factor",
+    "friction",
 ];
 
 /// Random samples per check.
@@ -140,7 +150,109 @@ pub fn check_all(
     check_load(k, mesh, dofs, seed, scale)?;
     check_projection(k, mesh, dofs, seed, scale)?;
     check_scaled_load(k, mesh, dofs)?;
-    check_rows_at_factor(k, mesh, dofs)
+    check_rows_at_factor(k, mesh, dofs)?;
+    check_friction(k, mesh, dofs, seed)
+}
+
+/// (g) `friction`: the tangential rows and weights of every friction block, and the law's
+/// projection and its derivative (module docs). Nothing to check without friction.
+pub fn check_friction(
+    k: &dyn AdmissibleDisplacements,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    seed: u64,
+) -> Result<(), KitFailure> {
+    let rows =
+        k.discretise(mesh, dofs, "obstacle").map_err(|e| KitFailure { check: "discretise", message: e.to_string() })?;
+    let fr = &rows.friction;
+    let dense = |i: usize| -> Vec<(usize, f64)> {
+        let (c, v) = rows.row(i);
+        c.iter().copied().zip(v.iter().copied()).collect()
+    };
+    let inner = |a: &[(usize, f64)], b: &[(usize, f64)]| -> f64 {
+        a.iter().map(|(j, x)| b.iter().filter(|(k, _)| k == j).map(|(_, y)| x * y).sum::<f64>()).sum()
+    };
+    for (bi, b) in fr.blocks.iter().enumerate() {
+        let (n, t1, t2) = (b.normal, b.tangent, b.tangent + 1);
+        if t2 >= rows.n_rows() || rows.node[t1] != rows.node[n] || rows.node[t2] != rows.node[n] {
+            return fail("friction", format!("block {bi}: tangential rows {t1}, {t2} are not rows of row {n}'s node"));
+        }
+        if !(b.weight.is_finite() && b.weight > 0.0) || b.law >= fr.laws.len() {
+            return fail("friction", format!("block {bi}: weight {} (must be finite, > 0), law {}", b.weight, b.law));
+        }
+        let (gn, g1, g2) = (dense(n), dense(t1), dense(t2));
+        if [&gn, &g1, &g2].iter().all(|g| g.len() == 3) {
+            let products =
+                [inner(&g1, &g1) - 1.0, inner(&g2, &g2) - 1.0, inner(&g1, &g2), inner(&gn, &g1), inner(&gn, &g2)];
+            if products.iter().any(|p| !le(p.abs(), 1e-12)) {
+                return fail(
+                    "friction",
+                    format!(
+                        "block {bi} ({}): the tangential rows are not an orthonormal basis of the normal row's tangent \
+                         plane: |t₁|² − 1, |t₂|² − 1, t₁·t₂, n·t₁, n·t₂ = {products:?}",
+                        rows.node[n]
+                    ),
+                );
+            }
+        }
+    }
+    let mut rng = StdRng::seed_from_u64(seed);
+    for law in &fr.laws {
+        if let Err(e) = law.validate("obstacle.friction") {
+            return fail("friction", e.to_string());
+        }
+        for s in 0..SAMPLES {
+            let (w, ln) = (rng.random_range(0.1..2.0), rng.random_range(0.0..2.0));
+            let r = law.radius(w, ln);
+            let t = [rng.random_range(-3.0..3.0) * r.max(1e-3), rng.random_range(-3.0..3.0) * r.max(1e-3)];
+            let p = law.project(w, ln, t);
+            let q = law.project(w, ln, p);
+            let inside = [0.5 * p[0], 0.5 * p[1]];
+            let tol = 1e-12 * (1.0 + r + t[0].hypot(t[1]));
+            if !le(p[0].hypot(p[1]), r + tol)
+                || !le((q[0] - p[0]).hypot(q[1] - p[1]), tol)
+                || law.project(w, ln, inside) != inside
+            {
+                return fail(
+                    "friction",
+                    format!(
+                        "sample {s}: {:?}.project({w}, {ln}, {t:?}) = {p:?} for radius {r}: not the disc's projection",
+                        law.name()
+                    ),
+                );
+            }
+            let (dt, dn) = law.project_derivative(w, ln, t);
+            let h = 1e-6 * (1.0 + t[0].hypot(t[1]));
+            for k in 0..3 {
+                let step = |sign: f64| {
+                    let mut tt = t;
+                    let mut l = ln;
+                    if k < 2 {
+                        tt[k] += sign * h
+                    } else {
+                        l += sign * h
+                    }
+                    law.project(w, l, tt)
+                };
+                let (pp, pm) = (step(1.0), step(-1.0));
+                for i in 0..2 {
+                    let fd = (pp[i] - pm[i]) / (2.0 * h);
+                    let an = if k < 2 { dt[i][k] } else { dn[i] };
+                    // central differences of a map smooth away from the rim: O(h²) + round-off/h
+                    if !le((fd - an).abs(), 1e-6 * (1.0 + an.abs())) {
+                        return fail(
+                            "friction",
+                            format!(
+                                "sample {s}: ∂P_{i}/∂{} = {an:e}, central difference {fd:e}",
+                                ["t₁", "t₂", "λ_n"][k]
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// (f) `rows_at_factor` (when the plugin can scale its load): the rows a load step at factors
@@ -349,6 +461,21 @@ impl<'a> Ctx<'a> {
             .fold(0.0, f64::max);
         let tol = 1e-9 * (max_abs(rows.offset.iter().copied()).0 + scale * row_norm);
         Ok(Self { k, mesh, dofs, rows, rng: StdRng::seed_from_u64(seed), scale, tol })
+    }
+
+    /// The normal rows alone (all rows without friction): the constraints of K_h on (w, V).
+    fn normal_rows(&self) -> ConstraintRows {
+        if !self.rows.has_friction() {
+            return self.rows.clone();
+        }
+        let tangential = self.rows.friction.tangential_mask(self.rows.n_rows());
+        let mut rows = ConstraintRows::new(self.rows.n_extras);
+        for i in (0..self.rows.n_rows()).filter(|&i| !tangential[i]) {
+            let (c, v) = self.rows.row(i);
+            let e: Vec<(usize, f64)> = c.iter().copied().zip(v.iter().copied()).collect();
+            rows.push(&e, self.rows.extra_row(i), self.rows.offset[i], self.rows.node[i]);
+        }
+        rows
     }
 
     fn n_free(&self) -> usize {
@@ -569,7 +696,7 @@ impl<'a> Ctx<'a> {
         if let Some(force) = report.get("force") {
             self.force(&f, &names, &lambda, &extras, force)?;
         }
-        let expected = contact_set(&lambda).len();
+        let expected = normal_contact_set(&self.rows, &lambda).len();
         if report.contact_nodes != expected {
             return fail(
                 "report",
@@ -654,15 +781,28 @@ impl<'a> Ctx<'a> {
     }
 
     /// λ ≥ 0 with Hᵀλ = −f, closest to a random λ̃ ≥ 0 (any random λ̃ without extras).
+    /// With friction the tangential multipliers have either sign (theory §8.3): each
+    /// tangential row enters twice, as itself and negated, both with λ ≥ 0, and its λ is the
+    /// difference.
     fn balanced(&mut self, f: &[f64]) -> Result<Vec<f64>, KitFailure> {
-        let n = self.rows.n_rows();
+        let rows = self.rows.n_rows();
+        let tangential = self.rows.friction.tangential_mask(rows);
+        let negated: Vec<usize> = (0..rows).filter(|&i| tangential[i]).collect();
+        let n = rows + negated.len();
         let m = self.n_extras();
+        let fold = |x: &[f64]| -> Vec<f64> {
+            let mut l = x[..rows].to_vec();
+            negated.iter().enumerate().for_each(|(k, &i)| l[i] -= x[rows + k]);
+            l
+        };
         let mut lt: Vec<f64> =
             (0..n).map(|_| if self.rng.random_bool(0.25) { 0.0 } else { self.rng.random_range(0.0..1.0) }).collect();
         if m == 0 {
-            return Ok(lt);
+            return Ok(fold(&lt));
         }
-        let h = DMatrix::from_fn(n, m, |i, k| self.rows.extra_row(i)[k]);
+        let h = DMatrix::from_fn(n, m, |i, k| {
+            if i < rows { self.rows.extra_row(i)[k] } else { -self.rows.extra_row(negated[i - rows])[k] }
+        });
         let fv = DVector::from_column_slice(f);
         // bring λ̃ to the size of the load
         let ht_lt = h.transpose() * DVector::from_column_slice(&lt);
@@ -703,19 +843,24 @@ impl<'a> Ctx<'a> {
                 ),
             });
         }
-        Ok(lambda.iter().copied().collect())
+        Ok(fold(lambda.as_slice()))
     }
 
     /// Projections of random points: feasible, idempotent, the variational inequality.
     fn projection(&mut self) -> Result<(), KitFailure> {
+        let normal = self.normal_rows();
         let mut points = Vec::with_capacity(SAMPLES);
         for s in 0..SAMPLES {
             let z = self.random(self.n_free(), self.scale);
             let zv = self.random(self.n_extras(), self.scale);
-            let Projected { u: w, extras: wv, .. } = project_euclidean(&self.rows, &z, &zv).map_err(|e| {
-                KitFailure { check: "projection", message: format!("projecting random point {s}: {e}") }
+            let Projected { u: w, extras: wv, .. } = project_euclidean(&normal, &z, &zv).map_err(|e| KitFailure {
+                check: "projection",
+                message: format!("projecting random point {s}: {e}"),
             })?;
-            for (which, g) in [("the rows", self.rgap(&w, &wv)), ("gap()", self.kgap(&w, &wv))] {
+            let tangential = self.rows.friction.tangential_mask(self.rows.n_rows());
+            for (which, mut g) in [("the rows", self.rgap(&w, &wv)), ("gap()", self.kgap(&w, &wv))] {
+                // the tangential rows are slips, not constraints (theory §8.3)
+                g.iter_mut().zip(&tangential).filter(|(_, t)| **t).for_each(|(x, _)| *x = f64::INFINITY);
                 let (i, gmin) = min_at(&g);
                 if !le(-self.tol, gmin) {
                     return fail(
@@ -728,8 +873,9 @@ impl<'a> Ctx<'a> {
                     );
                 }
             }
-            let Projected { u: w2, extras: wv2, .. } = project_euclidean(&self.rows, &w, &wv).map_err(|e| {
-                KitFailure { check: "projection", message: format!("re-projecting random point {s}: {e}") }
+            let Projected { u: w2, extras: wv2, .. } = project_euclidean(&normal, &w, &wv).map_err(|e| KitFailure {
+                check: "projection",
+                message: format!("re-projecting random point {s}: {e}"),
             })?;
             let moved = max_abs(w2.iter().zip(&w).chain(wv2.iter().zip(&wv)).map(|(a, b)| a - b)).0;
             let size = max_abs(w.iter().chain(&wv).copied()).0 + self.scale;

@@ -115,6 +115,7 @@
 //! ```
 
 pub mod conformance;
+pub mod friction;
 pub mod gap;
 pub mod projection;
 pub mod punch;
@@ -123,6 +124,7 @@ pub mod tilting_punch;
 pub mod zone;
 
 pub use conformance::{KitFailure, check_all};
+pub use friction::Tresca;
 pub use gap::{EllipticParaboloid, Flat, GapShape, Paraboloid};
 pub use punch::{RigidPunch, RigidPunchDisplacement};
 pub use rigid_sphere::RigidSphere;

@@ -24,13 +24,24 @@
 //!
 //! Unlike the punches, the zone need not be flat or horizontal: any boundary node of the zone
 //! with a free dof carries a row ([`Selection::AnyFreeDof`]).
+//!
+//! **Friction** (theory §8.3). With a `friction` law each node's normal row is followed by two
+//! tangential rows, the slip of the node against the sphere in its tangent plane,
+//! `s_i = T_iᵀ(u_i − V d − W)` with T_i = [t₁, t₂] orthonormal and ⊥ n_i ([`RigidSphere::frame`]),
+//! and a block naming them with the node's share w_i of the faces that look at the centre. The
+//! sphere then also moves across d, by `W = W_x e₁ + W_y e₂` ((e₁, e₂) ⊥ d,
+//! [`RigidSphere::tangential_axes`]): prescribed (`W`), or extras `Ux`, `Uy` loaded by the force
+//! `Q = [Qx, Qy]`. The normal rows see that motion too: the sphere's centre is c + V d + W.
+//! Without `friction`, `Q` and `W` the rows are exactly the frictionless ones.
 
+use crate::zone::node_areas_facing;
 use crate::zone::{Selection, candidate_nodes_with, rim_rows_facing, rim_warning};
 use saddle_core::error::{check, join};
 use saddle_core::mesh::signed_volume;
+use saddle_core::problem::friction::{ContactStatus, contact_status};
 use saddle_core::{
-    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, ParameterError, Region, SceneError, TetMesh,
-    contact_set,
+    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionBlock, FrictionLaw, ParameterError, Region,
+    SceneError, TetMesh, normal_contact_set,
 };
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -79,17 +90,79 @@ pub struct RigidSphere {
     pub V: Option<f64>,
     /// The candidate contact zone (boundary nodes with at least one free dof).
     pub zone: Region,
+    /// The friction law on the contact (theory §8.3); absent: frictionless.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<Box<dyn FrictionLaw>>,
+    /// The tangential force Q = [Qx, Qy] along (e₁, e₂) ⊥ d: the sphere's motion across d is
+    /// then the extras `Ux`, `Uy`. Needs `friction`; exclusive with `W`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub Q: Option<[f64; 2]>,
+    /// The prescribed motion W = [Wx, Wy] across d, along (e₁, e₂). Needs `friction`;
+    /// exclusive with `Q`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub W: Option<[f64; 2]>,
 }
 
 impl RigidSphere {
     /// A sphere pushed along `direction` by the force `force` (V unknown).
     pub fn pushed(center: [f64; 3], radius: f64, direction: [f64; 3], force: f64, zone: Region) -> Self {
-        Self { center, R: radius, direction, F: Some(force), V: None, zone }
+        Self { center, R: radius, direction, F: Some(force), V: None, zone, friction: None, Q: None, W: None }
     }
 
     /// A sphere moved along `direction` by the prescribed `v`.
     pub fn moved(center: [f64; 3], radius: f64, direction: [f64; 3], v: f64, zone: Region) -> Self {
-        Self { center, R: radius, direction, F: None, V: Some(v), zone }
+        Self { center, R: radius, direction, F: None, V: Some(v), zone, friction: None, Q: None, W: None }
+    }
+
+    /// The same sphere with the friction law `law` (theory §8.3).
+    pub fn with_friction(self, law: Box<dyn FrictionLaw>) -> Self {
+        Self { friction: Some(law), ..self }
+    }
+
+    /// (e₁, e₂): the axes of the motion across d, orthonormal and ⊥ d. e₁ is the first of the
+    /// coordinate axes x₁, x₂ not within 25° of d, made orthogonal to d; e₂ = d × e₁. For
+    /// d = e₃: (e₁, e₂) = (x₁, x₂).
+    pub fn tangential_axes(&self) -> ([f64; 3], [f64; 3]) {
+        let d = self.d();
+        let a = if d[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+        let e1 = unit(sub(a, scaled(d, dot(a, d))));
+        (e1, cross(d, e1))
+    }
+
+    /// (t₁, t₂): the tangent plane at a node of normal `n`, orthonormal, ⊥ n: t₁ the sphere's
+    /// e₁ (else e₂, if e₁ is within 25° of n) made orthogonal to n, t₂ = n × t₁.
+    pub fn frame(&self, n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+        let (e1, e2) = self.tangential_axes();
+        let a = if dot(e1, n).abs() < 0.9 { e1 } else { e2 };
+        let t1 = unit(sub(a, scaled(n, dot(a, n))));
+        (t1, cross(n, t1))
+    }
+
+    /// The sphere's motion across d: W e (prescribed), or the extras (Ux, Uy), or 0.
+    fn across(&self, extras: &[f64]) -> [f64; 3] {
+        let w = match (self.W, self.Q) {
+            (Some(w), _) => w,
+            (None, Some(_)) => {
+                let k = usize::from(self.V.is_none());
+                [extras[k], extras[k + 1]]
+            }
+            (None, None) => return [0.0; 3],
+        };
+        let (e1, e2) = self.tangential_axes();
+        std::array::from_fn(|k| w[0] * e1[k] + w[1] * e2[k])
+    }
+
+    /// The H entries of a row of direction `a` (n or t): −a·d for V unknown, −a·e₁, −a·e₂ for
+    /// (Ux, Uy) unknown.
+    fn extra_entries(&self, a: [f64; 3], out: &mut Vec<f64>) {
+        out.clear();
+        if self.V.is_none() {
+            out.push(-dot(a, self.d()));
+        }
+        if self.Q.is_some() {
+            let (e1, e2) = self.tangential_axes();
+            out.extend([-dot(a, e1), -dot(a, e2)]);
+        }
     }
 
     /// The unit direction d, or `None` when `direction` is not finite or zero.
@@ -122,11 +195,100 @@ impl RigidSphere {
         (r, norm(r))
     }
 
-    /// The centre c̃ about which the rows are linearised: c, or c + V d with V prescribed.
+    /// The centre c̃ about which the rows are linearised: c, moved by V d with V prescribed and
+    /// by W with W prescribed.
     fn linearisation_centre(&self) -> [f64; 3] {
         let d = self.d();
         let v = self.V.unwrap_or(0.0);
-        std::array::from_fn(|k| self.center[k] + v * d[k])
+        let w = if self.W.is_some() { self.across(&[]) } else { [0.0; 3] };
+        std::array::from_fn(|k| self.center[k] + v * d[k] + w[k])
+    }
+
+    /// The prescribed motion of the sphere's points at the linearisation: V d (V prescribed)
+    /// + W (W prescribed).
+    fn prescribed_motion(&self) -> [f64; 3] {
+        let d = self.d();
+        let v = self.V.unwrap_or(0.0);
+        let w = if self.W.is_some() { self.across(&[]) } else { [0.0; 3] };
+        std::array::from_fn(|k| v * d[k] + w[k])
+    }
+
+    /// Checks `friction`, `Q` and `W` (theory §8.3): the law's own parameters under
+    /// `{path}.friction`; Q and W finite and bounded, not both, and neither without a friction law.
+    fn validate_friction(&self, path: &str) -> Result<(), ParameterError> {
+        if let Some(law) = &self.friction {
+            law.validate(&join(path, "friction"))?;
+        }
+        for (field, value) in [("Q", self.Q), ("W", self.W)] {
+            let Some(value) = value else { continue };
+            check::bounded_all(path, field, &value)?;
+            if self.friction.is_none() {
+                return Err(ParameterError::new(
+                    join(path, field),
+                    format!("[{}, {}]", value[0], value[1]),
+                    format!(
+                        "moves the sphere across its direction, which needs a friction law: give {} (e.g. {{ type = \
+                         \"tresca\", g = 0.1 }}) or remove {}",
+                        join(path, "friction"),
+                        join(path, field)
+                    ),
+                ));
+            }
+        }
+        if let (Some(q), Some(w)) = (self.Q, self.W) {
+            return Err(ParameterError::new(
+                join(path, "Q"),
+                format!("[{}, {}]", q[0], q[1]),
+                format!(
+                    "cannot be given together with {} = [{}, {}]: give exactly one of the tangential force and the \
+                     prescribed tangential motion",
+                    join(path, "W"),
+                    w[0],
+                    w[1]
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Appends node `n`'s two tangential rows after its normal row `normal` (direction `nrm`)
+    /// and their block of weight `weight`: `t_k·(u_n − V d − W)` on the node's free dofs.
+    /// A node whose tangent plane has no free dof (both rows vanish in u) gets none.
+    #[allow(clippy::too_many_arguments)]
+    fn push_tangential(
+        &self,
+        rows: &mut ConstraintRows,
+        dofs: &DofMap,
+        n: usize,
+        nrm: [f64; 3],
+        normal: usize,
+        weight: f64,
+        h: &mut Vec<f64>,
+    ) -> bool {
+        let (t1, t2) = self.frame(nrm);
+        let motion = self.prescribed_motion();
+        let on_free = |t: [f64; 3]| {
+            let mut e = [(0, 0.0); 3];
+            let mut k = 0;
+            for (c, &tc) in t.iter().enumerate() {
+                if let (Some(j), true) = (dofs.free(n, c), tc != 0.0) {
+                    e[k] = (j, tc);
+                    k += 1;
+                }
+            }
+            (e, k)
+        };
+        let ((e1, k1), (e2, k2)) = (on_free(t1), on_free(t2));
+        if k1 == 0 || k2 == 0 {
+            return false;
+        }
+        let tangent = rows.n_rows();
+        for (t, e, k) in [(t1, e1, k1), (t2, e2, k2)] {
+            self.extra_entries(t, h);
+            rows.push(&e[..k], h, -dot(t, motion), n);
+        }
+        rows.friction.blocks.push(FrictionBlock { law: 0, normal, tangent, weight });
+        true
     }
 
     /// (n_i, |x_i − c̃|) for mesh node `n`: the row's normal and distance from c̃.
@@ -215,11 +377,37 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| a[k] + b[k])
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| a[k] - b[k])
+}
+
+fn scaled(a: [f64; 3], s: f64) -> [f64; 3] {
+    a.map(|x| x * s)
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    scaled(a, 1.0 / norm(a))
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
 #[typetag::serde(name = "rigid_sphere")]
 impl AdmissibleDisplacements for RigidSphere {
     /// F × factor or V × factor, whichever is given.
     fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
-        Some(Box::new(Self { F: self.F.map(|f| f * factor), V: self.V.map(|v| v * factor), ..self.clone() }))
+        Some(Box::new(Self {
+            F: self.F.map(|f| f * factor),
+            V: self.V.map(|v| v * factor),
+            Q: self.Q.map(|q| q.map(|x| x * factor)),
+            W: self.W.map(|w| w.map(|x| x * factor)),
+            ..self.clone()
+        }))
     }
 
     /// `center` finite, R finite and > 0, `direction` finite and nonzero (`{path}.direction`
@@ -268,35 +456,50 @@ impl AdmissibleDisplacements for RigidSphere {
                 ));
             }
         }
+        self.validate_friction(path)?;
         self.zone.validate(&join(path, "zone"))
     }
 
-    /// `["V"]` under force control, none when V is prescribed.
+    /// `["V"]` under force control, none when V is prescribed; then `Ux`, `Uy` under a
+    /// tangential force Q.
     fn extra_names(&self) -> Vec<String> {
-        if self.V.is_some() { vec![] } else { vec!["V".into()] }
+        let mut names = if self.V.is_some() { vec![] } else { vec!["V".to_string()] };
+        if self.Q.is_some() {
+            names.extend(["Ux".to_string(), "Uy".to_string()]);
+        }
+        names
     }
 
-    /// F·V (theory §8); nothing when V is prescribed.
+    /// F·V (theory §8), nothing when V is prescribed; then Qx Ux + Qy Uy under Q.
     fn load(&self) -> Vec<f64> {
-        match (self.F, self.V) {
+        let mut f = match (self.F, self.V) {
             (_, Some(_)) => vec![],
             (f, None) => vec![f.unwrap_or(0.0)],
-        }
+        };
+        f.extend(self.Q.into_iter().flatten());
+        f
     }
 
-    /// g_i = n_i·(x_i + u_i − c − V d) − R ≥ 0 (theory §8): G = n_i on the free dofs of node i,
-    /// H_i = −n_i·d (V unknown), c_i = |x_i − c| − R; with V prescribed, n_i and c_i are taken
-    /// about c + V d (see the module docs). Errors: the zone (no node with a free dof), a zone
-    /// node inside the sphere at V = 0 (`{path}.center`), and a prescribed V
-    /// that puts the sphere's centre on a zone node (`{path}.V`).
+    /// g_i = n_i·(x_i + u_i − c − V d − W) − R ≥ 0 (theory §8): G = n_i on the free dofs of
+    /// node i, H_i = −n_i·d (V unknown) and −n_i·e₁, −n_i·e₂ ((Ux, Uy) unknown),
+    /// c_i = |x_i − c| − R; with V or W prescribed, n_i and c_i are taken about c + V d + W (see
+    /// the module docs). With friction each normal row is followed by the node's two tangential
+    /// rows (theory §8.3). Errors: the zone (no node with a free dof), a zone node inside the
+    /// sphere at V = 0 (`{path}.center`), a prescribed V that puts the sphere's centre on a zone
+    /// node (`{path}.V`), and a friction law where no zone node has a free tangent plane
+    /// (`{path}.friction`).
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
         let zone = candidate_nodes_with(&self.zone, mesh, dofs, path, Selection::AnyFreeDof)?;
         self.check_outside(mesh, &zone.nodes, path)?;
-        let d = self.d();
         let centre = self.linearisation_centre();
-        let mut rows = ConstraintRows::new(usize::from(self.V.is_none()));
-        let mut entries = [(0, 0.0); 3];
-        for &n in &zone.nodes {
+        let mut rows = ConstraintRows::new(self.extra_names().len());
+        let weights = match &self.friction {
+            Some(_) => node_areas_facing(mesh, &zone.nodes, |normal, x| dot(normal, sub(centre, x)) > 0.0),
+            None => Vec::new(),
+        };
+        let (mut entries, mut h) = ([(0, 0.0); 3], Vec::with_capacity(3));
+        let mut without_plane = 0;
+        for (a, &n) in zone.nodes.iter().enumerate() {
             let (normal, dist) = self.normal(mesh, n, centre);
             if dist <= CENTRE_ON_NODE * self.R {
                 let x = mesh.nodes[n];
@@ -320,18 +523,40 @@ impl AdmissibleDisplacements for RigidSphere {
                     k += 1;
                 }
             }
-            match self.V {
-                None => rows.push(&entries[..k], &[-dot(normal, d)], dist - self.R, n),
-                Some(_) => rows.push(&entries[..k], &[], dist - self.R, n),
+            self.extra_entries(normal, &mut h);
+            let row = rows.n_rows();
+            rows.push(&entries[..k], &h, dist - self.R, n);
+            if self.friction.is_some() && !self.push_tangential(&mut rows, dofs, n, normal, row, weights[a], &mut h) {
+                without_plane += 1;
             }
         }
         rows.warnings = zone.warnings;
+        if let Some(law) = &self.friction {
+            if rows.friction.is_empty() {
+                return Err(SceneError::Parameter(ParameterError::new(
+                    join(path, "friction"),
+                    format!("type = {:?}", law.name()),
+                    format!(
+                        "no node of {} can slip: at every one the tangent plane's components are fixed by the \
+                         Dirichlet conditions, so the rows have no tangent plane for the friction law (theory §8.3)",
+                        join(path, "zone")
+                    ),
+                )));
+            }
+            rows.friction.laws.push(law.clone());
+            if without_plane > 0 {
+                rows.warnings.push(format!(
+                    "{}: {without_plane} zone node(s) have fixed tangential components and carry no friction rows",
+                    join(path, "friction")
+                ));
+            }
+        }
         Ok(rows)
     }
 
-    /// The exact gap |x_i + u_i − c − V d| − R.
-    /// Under force control the rows do not depend on F: the same rows. With V prescribed they
-    /// are linearised about the displaced centre (module docs): discretised again.
+    /// Under force control (F, Q) the rows do not depend on the load: the same rows. With V or
+    /// W prescribed they are linearised about the displaced centre (module docs): discretised
+    /// again.
     fn rows_at_factor<'r>(
         &self,
         factor: f64,
@@ -340,35 +565,54 @@ impl AdmissibleDisplacements for RigidSphere {
         dofs: &DofMap,
         path: &str,
     ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
-        match self.V {
-            None => Ok(Cow::Borrowed(rows)),
-            Some(v) => Self { V: Some(v * factor), ..self.clone() }.discretise(mesh, dofs, path).map(Cow::Owned),
+        if self.V.is_none() && self.W.is_none() {
+            return Ok(Cow::Borrowed(rows));
         }
+        let scaled = Self { V: self.V.map(|v| v * factor), W: self.W.map(|w| w.map(|x| x * factor)), ..self.clone() };
+        scaled.discretise(mesh, dofs, path).map(Cow::Owned)
     }
 
+    /// The exact gap |x_i + u_i − c − V d − W| − R on the normal rows; on the tangential rows
+    /// the slip t_k·(u_i − V d − W) (theory §8.3), t_k the frame of the row's normal.
     fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]) {
         let d = self.d();
         let v = self.v(extras);
+        let w = self.across(extras);
+        let motion: [f64; 3] = std::array::from_fn(|c| v * d[c] + w[c]);
+        let displacement =
+            |n: usize| -> [f64; 3] { std::array::from_fn(|c| dofs.free(n, c).map_or(0.0, |j| u[j]) - motion[c]) };
         for (g, &n) in out.iter_mut().zip(&rows.node) {
             let (r, _) = self.radial(mesh, n);
-            let y: [f64; 3] = std::array::from_fn(|c| r[c] + dofs.free(n, c).map_or(0.0, |j| u[j]) - v * d[c]);
-            *g = norm(y) - self.R;
+            *g = norm(add(r, displacement(n))) - self.R;
+        }
+        let centre = self.linearisation_centre();
+        for b in &rows.friction.blocks {
+            let n = rows.node[b.normal];
+            let (t1, t2) = self.frame(self.normal(mesh, n, centre).0);
+            let y = displacement(n);
+            out[b.tangent] = dot(t1, y);
+            out[b.tangent + 1] = dot(t2, y);
         }
     }
 
-    /// `V` (the extra or the prescribed value), `force` = Σλ_i n_i·d with the rows' normals (= F
-    /// at a solution), the
-    /// contact set, its radius about the sphere's own centre — the largest distance of a
-    /// contact node from the axis {c + t d} — and a warning when the contact set reaches the rim
-    /// of the zone. The rim is measured on the boundary facets facing the sphere (outward normal
-    /// towards c): unlike the punch's (facets with n₃ < 0) this works whichever face the
-    /// sphere touches; facets looking away from c never count.
+    /// `V` (the extra or the prescribed value), `force` = Σλ_i a_i·d with the rows' directions
+    /// a_i (normals and tangents; = F at a solution), the contact set of the normal rows, its
+    /// radius about the sphere's own centre — the largest distance of a contact node from the
+    /// axis {c + t d} — and a warning when the contact set reaches the rim of the zone. The rim
+    /// is measured on the boundary facets facing the sphere (outward normal towards c): unlike
+    /// the punch's (facets with n₃ < 0) this works whichever face the sphere touches; facets
+    /// looking away from c never count. With friction also `Ux`, `Uy` (the motion across d),
+    /// `force_x`, `force_y` = Σλ_i a_i·e₁, Σλ_i a_i·e₂ (= Q at a solution), `stick_nodes` and
+    /// `slip_nodes` (contact nodes with |λ_t| below, at the disc's radius: [`contact_status`];
+    /// theory §8.3).
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport {
         debug_assert_eq!(lambda.len(), rows.n_rows());
         let d = self.d();
         let centre = self.linearisation_centre();
-        let contact = contact_set(lambda);
-        let force: f64 = lambda.iter().zip(&rows.node).map(|(&l, &n)| l * dot(self.normal(mesh, n, centre).0, d)).sum();
+        let contact = normal_contact_set(rows, lambda);
+        let directions = self.row_directions(mesh, rows);
+        let resultant = |e: [f64; 3]| -> f64 { lambda.iter().zip(&directions).map(|(&l, &a)| l * dot(a, e)).sum() };
+        let force = resultant(d);
         let contact_radius = contact
             .iter()
             .map(|&i| {
@@ -382,11 +626,40 @@ impl AdmissibleDisplacements for RigidSphere {
             let to_c = [c[0] - x[0], c[1] - x[1], c[2] - x[2]];
             dot(normal, to_c) > FACING_TOL * norm(normal) * norm(to_c)
         });
+        let mut quantities = vec![("V".into(), self.v(extras)), ("force".into(), force)];
+        if self.friction.is_some() {
+            let (e1, e2) = self.tangential_axes();
+            let w = self.across(extras);
+            let status = contact_status(rows, lambda);
+            let count = |s: ContactStatus| status.iter().filter(|x| x.1 == s).count();
+            let (stick, slip) = (count(ContactStatus::Stick), count(ContactStatus::Slip));
+            quantities.extend([
+                ("Ux".into(), dot(w, e1)),
+                ("Uy".into(), dot(w, e2)),
+                ("force_x".into(), resultant(e1)),
+                ("force_y".into(), resultant(e2)),
+                ("stick_nodes".into(), stick as f64),
+                ("slip_nodes".into(), slip as f64),
+            ]);
+        }
         ContactReport {
-            quantities: vec![("V".into(), self.v(extras)), ("force".into(), force)],
+            quantities,
             contact_nodes: contact.len(),
             contact_radius,
             warnings: rim_warning("obstacle", mesh, rows, &rim).into_iter().collect(),
         }
+    }
+}
+
+impl RigidSphere {
+    /// The direction of every row: n_i for a normal row, t₁, t₂ of n_i for its tangential rows.
+    fn row_directions(&self, mesh: &TetMesh, rows: &ConstraintRows) -> Vec<[f64; 3]> {
+        let centre = self.linearisation_centre();
+        let mut a: Vec<[f64; 3]> = rows.node.iter().map(|&n| self.normal(mesh, n, centre).0).collect();
+        for b in &rows.friction.blocks {
+            let (t1, t2) = self.frame(a[b.normal]);
+            (a[b.tangent], a[b.tangent + 1]) = (t1, t2);
+        }
+        a
     }
 }

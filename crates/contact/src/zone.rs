@@ -199,22 +199,32 @@ fn norm(v: [f64; 3]) -> f64 {
 /// facet at each of its nodes; on a second-order one ∫N = 0 at a 6-node facet's vertices and a
 /// third of the facet at each edge node (theory §10.1): a vertex row carries no force under a
 /// smooth pressure and has no area, so its pressure is not defined (and not reported).
+/// [`node_areas_facing`] with "facing" = n₃ < 0.
 pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
-    let mut row_of = vec![usize::MAX; mesh.n_nodes()];
-    for (i, &n) in rows.node.iter().enumerate() {
-        row_of[n] = i;
+    node_areas_facing(mesh, &rows.node, |normal, _| normal[2] < -FACING_TOL * norm(normal))
+}
+
+/// The share of the contact face of each node of `nodes`, ∫_Γ N_i over the boundary facets
+/// facing the obstacle (`faces(normal, centroid)` as in [`rim_rows_facing`]): a third of every
+/// such facet at each corner on a first-order mesh; on a second-order one 0 at a 6-node facet's
+/// vertices and a third of the facet at each edge node (theory §10.1).
+pub fn node_areas_facing(mesh: &TetMesh, nodes: &[usize], faces: impl Fn([f64; 3], [f64; 3]) -> bool) -> Vec<f64> {
+    let mut listed = vec![false; mesh.n_nodes()];
+    for &n in nodes {
+        listed[n] = true;
     }
-    let mut area = vec![0.0; rows.n_rows()];
+    let mut area = vec![0.0; mesh.n_nodes()];
     let mut add = |n: usize, a: f64| {
-        if row_of[n] != usize::MAX {
-            area[row_of[n]] += a;
+        if listed[n] {
+            area[n] += a;
         }
     };
     for (fi, f) in mesh.boundary.iter().enumerate() {
         let [a, b, c] = f.map(|i| mesh.nodes[i]);
-        let n3 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-        let area2 = tri_area2(a, b, c);
-        if n3 < -FACING_TOL * area2 {
+        let centroid = std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0);
+        let normal = tri_normal(a, b, c);
+        if faces(normal, centroid) {
+            let area2 = norm(normal);
             match &mesh.second_order {
                 None => f.iter().for_each(|&n| add(n, area2 / 6.0)),
                 // ∫N of the 6-node triangle: 0 at the vertices, |F|/3 at the edge nodes
@@ -222,12 +232,7 @@ pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
             }
         }
     }
-    area
-}
-
-/// |(b − a) × (c − a)|: twice the area of a triangle.
-fn tri_area2(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    norm(tri_normal(a, b, c))
+    nodes.iter().map(|&n| area[n]).collect()
 }
 
 /// The warning for contact rows on the rim (see [`rim_rows`]); `None` when there are none.

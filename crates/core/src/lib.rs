@@ -48,10 +48,13 @@ pub use mesh::gmsh::{GmshImport, GmshMesh, PhysicalGroup};
 pub use mesh::inline::InlineMesh;
 pub use mesh::region::Region;
 pub use mesh::{MeshQuality, MeshSource, TetMesh};
-pub use problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set};
+pub use problem::displacements::{
+    AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set, normal_contact_set,
+};
 pub use problem::elasticity::Elasticity;
 pub use problem::energies::{dual_energy, energy, energy_of_strain, stress_energy};
 pub use problem::fields::{Hardening, PlasticState, StressField};
+pub use problem::friction::{FrictionBlock, FrictionLaw, FrictionRows};
 pub use problem::kkt::{KktResiduals, kkt, kkt_with_stress};
 pub use problem::lagrangian::{Data, Iterate, Lagrangian, LocalLaw, Workspace};
 pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};

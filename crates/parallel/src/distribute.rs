@@ -170,6 +170,14 @@ fn whole_problem(
     let dofs = DofMap::new(&mesh, dirichlet)?;
     dofs.check_rigid_motions(&mesh)?;
     let obstacles = obstacles.discretise(&mesh, &dofs, OBSTACLE_PATH)?;
+    if obstacles.rows().has_friction() {
+        return Err(SceneError::Region {
+            field: OBSTACLE_PATH.into(),
+            message: "friction (theory §8.3) is not distributed yet: its tangential rows are not sent to the ranks; \
+                      run the scene on one process"
+                .into(),
+        });
+    }
     let load = if loads.is_empty() { Vec::new() } else { nodal_loads(&mesh, &dofs, loads)? };
     let couplings = partition.couplings(&mesh, &dofs);
     let totals = Totals {
@@ -400,6 +408,7 @@ fn decode_part(bytes: &[u8]) -> RankPart {
             offset: r.reals(),
             node: r.words(),
             warnings: (0..r.word()).map(|_| r.text()).collect(),
+            friction: Default::default(),
         })
         .collect();
     let global_rows = r.words();

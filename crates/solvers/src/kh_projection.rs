@@ -10,7 +10,12 @@
 //! where H₊ are the extras with a metric weight m > 0 and H₀ those with m = 0, whose V is then
 //! eliminated exactly (it is the multiplier of the equality). The new point is
 //! `w = z + Y μ`, `V₊ = Z₊ + m₊⁻¹ H₊ᵀ μ`, `V₀ = y`.
+//!
+//! With friction (theory §8.3) the tangential rows' multipliers lie in discs, not in R₊: the
+//! same programme over R₊ × discs, solved by [`FrictionQp`]; the extras then need a metric
+//! weight (`extra_metric > 0`), the equality of eliminated extras being outside that solver.
 
+use crate::friction_qp::FrictionQp;
 use nalgebra::{DMatrix, DVector};
 use saddle_core::linalg::SparseCholesky;
 use saddle_core::linalg::{DenseQp, QpError};
@@ -28,13 +33,21 @@ pub const MAX_STORED_BYTES: usize = 512 << 20;
 /// (n × 64 doubles) stays small beside the factor.
 pub const SETUP_BLOCK: usize = 64;
 
+/// The dual programme of the projection: over μ ≥ 0 with the eliminated extras' equality
+/// (frictionless rows), or over R₊ × discs (friction, theory §8.3).
+#[derive(Debug)]
+enum Dual {
+    Polyhedral(Box<DenseQp>),
+    Friction(FrictionQp),
+}
+
 /// Exact projection onto K_h in the metric diag(M, m).
 #[derive(Debug)]
 pub struct MetricProjection {
     n: usize,
     /// M⁻¹Gᵀ, column-major n × rows, if kept.
     y: Option<Vec<f64>>,
-    qp: DenseQp,
+    qp: Dual,
     /// Metric weights of the extras (0: eliminated exactly).
     m: Vec<f64>,
     /// ρ f: the load's step on the extras.
@@ -116,9 +129,23 @@ impl MetricProjection {
             let hk = h.column(k);
             s += hk * hk.transpose() / m[k];
         }
-        let e_mat = DMatrix::from_fn(zero.len(), nr, |r, i| h[(i, zero[r])]);
-        let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);
-        let qp = DenseQp::new(s, e_mat, e_rhs).map_err(|e| qp_error(solver, e))?;
+        let qp = if rows.has_friction() {
+            if !zero.is_empty() {
+                return Err(SolveError::Unsupported {
+                    solver: solver.into(),
+                    message: format!(
+                        "friction (theory §8.3) with {} extra unknown(s) eliminated exactly (extra_metric = 0): the \
+                         projection with friction needs solver.extra_metric > 0 for force-controlled obstacles",
+                        zero.len()
+                    ),
+                });
+            }
+            Dual::Friction(FrictionQp::new(s, rows, rho, solver)?)
+        } else {
+            let e_mat = DMatrix::from_fn(zero.len(), nr, |r, i| h[(i, zero[r])]);
+            let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);
+            Dual::Polyhedral(Box::new(DenseQp::new(s, e_mat, e_rhs).map_err(|e| qp_error(solver, e))?))
+        };
         let gtmu = if keep { vec![] } else { vec![0.0; n] };
         let step_load = f.iter().map(|fk| rho * fk).collect();
         Ok(Self {
@@ -148,7 +175,10 @@ impl MetricProjection {
 
     /// Active-set steps and factorisations of the dense QP so far.
     pub fn qp_work(&self) -> (usize, usize) {
-        (self.qp.last_steps, self.qp.factorisations)
+        match &self.qp {
+            Dual::Polyhedral(qp) => (qp.last_steps, qp.factorisations),
+            Dual::Friction(qp) => (qp.last_sweeps, 0),
+        }
     }
 
     /// Step (ii) from the trial z = uⁿ − ρM⁻¹Bᵀσⁿ⁺¹ and `v` = Vⁿ: on return `w` holds uⁿ⁺¹,
@@ -174,9 +204,17 @@ impl MetricProjection {
             self.zv[k] = if *m == 0.0 { 0.0 } else { v[k] + self.step_load[k] / m };
         }
         rows.gap(z, &self.zv, self.q.as_mut_slice());
-        let sol = self.qp.solve(&self.q).map_err(|e| qp_error(&self.solver, e))?;
-        mu.copy_from_slice(sol.x.as_slice());
-        let y = sol.y;
+        let y = match &mut self.qp {
+            Dual::Polyhedral(qp) => {
+                let sol = qp.solve(&self.q).map_err(|e| qp_error(&self.solver, e))?;
+                mu.copy_from_slice(sol.x.as_slice());
+                sol.y
+            }
+            Dual::Friction(qp) => {
+                mu.copy_from_slice(qp.solve(self.q.as_slice(), &self.solver)?);
+                DVector::zeros(0)
+            }
+        };
         // V₊ = Z₊ + m⁻¹ H₊ᵀ μ, V₀ = y
         let mut r = 0;
         for (k, (vk, &mk)) in v.iter_mut().zip(&self.m).enumerate() {

@@ -19,6 +19,8 @@ pub mod distributed_basis;
 pub mod distributed_projection;
 pub mod distributed_system;
 mod fallback;
+pub mod friction;
+pub mod friction_qp;
 pub mod kh_projection;
 #[cfg(feature = "socp")]
 pub mod limit;

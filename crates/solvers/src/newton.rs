@@ -315,6 +315,7 @@ impl Newton {
         timer: &mut PhaseTimer,
         name: &str,
     ) -> Result<Solution, SolveError> {
+        crate::friction::refuse_friction(l.data.rows, name)?;
         let robust_start = start.clone();
         let mut run = Run::set_up(self, l, start, reuse, name, monitor, timer)?;
         let mut guard = StallGuard::new(self.stall_window);

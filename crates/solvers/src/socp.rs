@@ -79,6 +79,13 @@ pub const REFINEMENT_PER_IPM_TOL: f64 = 1e-4;
 /// interior-point iterations), never tighter than Clarabel's own 1e-13.
 pub const REFINEMENT_TOL_RANGE: (f64, f64) = (1e-13, 1e-7);
 
+/// With friction and no polish, the interior point's tolerance is this fraction of `tol`: its
+/// gap and feasibility tolerances are absolute in the programme's units, the KKT residual of
+/// theory §3.4 relative, and the nodes between stick and slip converge slowly. Measured on the
+/// partial-slip scene of `tests/friction.rs`: the KKT residual is 1.2e-7 at ipm_tol = 1e-10 and
+/// 2.8e-8 at 1e-13 (Clarabel's floor there); the default tol = 1e-8 is then not met, and says so.
+pub const FRICTION_IPM_PER_TOL: f64 = 1e-5;
+
 /// `type = "socp"`: the stress form of theory §3 as a second-order cone programme solved by
 /// Clarabel (theory §4.4), polished by active-set Newton.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -167,6 +174,9 @@ impl Solver for Socp {
     /// stages.
     fn solve(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
         saddle_core::one_rank("socp", l)?;
+        if l.data.rows.has_friction() && self.polish {
+            return self.with_friction(l, monitor);
+        }
         let mut timer = PhaseTimer::default();
         let (prog, ipm) = self.interior_point(l, monitor, &mut timer)?;
         beyond_collapse(l, &ipm)?;
@@ -190,6 +200,20 @@ impl Solver for Socp {
 }
 
 impl Socp {
+    /// With friction (theory §8.3) the polish is Newton's, which does not run friction laws: the
+    /// interior point's answer is the answer, run to `min(ipm_tol, tol ×`
+    /// [`FRICTION_IPM_PER_TOL`]`)` without polish (the report says so).
+    fn with_friction(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
+        let ipm_tol = self.ipm_tol.min(FRICTION_IPM_PER_TOL * self.tol);
+        let unpolished = Socp { polish: false, ipm_tol, ..self.clone() };
+        let mut sol = unpolished.solve(l, monitor)?;
+        sol.report.warnings.push(format!(
+            "friction: no polish (Newton does not run friction laws); the interior point ran to ipm_tol = {:e}",
+            unpolished.ipm_tol
+        ));
+        Ok(sol)
+    }
+
     /// Stage 1 (theory §4.4): the cone programme of `l` built and solved by Clarabel; an error
     /// if its solution is not finite.
     fn interior_point(
@@ -414,8 +438,15 @@ struct Layout {
     n_dofs: usize,
     /// Extra unknowns (load rows).
     n_extras: usize,
-    /// Rows of K_h (λ columns, sign rows).
+    /// Rows of K_h (λ columns).
     n_rows: usize,
+    /// The constraint row of each λ_i in the contact block: its sign row (normal rows,
+    /// nonnegative cone) or its entry of its node's friction disc (theory §8.3).
+    sign_row: Vec<usize>,
+    /// Normal rows (the nonnegative cone's dimension).
+    n_normal: usize,
+    /// Each friction disc's first constraint row and radius (the law's, a given bound).
+    discs: Vec<(usize, f64)>,
     /// Second-order cones.
     n_soc: usize,
 }
@@ -426,16 +457,42 @@ type StrainEntry = (usize, usize, usize, f64);
 impl Layout {
     /// Stage 3 (theory §4.4, the layout of the variables): x = [(σ_T, kept q_T) per point, λ],
     /// with the kept hardening variables `free_q` and `n_blocks` cones per point.
+    /// The contact block's rows (theory §4.4 block 3, §8.3): first the normal rows' sign rows
+    /// (all rows without friction), then a disc (R_b; λ_t1, λ_t2) per friction block.
     fn new(l: &Lagrangian<'_>, free_q: Vec<usize>, n_blocks: usize) -> Self {
+        let rows = l.data.rows;
+        let (nr, row0) = (rows.n_rows(), l.n_dofs() + l.n_extras());
+        let tangential = rows.friction.tangential_mask(nr);
+        let mut sign_row = vec![0; nr];
+        let mut next = row0;
+        for i in (0..nr).filter(|&i| !tangential[i]) {
+            sign_row[i] = next;
+            next += 1;
+        }
+        let n_normal = next - row0;
+        let mut discs = Vec::with_capacity(rows.friction.blocks.len());
+        for b in &rows.friction.blocks {
+            discs.push((next, rows.friction.law(b).radius(b.weight, 0.0)));
+            (sign_row[b.tangent], sign_row[b.tangent + 1]) = (next + 1, next + 2);
+            next += 3;
+        }
         Self {
             n_points: l.n_points(),
             q_dim: l.data.hardening_dim(),
             free_q,
             n_dofs: l.n_dofs(),
             n_extras: l.n_extras(),
-            n_rows: l.data.rows.n_rows(),
-            n_soc: l.n_points() * n_blocks,
+            n_rows: nr,
+            sign_row,
+            n_normal,
+            n_soc: l.n_points() * n_blocks + discs.len(),
+            discs,
         }
+    }
+
+    /// Constraint rows of the contact block: a sign row per normal row, three per disc.
+    fn n_contact_rows(&self) -> usize {
+        self.n_normal + 3 * self.discs.len()
     }
 
     /// The hardening variables fixed at their state value (infinite metric).
@@ -667,10 +724,11 @@ fn equilibrium_rows(l: &Lagrangian<'_>, strain: Vec<StrainEntry>, layout: &Layou
 }
 
 /// Stage 9 (theory §4.4, the contact rows): the column of each λ_i, −G_iᵀ in the equilibrium
-/// rows (block 1), −H_iᵀ in the load rows (block 2) and −1 in its sign row (block 3).
+/// rows (block 1), −H_iᵀ in the load rows (block 2) and −1 in its sign row or its friction
+/// disc (block 3, theory §8.3).
 fn contact_columns(l: &Lagrangian<'_>, layout: &Layout, a: &mut Triplets) {
     let rows = l.data.rows;
-    let (n, ne) = (layout.n_dofs, layout.n_extras);
+    let n = layout.n_dofs;
     for i in 0..layout.n_rows {
         let col = layout.lambda_col(i);
         let (cols, vals) = rows.row(i);
@@ -682,14 +740,14 @@ fn contact_columns(l: &Lagrangian<'_>, layout: &Layout, a: &mut Triplets) {
                 a.push(n + k, col, -h);
             }
         }
-        a.push(n + ne + i, col, -1.0);
+        a.push(layout.sign_row[i], col, -1.0);
     }
 }
 
 /// Stage 10 (theory §4.4, constraint block 4): each point's cone maps on its (σ, kept q), in the
 /// rows after the equilibrium, load and sign rows.
 fn cone_rows(layout: &Layout, cone_map: &ConeMap, a: &mut Triplets) {
-    let cone_row0 = layout.n_dofs + layout.n_extras + layout.n_rows;
+    let cone_row0 = layout.n_dofs + layout.n_extras + layout.n_contact_rows();
     for t in 0..layout.n_points {
         let row0 = cone_row0 + t * cone_map.rows;
         for &(r, c, v) in &cone_map.entries {
@@ -710,8 +768,11 @@ fn right_hand_side(l: &Lagrangian<'_>, layout: &Layout, blocks: &[SocBlock], sca
     for (k, f) in l.data.load.iter().enumerate() {
         b[n + k] = f / s_f;
     }
+    for &(row, radius) in &layout.discs {
+        b[row] = radius / s_f;
+    }
     let width = 6 + layout.q_dim;
-    let mut r0 = n + ne + layout.n_rows;
+    let mut r0 = n + ne + layout.n_contact_rows();
     for t in 0..layout.n_points {
         let fixed: Vec<(usize, f64)> = match l.data.state {
             Some(st) => layout.fixed_q().map(|k| (k, st.q(t)[k])).collect(),
@@ -729,16 +790,18 @@ fn right_hand_side(l: &Lagrangian<'_>, layout: &Layout, blocks: &[SocBlock], sca
 }
 
 /// Stage 12 (theory §4.4): the cones of the row blocks in order — zero (equilibrium and load
-/// rows), nonnegative (λ ≥ 0), and P's second-order cones at every point.
+/// rows), nonnegative (λ ≥ 0 on the normal rows), a 3-dimensional second-order cone per
+/// friction disc (|λ_t| ≤ R, theory §8.3), and P's second-order cones at every point.
 fn cones(layout: &Layout, blocks: &[SocBlock]) -> Vec<SupportedConeT<f64>> {
-    let (n, ne, nr) = (layout.n_dofs, layout.n_extras, layout.n_rows);
+    let (n, ne) = (layout.n_dofs, layout.n_extras);
     let mut cones = Vec::with_capacity(2 + layout.n_soc);
     if n + ne > 0 {
         cones.push(ZeroConeT(n + ne));
     }
-    if nr > 0 {
-        cones.push(NonnegativeConeT(nr));
+    if layout.n_normal > 0 {
+        cones.push(NonnegativeConeT(layout.n_normal));
     }
+    cones.extend(layout.discs.iter().map(|_| SecondOrderConeT(3)));
     for _ in 0..layout.n_points {
         cones.extend(blocks.iter().map(|blk| SecondOrderConeT(blk.dim)));
     }
@@ -782,8 +845,15 @@ impl ConeMap {
 impl ConeProgramme {
     /// Builds the programme of theory §3 form 3 for `l`, non-dimensionalised (module docs), in
     /// stages: P's cones and hardening metric, the layout of x, the units, the objective, the
-    /// constraints and their cones.
+    /// constraints and their cones. A friction law whose radius depends on λ_n (a
+    /// quasi-variational inequality) is refused by name.
     fn build(l: &Lagrangian<'_>) -> Result<Self, SolveError> {
+        if let Some(law) = l.data.rows.friction.quasi_law() {
+            return Err(unsupported(format!(
+                "the friction law {law:?} bounds the tangential force by the normal one (a quasi-variational \
+                 inequality, not a cone programme); socp runs laws with a given bound (tresca)"
+            )));
+        }
         let blocks = yield_cones(l)?;
         let (free_q, hinv) = hardening_metric(l)?;
         let layout = Layout::new(l, free_q, blocks.len());
@@ -796,7 +866,7 @@ impl ConeProgramme {
         equilibrium_rows(l, strain, &layout, &scales, &mut a);
         contact_columns(l, &layout, &mut a);
         cone_rows(&layout, &cone_map, &mut a);
-        let m = layout.n_dofs + layout.n_extras + layout.n_rows + layout.n_points * cone_map.rows;
+        let m = layout.n_dofs + layout.n_extras + layout.n_contact_rows() + layout.n_points * cone_map.rows;
         let a = a.into_csc(m, layout.n_vars());
         let b = right_hand_side(l, &layout, &blocks, &scales, m);
         let cones = cones(&layout, &blocks);

@@ -9,6 +9,7 @@
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
+use crate::problem::friction::FrictionRows;
 use std::borrow::Cow;
 use std::fmt::Debug;
 
@@ -31,6 +32,9 @@ pub struct ConstraintRows {
     pub node: Vec<usize>,
     /// Things the user should know about the discretisation (nodes dropped, ...).
     pub warnings: Vec<String>,
+    /// Which rows are tangential, and their friction laws (theory §8.3); empty without
+    /// friction, every row then a normal row with λ_i ≥ 0.
+    pub friction: FrictionRows,
 }
 
 impl ConstraintRows {
@@ -55,6 +59,11 @@ impl ConstraintRows {
         self.extra.extend_from_slice(extras);
         self.offset.push(offset);
         self.node.push(node);
+    }
+
+    /// True when some rows are tangential rows of a friction law (theory §8.3).
+    pub fn has_friction(&self) -> bool {
+        !self.friction.is_empty()
     }
 
     /// Row i of G as (columns, values).
@@ -95,6 +104,17 @@ impl ConstraintRows {
             }
         }
     }
+}
+
+/// The contact set of the normal rows of `rows` with multipliers `lambda` (theory §8.3): as
+/// [`contact_set`], tangential rows left out.
+pub fn normal_contact_set(rows: &ConstraintRows, lambda: &[f64]) -> Vec<usize> {
+    if !rows.has_friction() {
+        return contact_set(lambda);
+    }
+    let tangential = rows.friction.tangential_mask(rows.n_rows());
+    let lmax = lambda.iter().zip(&tangential).filter(|(_, t)| !**t).map(|(l, _)| *l).fold(0.0, f64::max);
+    (0..lambda.len()).filter(|&i| !tangential[i] && lmax > 0.0 && lambda[i] > 1e-8 * lmax).collect()
 }
 
 /// The contact set of a multiplier vector: rows with λ_i > 1e-8 · max λ. The relative

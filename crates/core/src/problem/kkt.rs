@@ -2,9 +2,11 @@
 //! operators and data of L — independently of the solver that produced the iterate.
 
 use crate::problem::comm::Comm;
+use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::energies::hardening_increment;
 use crate::problem::fields::PlasticState;
+use crate::problem::friction::friction_residual;
 use crate::problem::lagrangian::{Iterate, Lagrangian, Workspace};
 use crate::problem::operators::ElementOperators;
 use crate::problem::stresses::energy_inner;
@@ -92,6 +94,9 @@ fn complementarity(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &mut Workspace) -> 
     rows.gap(it.u, it.extras, &mut ws.gap);
     let lambda_s = comm.max(max_abs(it.lambda));
     let g_s = comm.max(max_abs(it.u).max(max_abs(&rows.offset))).max(max_abs(it.extras));
+    if rows.has_friction() {
+        return comm.max(complementarity_with_friction(rows, it.lambda, &ws.gap, lambda_s, g_s));
+    }
     let mut worst: f64 = 0.0;
     for (l, g) in it.lambda.iter().zip(&ws.gap) {
         let a = if lambda_s > 0.0 { l / lambda_s } else { *l };
@@ -100,6 +105,22 @@ fn complementarity(l: &Lagrangian<'_>, it: &Iterate<'_>, ws: &mut Workspace) -> 
         worst = if r.is_nan() || worst.is_nan() { f64::NAN } else { worst.max(r) };
     }
     comm.max(worst)
+}
+
+/// The natural residual of rows with friction (theory §8.3): `min(λ_i/λ_s, g_i/g_s)` on the
+/// normal rows, the friction residual of each node's tangential pair
+/// ([`friction_residual`]), the larger of the two.
+fn complementarity_with_friction(rows: &ConstraintRows, lambda: &[f64], gap: &[f64], lambda_s: f64, g_s: f64) -> f64 {
+    let tangential = rows.friction.tangential_mask(rows.n_rows());
+    let mut worst: f64 = 0.0;
+    for ((l, g), _) in lambda.iter().zip(gap).zip(&tangential).filter(|(_, t)| !**t) {
+        let a = if lambda_s > 0.0 { l / lambda_s } else { *l };
+        let b = if g_s > 0.0 { g / g_s } else { *g };
+        let r = a.min(b).abs();
+        worst = if r.is_nan() || worst.is_nan() { f64::NAN } else { worst.max(r) };
+    }
+    let f = friction_residual(&rows.friction, lambda, gap, lambda_s, g_s);
+    if f.is_nan() || worst.is_nan() { f64::NAN } else { worst.max(f) }
 }
 
 /// [σ̂ − σ̂(u)]^{1/2} / [σ̂(u)]^{1/2} in the energy norm, σ̂(u) the local law's in `ws.stress`.

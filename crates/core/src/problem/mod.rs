@@ -22,6 +22,7 @@ pub mod displacements;
 pub mod elasticity;
 pub mod energies;
 pub mod fields;
+pub mod friction;
 pub mod kkt;
 pub mod lagrangian;
 pub mod lifting;

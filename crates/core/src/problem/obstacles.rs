@@ -393,6 +393,7 @@ impl DiscreteObstacles {
                 h[part.extra_range.clone()].copy_from_slice(part.rows.extra_row(i));
                 all.push(&entries, &h, part.rows.offset[i], part.rows.node[i]);
             }
+            all.friction.extend_shifted(&part.rows.friction, part.row_range.start);
             all.warnings.extend(part.rows.warnings.iter().cloned());
         }
         let load = obstacles.load();
@@ -437,13 +438,17 @@ impl DiscreteObstacles {
             .iter()
             .map(|part| {
                 let mut rows = ConstraintRows::new(part.rows.n_extras);
-                for i in 0..part.rows.n_rows() {
+                let mut new_row = vec![None; part.rows.n_rows()];
+                for (i, kept) in new_row.iter_mut().enumerate() {
                     let Some(node) = local_node(part.rows.node[i]) else { continue };
                     let (cols, vals) = part.rows.row(i);
                     let entries: Vec<(usize, f64)> =
                         cols.iter().map(|&j| column(j)).zip(vals.iter().copied()).collect();
+                    *kept = Some(rows.n_rows());
                     rows.push(&entries, part.rows.extra_row(i), part.rows.offset[i], node);
                 }
+                // a node's normal and tangential rows share its node: kept or dropped together
+                rows.friction = part.rows.friction.renumbered(|i| new_row[i]);
                 rows.warnings = part.rows.warnings.clone();
                 rows
             })

@@ -27,6 +27,7 @@ impl Penalty {
         start: Option<&Start>,
         monitor: &mut dyn Monitor,
     ) -> Result<Solution, SolveError> {
+        crate::friction::refuse_friction(l.data.rows, "penalty")?;
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
         let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
