@@ -102,6 +102,14 @@ fn bad_input_gives_typed_errors_naming_the_cause() {
     // no load
     let e = collapse(&compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 0.0)).unwrap_err();
     assert!(matches!(e, LimitError::NoLoad), "{e}");
+    // friction: tangential rows have no place in the kinematic problem (theory §13.1), refused
+    // with the count of nodes that carry them rather than read as normal rows
+    let mut t = compression("type = \"von_mises\"\nk0 = 1.0\nh = 0.0", "p1", 1.0);
+    let sphere = "type = \"rigid_sphere\"\ncenter = [0.5, 0.5, -5.0]\nR = 5.0\ndirection = [0.0, 0.0, 1.0]\n\
+                  F = 1.0\nW = [0.001, 0.0]\nfriction = { type = \"tresca\", g = 0.1 }\nzone = { group = \"zmin\" }";
+    t.insert("obstacle".into(), toml::Value::Table(toml::from_str(sphere).unwrap()));
+    let e = collapse(&t).unwrap_err();
+    assert!(matches!(e, LimitError::Friction { blocks } if blocks > 0) && e.to_string().contains("friction"), "{e}");
 }
 
 /// `saddle limit` on a scene table written to a temporary folder: (exit code, stderr, the

@@ -110,6 +110,15 @@ pub enum LimitError {
         /// Dual residual.
         r_dual: f64,
     },
+    /// Friction rows (theory §8.3) have no place in the kinematic problem of §13.1.
+    #[error(
+        "obstacle: friction ({blocks} contact nodes with tangential rows): limit analysis (theory §13) poses \
+         frictionless contact only; remove the obstacle's friction table or use `saddle run`/`saddle sweep`"
+    )]
+    Friction {
+        /// How many nodes carry tangential rows.
+        blocks: usize,
+    },
     /// A setting is out of range.
     #[error("limit.{field} = {value}: {message}")]
     Setting {
@@ -192,6 +201,7 @@ impl LimitAnalysis {
     /// The static programme of `problem` as JSON (`StaticProgramme::json`), for other conic
     /// solvers.
     pub fn programme_json(problem: &DiscreteProblem) -> Result<String, LimitError> {
+        refuse_friction(problem)?;
         let loads = ReferenceLoads::new(problem)?;
         Ok(StaticProgramme::build(problem, &loads)?.json())
     }
@@ -199,6 +209,7 @@ impl LimitAnalysis {
     /// The collapse of `problem` (theory §13), in the stages of the module docs.
     pub fn solve(&self, problem: &DiscreteProblem) -> Result<Collapse, LimitError> {
         self.validate()?;
+        refuse_friction(problem)?;
         let started = Instant::now();
         let loads = ReferenceLoads::new(problem)?;
         let prog = StaticProgramme::build(problem, &loads)?;
@@ -228,4 +239,13 @@ impl LimitAnalysis {
         collapse.wall_s = started.elapsed().as_secs_f64();
         Ok(collapse)
     }
+}
+
+/// Limit analysis knows frictionless contact only (theory §13.1): tangential rows are refused.
+fn refuse_friction(problem: &DiscreteProblem) -> Result<(), LimitError> {
+    let rows = problem.obstacles.rows();
+    if rows.has_friction() {
+        return Err(LimitError::Friction { blocks: rows.friction.blocks.len() });
+    }
+    Ok(())
 }
