@@ -504,7 +504,7 @@ impl<'a> Run<'a> {
         monitor.phase("analysis");
         let mut count = Counts::default();
         let c_elastic = l.data.elasticity.stiffness_matrix();
-        if l.distributed_solver().is_some() {
+        if l.is_distributed() {
             return Self::set_up_distributed(settings, l, start, name, count, timer);
         }
         // a warm start may take the set-up the previous step kept (a load path, theory §11.2)

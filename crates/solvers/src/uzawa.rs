@@ -308,7 +308,7 @@ impl<'a> Run<'a> {
         let mut count = Counts::default();
         let (metric, lip) = settings.metric(l.data.elasticity);
         let rho = settings.rho / lip;
-        let projector = if l.distributed_solver().is_some() {
+        let projector = if l.is_distributed() {
             Self::distributed(settings, l, &metric, rho, monitor, &mut timer)?
         } else {
             let mut chol = Self::factorise_metric(l, &metric, monitor, &mut timer, &mut count)?;
