@@ -88,3 +88,22 @@ fn a_body_force_beyond_the_collapse_load_is_reported_by_every_solver_and_one_bel
         assert!(worst <= 1e-7, "{s}: stresses differ by {worst:e}");
     }
 }
+
+/// Newton beyond the collapse load (theory §4.2.1, §4.6): its singular plastic tangent calls the
+/// fallback on the penalty method, and the penalty run finds the collapse by its regularisation
+/// share; Newton's error is that finding (before, Newton dropped the penalty's error and
+/// reported its own singular tangent). With `max_fallbacks = 0` Newton's own finding stands.
+#[test]
+fn newtons_collapse_is_its_fallbacks_finding_when_the_fallback_finds_it() {
+    let mut t = perfectly_plastic_cube();
+    set(&mut t, "obstacle.F", toml::Value::Float(2.0));
+    for l in [build(&t).0, hanging_cube(2.03)] {
+        let found = beyond_collapse(&l, "type = \"newton\"");
+        println!("{found}");
+        assert!(found.starts_with("newton:") && found.contains("fallback 1 on the penalty method"), "{found}");
+        assert!(found.contains("of the loads' work"), "{found}");
+        let own = beyond_collapse(&l, "type = \"newton\"\nmax_fallbacks = 0");
+        println!("{own}");
+        assert!(own.contains("tangent stiffness of the plastic body is singular"), "{own}");
+    }
+}

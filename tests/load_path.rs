@@ -5,7 +5,7 @@ mod common;
 use common::*;
 use saddle::core::linalg::{LowerCsc, SparseCholesky};
 use saddle::core::problem::tensor::deviator;
-use saddle::core::{DiscreteProblem, dual_energy, energy};
+use saddle::core::{DiscreteProblem, dual_energy, energy, energy_of_stress};
 use saddle::core::{Evolution, Material, Silent, Sym, Workspace, step_factors};
 
 /// Every solver, tight enough that the closed forms hold to 1e-8.
@@ -105,6 +105,15 @@ fn homogeneous_compression_loaded_and_unloaded_matches_the_closed_form_for_every
             // the work of the largest load, F·U, is the problem's energy scale (J → 0 unloaded)
             let scale = j.abs().max(2.0 * (2.0 / c.e - p[2]));
             assert!((j - dual).abs() <= 1e-8 * scale, "{name}, step {k}: J = {j:e}, dual {dual:e}");
+            // J from the stresses (uzawa's safeguard, theory §4.1) is the same J: one formula
+            // rearranged, so to round-off (measured: below 1e-14 of the scale)
+            let mut ws2 = Workspace::new(&step.problem.lagrangian());
+            saddle::core::kkt(&step.problem.lagrangian(), &step.solution.iterate(), &mut ws2);
+            let j_stress = energy_of_stress(&step.problem.lagrangian(), &sol.u, &sol.extras, &ws2.stress, &ws2.force);
+            assert!(
+                (j - j_stress).abs() <= 1e-12 * scale,
+                "{name}, step {k}: J = {j:e}, from the stresses {j_stress:e}"
+            );
             // the plastic strain: none before F = 2, p after; ξ likewise
             let p_now = if k == 0 { Sym::zeros() } else { p };
             step.problem.lagrangian().strain(&sol.u, &mut ws.eps);

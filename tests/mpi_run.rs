@@ -294,3 +294,23 @@ fn bad_input_ends_every_rank_with_its_message() {
     );
     fails_everywhere(2, &["run", bad.to_str().unwrap(), "--out", out], "no_such_preconditioner");
 }
+
+/// A punch force beyond the collapse load on 2 ranks (theory §4.6, §12.4): the perfectly plastic
+/// homogeneous cube (`examples/homogeneous.toml` with h = 0) pressed with F = 2 = 1.63 F_lim
+/// (F_lim = √(3/2) k₀, theory §7.1) has no solution; uzawa's escape test and the penalty's
+/// regularisation share, judged on sums over the ranks, end every rank with the collapse, as on
+/// one machine (tests/collapse.rs), never with a number.
+#[test]
+fn a_punch_force_beyond_collapse_is_reported_on_two_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/homogeneous.toml");
+    let text = std::fs::read_to_string(example).unwrap();
+    assert!(text.contains("h = 5.0") && text.contains("F = 2.0"), "the example changed");
+    let file = dir.path().join("collapse.toml");
+    std::fs::write(&file, text.replace("h = 5.0", "h = 0.0")).unwrap();
+    let out = dir.path().join("out");
+    for solver in ["uzawa", "penalty"] {
+        let args = ["run", file.to_str().unwrap(), "--solver", solver, "--out", out.to_str().unwrap()];
+        fails_everywhere(2, &args, &format!("{solver}: the load exceeds what the body can carry"));
+    }
+}

@@ -52,7 +52,7 @@ pub use problem::displacements::{
     AdmissibleDisplacements, ConstraintRows, ContactReport, contact_set, normal_contact_set,
 };
 pub use problem::elasticity::Elasticity;
-pub use problem::energies::{dual_energy, energy, energy_of_strain, stress_energy};
+pub use problem::energies::{dual_energy, energy, energy_of_strain, energy_of_stress, stress_energy};
 pub use problem::fields::{Hardening, PlasticState, StressField};
 pub use problem::friction::{FrictionBlock, FrictionLaw, FrictionRows};
 pub use problem::kkt::{KktResiduals, kkt, kkt_with_stress};

@@ -154,6 +154,9 @@ impl ElementOperators for DistributedElement {
     fn comm(&self) -> &dyn Comm {
         &self.comm
     }
+    fn is_distributed(&self) -> bool {
+        true
+    }
     fn distributed_solver(&self) -> Option<Result<Box<dyn DistributedSpd>, DistributedError>> {
         Some(
             PetscSpd::new(self.session.get(), self.layout.clone())

@@ -45,4 +45,4 @@ pub use newton::{Newton, Start};
 pub use penalty::Penalty;
 #[cfg(feature = "socp")]
 pub use socp::Socp;
-pub use uzawa::{Uzawa, UzawaMetric};
+pub use uzawa::{Uzawa, UzawaAcceleration, UzawaMetric};

@@ -331,7 +331,7 @@ impl Newton {
                 guard.reset();
             } else if guard.stalled(r, run.state.it)
                 && run.can_fall_back()
-                && run.fall_back(robust_start.as_ref(), monitor, timer)
+                && run.fall_back(robust_start.as_ref(), monitor, timer)?
             {
                 guard.reset();
                 continue;
@@ -341,7 +341,7 @@ impl Newton {
             let step = match run.solve(r, timer) {
                 Ok(step) => step,
                 Err(e) if caused_by_the_active_set(&e) && run.can_fall_back() => {
-                    if !run.fall_back(robust_start.as_ref(), monitor, timer) {
+                    if !run.fall_back(robust_start.as_ref(), monitor, timer)? {
                         return Err(run.collapse_or(e));
                     }
                     guard.reset();
@@ -505,7 +505,7 @@ impl<'a> Run<'a> {
         monitor.phase("analysis");
         let mut count = Counts::default();
         let c_elastic = l.data.elasticity.stiffness_matrix();
-        if l.distributed_solver().is_some() {
+        if l.is_distributed() {
             return Self::set_up_distributed(settings, l, start, name, count, timer);
         }
         // a warm start may take the set-up the previous step kept (a load path, theory §11.2)
@@ -823,14 +823,30 @@ impl<'a> Run<'a> {
     /// The globalisation (theory §4.2.1): a bounded run of the penalty method from the solve's
     /// `start` gives the next iterate (u, V, λ), converged or not; Newton goes on from it with
     /// the active set its λ and gaps give. Counts as one iteration. False when the penalty
-    /// method failed with an error (nothing to go on from; the fallback is counted all the same).
-    fn fall_back(&mut self, start: Option<&Start>, monitor: &mut dyn Monitor, timer: &mut PhaseTimer) -> bool {
+    /// method failed with an error (nothing to go on from; the fallback is counted all the same);
+    /// its finding of a load beyond collapse (theory §4.6) is Newton's error.
+    fn fall_back(
+        &mut self,
+        start: Option<&Start>,
+        monitor: &mut dyn Monitor,
+        timer: &mut PhaseTimer,
+    ) -> Result<bool, SolveError> {
         let settings = self.settings;
         let tol = settings.tol.max(Penalty::default().tol);
         let robust = robust_steps(self.l, start, tol, settings.fallback_max_iter, monitor, timer);
         self.count.fallbacks += 1;
-        let Ok(robust) = robust else {
-            return false;
+        let robust = match robust {
+            Ok(robust) => robust,
+            Err(SolveError::BeyondCollapse { solver, evidence }) => {
+                return Err(SolveError::BeyondCollapse {
+                    solver: self.name.into(),
+                    evidence: format!(
+                        "at iteration {}, fallback {} on the {solver} method found it (theory §4.2.1): {evidence}",
+                        self.state.it, self.count.fallbacks
+                    ),
+                });
+            }
+            Err(_) => return Ok(false),
         };
         self.count.fallback_iterations += robust.report.iterations;
         let s = &mut self.state;
@@ -840,7 +856,7 @@ impl<'a> Run<'a> {
         s.elastic_phase = false;
         s.it += 1;
         self.cold = false;
-        true
+        Ok(true)
     }
 
     /// The error `e` of a step, or the collapse it shows (theory §4.2.1): a plastic tangent that

@@ -40,6 +40,7 @@ use crate::linear::{self, InSolver};
 use crate::local_law::{IterateMut, local_law_and_residual};
 use crate::residual::History;
 use crate::warm_start::warm_solve;
+use saddle_core::energy_of_stress;
 use saddle_core::error::{ParameterError, check};
 use saddle_core::linalg::SparseCholesky;
 use saddle_core::problem::fields::StressField;
@@ -61,6 +62,17 @@ pub enum UzawaMetric {
     Strain,
 }
 
+/// The acceleration of the projected gradient step (theory §4.1, acceleration).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum UzawaAcceleration {
+    /// The plain step from the iterate: the paper's method.
+    None,
+    /// Nesterov's momentum (FISTA) with adaptive restart and a monotone safeguard (default; for
+    /// ρ ≤ 1, the plain step above).
+    Fista,
+}
+
 /// `type = "uzawa"`: the paper's Uzawa / Arrow–Hurwicz method (theory §4.1).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -76,11 +88,20 @@ pub struct Uzawa {
     pub tol: f64,
     /// Iteration budget.
     pub max_iter: usize,
+    /// The acceleration: FISTA with restart (default) or none.
+    pub acceleration: UzawaAcceleration,
 }
 
 impl Default for Uzawa {
     fn default() -> Self {
-        Self { rho: 1.0, metric: UzawaMetric::Energy, extra_metric: 0.0, tol: 1e-8, max_iter: 20_000 }
+        Self {
+            rho: 1.0,
+            metric: UzawaMetric::Energy,
+            extra_metric: 0.0,
+            tol: 1e-8,
+            max_iter: 20_000,
+            acceleration: UzawaAcceleration::Fista,
+        }
     }
 }
 
@@ -97,6 +118,16 @@ pub const DIVERGENCE_GROWTH: f64 = 10.0;
 /// Steps below this fraction of the first one are round-off: the smallest step is floored
 /// there, so that tiny steps of a converging iteration are not taken for growth.
 pub const STEP_ROUND_OFF: f64 = 1e-12;
+
+/// The accelerated step needs ρ at most this (theory §4.1, acceleration: FISTA's step 1/L).
+pub const ACCELERATION_RHO_BOUND: f64 = 1.0;
+
+/// The safeguard's round-off (theory §4.1, acceleration): J is summed over every point and dof,
+/// so its value wanders by a few 1e-15 of its terms between iterates that differ by less
+/// (measured on the perfectly plastic P2 strip near its solution: rises up to 1.2e-15 on
+/// J = 0.18, where this allowance is 3.7e-14); a rise
+/// below this fraction of |J| + |u·Bᵀσ̂| is not a rise.
+pub const ENERGY_ROUND_OFF: f64 = 1e-13;
 
 /// The first iteration at which divergence is judged: the test compares the last step with the
 /// smallest one after the first, so it needs steps 1 and 2.
@@ -170,9 +201,12 @@ impl Uzawa {
             if let Some(stop) = run.stop(r)? {
                 break (stop, kkt);
             }
+            run.safeguard();
+            run.extrapolate();
             run.gradient_step();
             run.project()?;
             run.measure_step();
+            run.restart_test();
             run.advance();
         };
         Ok(run.finish(stop, kkt))
@@ -184,6 +218,12 @@ impl Uzawa {
             UzawaMetric::Energy => (law.stiffness_matrix(), 1.0),
             UzawaMetric::Strain => (SymOp::identity(), law.max_eigenvalue()),
         }
+    }
+
+    /// The momentum is used: FISTA asked for, with ρ within its bound (theory §4.1,
+    /// acceleration).
+    fn accelerated(&self) -> bool {
+        self.acceleration == UzawaAcceleration::Fista && self.rho <= ACCELERATION_RHO_BOUND
     }
 }
 
@@ -201,6 +241,13 @@ struct State {
     stress: StressField,
     /// Iterations done.
     it: usize,
+    /// The momentum of the accelerated step (theory §4.1, acceleration): FISTA's tₖ, 1 after a
+    /// restart.
+    t: f64,
+    /// The extrapolation factor βₙ of the last step (0: the plain step).
+    beta: f64,
+    /// J(xⁿ) of the last accepted iterate (+∞ before the first).
+    energy: f64,
 }
 
 /// What the divergence and stagnation tests of theory §4.1 watch. For ρ < 2 the iteration map
@@ -227,6 +274,12 @@ struct Watch {
 /// What an Uzawa run counts for its report.
 #[derive(Default)]
 struct Counts {
+    /// Steps taken from an extrapolated point (β > 0).
+    momentum_steps: usize,
+    /// Restarts of the momentum by the gradient test.
+    restarts: usize,
+    /// Momentum steps rejected by the safeguard (J rose) and replaced by the plain step.
+    rejected_steps: usize,
     /// Symbolic analyses of M's pattern.
     symbolic_analyses: usize,
     /// Numeric factorisations of M.
@@ -242,9 +295,17 @@ struct Scratch {
     ws: Workspace,
     /// The unprojected step z = uⁿ − ρM⁻¹Bᵀσⁿ⁺¹, then Gᵀμ.
     z: Vec<f64>,
-    /// The previous iterate (uⁿ, Vⁿ).
+    /// The point yⁿ the gradient step starts from (the iterate (uⁿ, Vⁿ) for the plain step).
     u_prev: Vec<f64>,
     v_prev: Vec<f64>,
+    /// The iterate xⁿ the step was taken from, λⁿ and ∇J(xⁿ), for the momentum and the safeguard
+    /// (empty without acceleration).
+    u_last: Vec<f64>,
+    v_last: Vec<f64>,
+    lambda_last: Vec<f64>,
+    force_last: Vec<f64>,
+    /// σ̂ at the extrapolated point.
+    stress_y: StressField,
     /// Hᵀμ (unused).
     ht_mu: Vec<f64>,
     /// The iterate (u, V) at the last escape mark.
@@ -255,13 +316,19 @@ struct Scratch {
 impl Scratch {
     /// The scratch of the stages for `l`, the escape mark at the iterate `start` (zero if
     /// `None`).
-    fn new(l: &Lagrangian<'_>, start: Option<&Start>) -> Self {
-        let (n, ne) = (l.n_dofs(), l.n_extras());
+    fn new(l: &Lagrangian<'_>, start: Option<&Start>, accelerated: bool) -> Self {
+        let (n, ne, nr) = (l.n_dofs(), l.n_extras(), l.n_rows());
+        let k = usize::from(accelerated);
         Self {
             ws: Workspace::new(l),
             z: vec![0.0; n],
             u_prev: vec![0.0; n],
             v_prev: vec![0.0; ne],
+            u_last: vec![0.0; n * k],
+            v_last: vec![0.0; ne * k],
+            lambda_last: vec![0.0; nr * k],
+            force_last: vec![0.0; n * k],
+            stress_y: StressField::new(l.n_points() * k, l.data.hardening_dim()),
             ht_mu: vec![0.0; ne],
             u_mark: start.map_or_else(|| vec![0.0; n], |s| s.u.clone()),
             v_mark: start.map_or_else(|| vec![0.0; ne], |s| s.extras.clone()),
@@ -308,7 +375,7 @@ impl<'a> Run<'a> {
         let mut count = Counts::default();
         let (metric, lip) = settings.metric(l.data.elasticity);
         let rho = settings.rho / lip;
-        let projector = if l.distributed_solver().is_some() {
+        let projector = if l.is_distributed() {
             Self::distributed(settings, l, &metric, rho, monitor, &mut timer)?
         } else {
             let mut chol = Self::factorise_metric(l, &metric, monitor, &mut timer, &mut count)?;
@@ -339,7 +406,7 @@ impl<'a> Run<'a> {
                 escaping: false,
             },
             count,
-            work: Scratch::new(l, start),
+            work: Scratch::new(l, start, settings.accelerated()),
             timer,
             history: History::new("uzawa", settings.tol),
         })
@@ -401,6 +468,9 @@ impl<'a> Run<'a> {
             lambda: vec![0.0; nr],
             stress: StressField::new(l.n_points(), l.data.hardening_dim()),
             it: 0,
+            t: 1.0,
+            beta: 0.0,
+            energy: f64::INFINITY,
         };
         if let Some(st) = start {
             s.u.copy_from_slice(&st.u);
@@ -436,7 +506,9 @@ impl<'a> Run<'a> {
         if r < wt.best.0 {
             wt.best = (r, it);
         }
-        self.divergence_guard(r)?;
+        if !self.settings.accelerated() {
+            self.divergence_guard(r)?;
+        }
         self.escape_guard(r)?;
         Ok(if it >= self.settings.max_iter {
             Some(StopReason::MaxIterations)
@@ -503,6 +575,71 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
+    /// Stage 2b (theory §4.1, acceleration): J(xⁿ) from the local law's output; a momentum step
+    /// that raised J is rejected — the iterate goes back to xⁿ⁻¹, the one it was taken from,
+    /// with its λ and gradient, and the momentum restarts, so the next step is the plain one.
+    fn safeguard(&mut self) {
+        if !self.settings.accelerated() {
+            return;
+        }
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        let j = energy_of_stress(l, &s.u, &s.v, &s.stress, &w.ws.force);
+        // J's round-off: its largest term u·Bᵀσ̂ and J itself, times ENERGY_ROUND_OFF
+        let work = l.comm().sum(s.u.iter().zip(&w.ws.force).map(|(x, f)| x * f).sum::<f64>());
+        let round_off = ENERGY_ROUND_OFF * (j.abs() + work.abs());
+        if s.beta > 0.0 && j > s.energy + round_off {
+            s.u.copy_from_slice(&w.u_last);
+            s.v.copy_from_slice(&w.v_last);
+            s.lambda.copy_from_slice(&w.lambda_last);
+            for (m, x) in s.mu.iter_mut().zip(&s.lambda) {
+                *m = self.rho * x;
+            }
+            w.ws.force.copy_from_slice(&w.force_last);
+            s.t = 1.0;
+            self.count.rejected_steps += 1;
+        } else {
+            s.energy = j;
+        }
+    }
+
+    /// Stage 2c (theory §4.1, acceleration): the point of the gradient step,
+    /// yⁿ = xⁿ + βₙ(xⁿ − xⁿ⁻¹) with FISTA's βₙ = (tₙ − 1)/tₙ₊₁, tₙ₊₁ = (1 + √(1 + 4tₙ²))/2, and
+    /// ∇J(yⁿ) by the local law at yⁿ into `ws.force`; xⁿ, λⁿ and ∇J(xⁿ) are kept for the
+    /// safeguard. The plain step (β = 0, after a restart) needs no second local law.
+    fn extrapolate(&mut self) {
+        if !self.settings.accelerated() {
+            return;
+        }
+        let (l, s, w) = (self.l, &mut self.state, &mut self.work);
+        let t_next = 0.5 * (1.0 + (1.0 + 4.0 * s.t * s.t).sqrt());
+        s.beta = (s.t - 1.0) / t_next;
+        s.t = t_next;
+        w.lambda_last.copy_from_slice(&s.lambda);
+        if s.beta == 0.0 {
+            w.u_last.copy_from_slice(&s.u);
+            w.v_last.copy_from_slice(&s.v);
+            return;
+        }
+        let beta = s.beta;
+        for (x, last) in s.u.iter_mut().zip(w.u_last.iter_mut()).chain(s.v.iter_mut().zip(w.v_last.iter_mut())) {
+            let xn = *x;
+            *x += beta * (xn - *last);
+            *last = xn;
+        }
+        w.force_last.copy_from_slice(&w.ws.force);
+        let projected = self.timer.time("local law", || {
+            l.strain(&s.u, &mut w.ws.eps);
+            let law = l.data.local_law(&w.ws.eps, &mut w.stress_y, None);
+            l.divergence(&w.stress_y.sigma, &mut w.ws.force);
+            for (f, b) in w.ws.force.iter_mut().zip(l.data.nodal_load) {
+                *f -= b;
+            }
+            law.projected
+        });
+        self.count.return_mappings += projected;
+        self.count.momentum_steps += 1;
+    }
+
     /// Stage 3 (theory §4.1 step 2, the gradient step): z = uⁿ − ρM⁻¹Bᵀσ̂ⁿ⁺¹ by one triangular
     /// solve pair with the factorised M (`ws.force` holds Bᵀσ̂ⁿ⁺¹); the distributed projection
     /// needs no z.
@@ -563,13 +700,37 @@ impl<'a> Run<'a> {
         };
         let dv_m_dv: f64 = weights.iter().zip(s.v.iter().zip(&w.v_prev)).map(|(m, (a, b))| m * (a - b) * (a - b)).sum();
         wt.last_step = (du_m_du + dv_m_dv).max(0.0).sqrt();
-        let du2: f64 = s.u.iter().zip(&w.u_prev).map(|(a, b)| (a - b).powi(2)).sum();
-        let dv2: f64 = s.v.iter().zip(&w.v_prev).map(|(a, b)| (a - b).powi(2)).sum();
+        // the path runs over the iterates: from xⁿ, which is yⁿ unless the step was accelerated
+        let (u_from, v_from) =
+            if self.settings.accelerated() { (&w.u_last, &w.v_last) } else { (&w.u_prev, &w.v_prev) };
+        let du2: f64 = s.u.iter().zip(u_from).map(|(a, b)| (a - b).powi(2)).sum();
+        let dv2: f64 = s.v.iter().zip(v_from).map(|(a, b)| (a - b).powi(2)).sum();
         wt.path += (self.l.comm().sum(du2) + dv2).sqrt();
         if s.it == 0 {
             wt.first_step = wt.last_step;
         } else {
             wt.smallest_step = wt.smallest_step.min(wt.last_step);
+        }
+    }
+
+    /// Stage 5b (theory §4.1, acceleration; O'Donoghue & Candès 2015): the momentum restarts
+    /// when the step from yⁿ points against the motion, (yⁿ − xⁿ⁺¹)ᵀ diag(M, m) (xⁿ⁺¹ − xⁿ) > 0,
+    /// with M(uⁿ⁺¹ − yⁿ) = Gᵀμ − ρ∇J(yⁿ) from stage 5 (`z` holds Gᵀμ).
+    fn restart_test(&mut self) {
+        if !self.settings.accelerated() {
+            return;
+        }
+        let (rho, s, w) = (self.rho, &mut self.state, &self.work);
+        let du: f64 = (0..s.u.len()).map(|j| (w.z[j] - rho * w.ws.force[j]) * (s.u[j] - w.u_last[j])).sum();
+        let weights = match &self.projector {
+            Projector::Serial { proj: Some(p), .. } => p.extra_weights(),
+            _ => &[],
+        };
+        let dv: f64 =
+            (weights.iter().enumerate()).map(|(k, m)| m * (s.v[k] - w.v_prev[k]) * (s.v[k] - w.v_last[k])).sum();
+        if self.l.comm().sum(du) + dv < 0.0 {
+            s.t = 1.0;
+            self.count.restarts += 1;
         }
     }
 
@@ -600,6 +761,9 @@ impl<'a> Run<'a> {
         put("triangular_solve_pairs", c.solves as f64);
         put("qp_factorisations", proj.map_or(0, |p| p.qp_work().1) as f64);
         put("return_mappings", self.l.comm().sum_count(c.return_mappings) as f64);
+        put("momentum_steps", c.momentum_steps as f64);
+        put("momentum_restarts", c.restarts as f64);
+        put("rejected_steps", c.rejected_steps as f64);
         let distributed = matches!(self.projector, Projector::Distributed(_));
         put("contact_structures", (proj.is_some() || distributed) as u8 as f64);
         put("delassus_columns_kept", proj.is_some_and(|p| p.keeps_delassus_columns()) as u8 as f64);
@@ -611,7 +775,15 @@ impl<'a> Run<'a> {
             put("krylov_iterations", iterations as f64);
             put("krylov_unconverged", unconverged as f64);
         }
-        let slow = self.slow_convergence(stop, kkt.max());
+        let mut slow: Vec<String> = self.slow_convergence(stop, kkt.max()).into_iter().collect();
+        let s = self.settings;
+        if s.acceleration == UzawaAcceleration::Fista && !s.accelerated() {
+            slow.push(format!(
+                "uzawa ran without acceleration: solver.acceleration = \"fista\" needs rho <= {ACCELERATION_RHO_BOUND} \
+                 (FISTA's step 1/L, theory §4.1), and rho = {}",
+                s.rho
+            ));
+        }
         let State { u, v, lambda, stress, it, .. } = self.state;
         let mut report = self.history.report(stop, it, kkt, self.timer.into_phases(), counters);
         report.warnings.extend(slow);

@@ -74,10 +74,25 @@ pub fn stress_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
 /// solution: J − dual is the duality gap.
 pub fn dual_energy(l: &Lagrangian<'_>, stress: &StressField, lambda: &[f64]) -> f64 {
     let c = &l.data.rows.offset;
+    let work = l.comm().sum(lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>());
+    -(complementary_energy(l, stress) + work)
+}
+
+/// ½[σ̂, σ̂] (theory §3 form 3); from a step's state ½[σ̂, σ̂]_n + (ε_p, σ) (theory §11.1).
+fn complementary_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
     let prestrain: f64 = l.data.state.map_or(0.0, |st| {
         let w = l.weights();
         l.comm().sum((0..stress.len()).into_par_iter().map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum())
     });
-    let work = l.comm().sum(lambda.iter().zip(c).map(|(l, c)| l * c).sum::<f64>());
-    -(stress_energy(l, stress) + prestrain + work)
+    stress_energy(l, stress) + prestrain
+}
+
+/// J(u, V) from the local law's output at u, without running it again (theory §2.3:
+/// ψ(ε) = ε:σ − ½[σ̂, σ̂] at σ̂ = P_D(Cε, 0); from a step's state ψ_n = (ε − ε_p):σ − ½[σ̂, σ̂]_n):
+/// with `force` = Bᵀσ̂ − f_u, Σ_T |T| ε(u):σ = u·Bᵀσ̂, so J = u·force − f·V − ½[σ̂, σ̂]_n − (ε_p, σ).
+/// Equals [`energy`] when `stress` is the local law's at u.
+pub fn energy_of_stress(l: &Lagrangian<'_>, u: &[f64], extras: &[f64], stress: &StressField, force: &[f64]) -> f64 {
+    l.comm().sum(u.iter().zip(force).map(|(x, f)| x * f).sum::<f64>())
+        - l.data.load.iter().zip(extras).map(|(f, v)| f * v).sum::<f64>()
+        - complementary_energy(l, stress)
 }

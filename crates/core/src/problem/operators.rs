@@ -133,4 +133,10 @@ pub trait ElementOperators: Debug + Send + Sync {
     fn distributed_solver(&self) -> Option<Result<Box<dyn DistributedSpd>, DistributedError>> {
         None
     }
+
+    /// Whether this is a rank's part of a distributed problem (theory §12): solvers choose their
+    /// distributed linear algebra by it, without building [`ElementOperators::distributed_solver`].
+    fn is_distributed(&self) -> bool {
+        false
+    }
 }

@@ -115,7 +115,7 @@ impl PenaltySystem {
         let c_el = l.data.elasticity.stiffness_matrix();
         let mut kprime = l.stiffness(Material::Uniform(&c_el));
         let mut symbolic_analyses = 0;
-        let (slaves, row_stiffness, linear) = if l.distributed_solver().is_some() {
+        let (slaves, row_stiffness, linear) = if l.is_distributed() {
             let mut system = DistributedSystem::new(l, "penalty")?;
             let row_stiffness = system.row_stiffness(l, &kprime)?;
             (system.basis().clone(), row_stiffness, Linear::Distributed(system))
