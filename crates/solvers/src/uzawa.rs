@@ -66,10 +66,10 @@ pub enum UzawaMetric {
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum UzawaAcceleration {
-    /// The plain step from the iterate: the paper's method.
+    /// The plain step from the iterate: the paper's method (default).
     None,
-    /// Nesterov's momentum (FISTA) with adaptive restart and a monotone safeguard (default; for
-    /// ρ ≤ 1, the plain step above).
+    /// Nesterov's momentum (FISTA) with adaptive restart and a monotone safeguard (for ρ ≤ 1;
+    /// not the default: theory §4.1, acceleration, names the case it fails).
     Fista,
 }
 
@@ -88,7 +88,7 @@ pub struct Uzawa {
     pub tol: f64,
     /// Iteration budget.
     pub max_iter: usize,
-    /// The acceleration: FISTA with restart (default) or none.
+    /// The acceleration: none (default) or FISTA with restart.
     pub acceleration: UzawaAcceleration,
 }
 
@@ -100,7 +100,7 @@ impl Default for Uzawa {
             extra_metric: 0.0,
             tol: 1e-8,
             max_iter: 20_000,
-            acceleration: UzawaAcceleration::Fista,
+            acceleration: UzawaAcceleration::None,
         }
     }
 }
@@ -203,8 +203,7 @@ impl Uzawa {
             }
             run.safeguard();
             run.extrapolate();
-            run.gradient_step();
-            run.project()?;
+            run.step_and_project()?;
             run.measure_step();
             run.restart_test();
             run.advance();
@@ -588,17 +587,40 @@ impl<'a> Run<'a> {
         let work = l.comm().sum(s.u.iter().zip(&w.ws.force).map(|(x, f)| x * f).sum::<f64>());
         let round_off = ENERGY_ROUND_OFF * (j.abs() + work.abs());
         if s.beta > 0.0 && j > s.energy + round_off {
-            s.u.copy_from_slice(&w.u_last);
-            s.v.copy_from_slice(&w.v_last);
-            s.lambda.copy_from_slice(&w.lambda_last);
-            for (m, x) in s.mu.iter_mut().zip(&s.lambda) {
-                *m = self.rho * x;
-            }
-            w.ws.force.copy_from_slice(&w.force_last);
-            s.t = 1.0;
-            self.count.rejected_steps += 1;
+            self.reject_momentum();
         } else {
             s.energy = j;
+        }
+    }
+
+    /// A momentum step thrown away (theory §4.1, acceleration): the iterate goes back to the
+    /// point xⁿ it was taken from, with its λ and ∇J(xⁿ), and the momentum restarts.
+    fn reject_momentum(&mut self) {
+        let (s, w) = (&mut self.state, &mut self.work);
+        s.u.copy_from_slice(&w.u_last);
+        s.v.copy_from_slice(&w.v_last);
+        s.lambda.copy_from_slice(&w.lambda_last);
+        for (m, x) in s.mu.iter_mut().zip(&s.lambda) {
+            *m = self.rho * x;
+        }
+        w.ws.force.copy_from_slice(&w.force_last);
+        (s.t, s.beta) = (1.0, 0.0);
+        self.count.rejected_steps += 1;
+    }
+
+    /// Stages 3–4 from the extrapolated point yⁿ; when K_h's projection fails from there (its
+    /// warm start infeasible for the extras' equality constraints), the momentum step is
+    /// rejected and the plain step taken from xⁿ, whose projection the unaccelerated method
+    /// needs anyway (theory §4.1, acceleration).
+    fn step_and_project(&mut self) -> Result<(), SolveError> {
+        self.gradient_step();
+        match self.project() {
+            Err(_) if self.settings.accelerated() && self.state.beta > 0.0 => {
+                self.reject_momentum();
+                self.gradient_step();
+                self.project()
+            }
+            r => r,
         }
     }
 
