@@ -68,7 +68,7 @@ pub fn write_piece(
     // with friction (theory §8.3): 0 separated, 1 stick, 2 slip at each node (0 off the rows)
     if l.data.rows.has_friction() {
         let mut status = vec![0.0; mesh.n_nodes()];
-        for (n, s) in saddle_core::problem::friction::contact_status(l.data.rows, &sol.lambda) {
+        for (n, s) in saddle_core::problem::displacements::contact_status(l.data.rows, &sol.lambda) {
             status[n] = f64::from(s as u8);
         }
         arrays.push(("point", "contact_status", 1, f64_bytes(status.into_iter())));

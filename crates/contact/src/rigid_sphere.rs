@@ -38,7 +38,8 @@ use crate::zone::node_areas_facing;
 use crate::zone::{Selection, candidate_nodes_with, rim_rows_facing, rim_warning};
 use saddle_core::error::{check, join};
 use saddle_core::mesh::signed_volume;
-use saddle_core::problem::friction::{ContactStatus, contact_status};
+use saddle_core::problem::displacements::contact_status;
+use saddle_core::problem::friction::ContactStatus;
 use saddle_core::{
     AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionBlock, FrictionLaw, ParameterError, Region,
     SceneError, TetMesh, normal_contact_set,

@@ -9,7 +9,7 @@
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
-use crate::problem::friction::FrictionRows;
+use crate::problem::friction::{ContactStatus, FrictionRows, SLIP_TOL};
 use std::borrow::Cow;
 use std::fmt::Debug;
 
@@ -210,3 +210,24 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
 }
 
 dyn_clone::clone_trait_object!(AdmissibleDisplacements);
+
+/// (node, status) of every friction block (theory §8.3) of `rows` for the multipliers `lambda`.
+pub fn contact_status(rows: &ConstraintRows, lambda: &[f64]) -> Vec<(usize, ContactStatus)> {
+    let mut in_contact = vec![false; rows.n_rows()];
+    normal_contact_set(rows, lambda).into_iter().for_each(|i| in_contact[i] = true);
+    let fr = &rows.friction;
+    fr.blocks
+        .iter()
+        .map(|b| {
+            let r = fr.law(b).radius(b.weight, lambda[b.normal]);
+            let status = if !in_contact[b.normal] {
+                ContactStatus::Separated
+            } else if lambda[b.tangent].hypot(lambda[b.tangent + 1]) < (1.0 - SLIP_TOL) * r {
+                ContactStatus::Stick
+            } else {
+                ContactStatus::Slip
+            };
+            (rows.node[b.normal], status)
+        })
+        .collect()
+}

@@ -185,33 +185,12 @@ pub const SLIP_TOL: f64 = 1e-6;
 /// disc's radius by more than [`SLIP_TOL`] of it) or slipping (on the rim).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ContactStatus {
-    /// Not in contact (its normal row not in [`crate::normal_contact_set`]): 0.
+    /// Not in contact (its normal row not in the normal contact set): 0.
     Separated = 0,
     /// In contact, |λ_t| inside the disc: 1.
     Stick = 1,
     /// In contact, |λ_t| on the disc's rim: 2.
     Slip = 2,
-}
-
-/// (node, status) of every friction block of `rows` for the multipliers `lambda`.
-pub fn contact_status(rows: &crate::ConstraintRows, lambda: &[f64]) -> Vec<(usize, ContactStatus)> {
-    let mut in_contact = vec![false; rows.n_rows()];
-    crate::normal_contact_set(rows, lambda).into_iter().for_each(|i| in_contact[i] = true);
-    let fr = &rows.friction;
-    fr.blocks
-        .iter()
-        .map(|b| {
-            let r = fr.law(b).radius(b.weight, lambda[b.normal]);
-            let status = if !in_contact[b.normal] {
-                ContactStatus::Separated
-            } else if lambda[b.tangent].hypot(lambda[b.tangent + 1]) < (1.0 - SLIP_TOL) * r {
-                ContactStatus::Stick
-            } else {
-                ContactStatus::Slip
-            };
-            (rows.node[b.normal], status)
-        })
-        .collect()
 }
 
 /// The friction part of the natural residual of an iterate (theory §8.3): for each block
