@@ -203,7 +203,8 @@ impl Uzawa {
             }
             run.safeguard();
             run.extrapolate();
-            run.step_and_project()?;
+            run.gradient_step();
+            run.project()?;
             run.measure_step();
             run.restart_test();
             run.advance();
@@ -606,22 +607,6 @@ impl<'a> Run<'a> {
         w.ws.force.copy_from_slice(&w.force_last);
         (s.t, s.beta) = (1.0, 0.0);
         self.count.rejected_steps += 1;
-    }
-
-    /// Stages 3–4 from the extrapolated point yⁿ; when K_h's projection fails from there (its
-    /// warm start infeasible for the extras' equality constraints), the momentum step is
-    /// rejected and the plain step taken from xⁿ, whose projection the unaccelerated method
-    /// needs anyway (theory §4.1, acceleration).
-    fn step_and_project(&mut self) -> Result<(), SolveError> {
-        self.gradient_step();
-        match self.project() {
-            Err(_) if self.settings.accelerated() && self.state.beta > 0.0 => {
-                self.reject_momentum();
-                self.gradient_step();
-                self.project()
-            }
-            r => r,
-        }
     }
 
     /// Stage 2c (theory §4.1, acceleration): the point of the gradient step,
