@@ -13,6 +13,7 @@ use saddle::io::summary::Summary;
 use saddle::studies::bench;
 use saddle::studies::report::{self, Progress, ReportOptions};
 use saddle_core::Monitor;
+use saddle_core::{ParameterError, SceneError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -46,6 +47,10 @@ enum Command {
         /// Use this finite element (`p1`, `p2`) instead of the scene's `[discretisation]`.
         #[arg(long)]
         discretisation: Option<String>,
+        /// Cells per axis NX,NY,NZ instead of the scene's `mesh.cells` (a `box` mesh; with
+        /// `mesh.base`, a level of its family).
+        #[arg(long, value_delimiter = ',', value_name = "NX,NY,NZ")]
+        cells: Option<Vec<usize>>,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -288,18 +293,33 @@ fn print_summary(s: &Summary) {
     }
 }
 
-fn run(
-    scene: PathBuf,
-    out: Option<PathBuf>,
-    solver: Option<String>,
-    element: Option<String>,
-    quiet: bool,
-) -> Result<ExitCode, RunError> {
+/// `saddle run`'s replacements of the scene's solver, element and cell counts.
+type Overrides = (Option<String>, Option<String>, Option<Vec<usize>>);
+
+/// The counts of `--cells`: three, each at least 1 (the scene checks them against its mesh).
+fn cell_counts(cells: Option<&[usize]>) -> Result<Option<[usize; 3]>, RunError> {
+    cells
+        .map(|c| {
+            <[usize; 3]>::try_from(c).map_err(|_| {
+                let value = c.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
+                SceneError::from(ParameterError::new("--cells", value, "needs three counts NX,NY,NZ")).into()
+            })
+        })
+        .transpose()
+}
+
+fn run(scene: PathBuf, out: Option<PathBuf>, overrides: Overrides, quiet: bool) -> Result<ExitCode, RunError> {
+    let (solver, element, cells) = overrides;
     let element = element.as_deref().map(element_by_type).transpose()?;
+    let cells = cell_counts(cells.as_deref())?;
     let loaded = load_with(&scene, solver.as_deref(), |s| {
         if let Some(e) = element {
             s.discretisation = Some(e);
         }
+        if let Some(c) = cells {
+            *s = s.with_cells(c)?;
+        }
+        Ok(())
     })?;
     if !quiet {
         eprintln!(
@@ -492,8 +512,8 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Run { scene, out, solver, discretisation, quiet } => {
-            run(scene, out, solver, discretisation, quiet).map_err(|e| e.to_string())
+        Command::Run { scene, out, solver, discretisation, cells, quiet } => {
+            run(scene, out, (solver, discretisation, cells), quiet).map_err(|e| e.to_string())
         }
         Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
         Command::Sweep { scene, out, factors, solver, discretisation, x, y } => {
@@ -539,14 +559,18 @@ fn mpi_main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let Command::Run { scene, out, solver, discretisation, quiet } = cli.command else {
+    let Command::Run { scene, out, solver, discretisation, cells, quiet } = cli.command else {
         eprintln!("error: under mpirun saddle runs `saddle run` only; run the other commands without mpirun");
         return ExitCode::FAILURE;
     };
     let quiet = quiet || rank != 0;
-    let result = match mpi::load(&session, &scene, solver.as_deref(), discretisation.as_deref()) {
+    let loaded = cell_counts(cells.as_deref())
+        .and_then(|c| mpi::load(&session, &scene, solver.as_deref(), (discretisation.as_deref(), c)));
+    let result = match loaded {
         // one rank and a solver that runs on one rank only: as on one machine
-        Ok(loaded) if size == 1 && !loaded.solver.runs_distributed() => run(scene, out, solver, discretisation, quiet),
+        Ok(loaded) if size == 1 && !loaded.solver.runs_distributed() => {
+            run(scene, out, (solver, discretisation, cells), quiet)
+        }
         Ok(loaded) => {
             if !quiet {
                 eprintln!(

@@ -85,3 +85,41 @@ fn a_run_out_of_iterations_is_flagged_and_exits_non_zero() {
     assert_eq!(summary["stop_reason"], "max_iterations");
     assert!(summary["kkt_residual"].as_f64().unwrap() > 1e-8);
 }
+
+/// `--cells` is the scene with `mesh.cells` replaced: the same mesh, so the same U to round-off
+/// (a different mesh changes U in the third digit); bad counts are refused by name, nothing run.
+#[test]
+fn cells_on_the_command_line_are_the_scenes_mesh_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = example("johnson.toml");
+    set(&mut t, "mesh.grading.ratio", toml::Value::Float(2.0));
+    let full = dir.path().join("full.toml");
+    std::fs::write(&full, toml::to_string(&t).unwrap()).unwrap();
+    set(&mut t, "mesh.cells", toml::Value::try_from([6, 6, 3]).unwrap());
+    let edited = dir.path().join("edited.toml");
+    std::fs::write(&edited, toml::to_string(&t).unwrap()).unwrap();
+    let run = |scene: &std::path::Path, extra: &[&str], out: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+            .args(["run", scene.to_str().unwrap(), "--quiet", "--solver", "newton", "--out"])
+            .arg(dir.path().join(out))
+            .args(extra)
+            .output()
+            .unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let u = |out: &str| -> f64 {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join(out).join("summary.json")).unwrap()).unwrap();
+        s["U"].as_f64().unwrap()
+    };
+    assert_eq!(run(&full, &["--cells", "6,6,3"], "a").0, Some(0));
+    assert_eq!(run(&edited, &[], "b").0, Some(0));
+    assert!((u("a") - u("b")).abs() <= 1e-14 * u("b"), "{} against {}", u("a"), u("b"));
+    let (code, err) = run(&full, &["--cells", "6,6"], "c");
+    assert_eq!(code, Some(1));
+    assert!(err.contains("--cells") && err.contains("6,6"), "{err}");
+    let (code, err) = run(&full, &["--cells", "6,0,3"], "d");
+    assert_eq!(code, Some(1));
+    assert!(err.contains("mesh.cells[1]"), "{err}");
+    assert!(!dir.path().join("c").exists() && !dir.path().join("d").exists());
+}

@@ -174,6 +174,7 @@ pub fn run(
         if let Some(e) = element {
             s.discretisation = Some(e);
         }
+        Ok(())
     })?;
     let mut out = OutDir::claim(out_dir)?;
     let mut timer = loaded.timer.clone();

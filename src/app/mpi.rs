@@ -196,13 +196,13 @@ fn solver(scene: &Scene, solver_override: Option<&str>, ranks: usize) -> Result<
 
 /// Reads a scene under `mpirun` and distributes its problem (module docs): the scene file read by
 /// rank 0 and parsed by every rank (so that every rank holds the same plugins), `--discretisation`
-/// applied, the mesh read or built by rank 0 only, PETSc's options of `[solver.petsc]` inserted,
+/// and `--cells` applied, the mesh read or built by rank 0 only, PETSc's options of `[solver.petsc]` inserted,
 /// then [`distribute`]. Every stage's error is every rank's. Collective.
 pub fn load(
     session: &Petsc,
     scene_path: &Path,
     solver_override: Option<&str>,
-    discretisation: Option<&str>,
+    (discretisation, cells): (Option<&str>, Option<[usize; 3]>),
 ) -> Result<Loaded, RunError> {
     let mut ranks = MpiRanks {
         comm: MpiComm::new(session),
@@ -228,6 +228,9 @@ pub fn load(
         scene.base_dir = scene_path.parent().map(Path::to_path_buf).unwrap_or_default();
         if let Some(name) = discretisation {
             scene = scene.with_element(element_by_type(name)?);
+        }
+        if let Some(c) = cells {
+            scene = scene.with_cells(c)?;
         }
         let mesh = if root { Some(scene.build_mesh()?) } else { None };
         Ok((scene, mesh))

@@ -85,20 +85,20 @@ pub struct Loaded {
 
 /// Reads a scene, applies a `--solver` override, and assembles L.
 pub fn load(scene: &Path, solver_override: Option<&str>) -> Result<Loaded, RunError> {
-    load_with(scene, solver_override, |_| {})
+    load_with(scene, solver_override, |_| Ok(()))
 }
 
 /// [`load`], with `edit` applied to the scene after it is read (for example another mesh
-/// file, as `saddle bench --meshes` does); the time of the edit counts as `read`.
+/// file, as `saddle bench --meshes` does, or `--cells`); the time of the edit counts as `read`.
 pub fn load_with(
     scene: &Path,
     solver_override: Option<&str>,
-    edit: impl FnOnce(&mut Scene),
+    edit: impl FnOnce(&mut Scene) -> Result<(), SceneError>,
 ) -> Result<Loaded, RunError> {
     let mut timer = PhaseTimer::default();
     let (scene, mesh) = timer.time("read", || -> Result<_, RunError> {
         let mut scene = Scene::from_file(scene)?;
-        edit(&mut scene);
+        edit(&mut scene)?;
         let mesh = scene.build_mesh()?;
         Ok((scene, mesh))
     })?;

@@ -183,7 +183,11 @@ pub fn measure(
         let load_before = load_average();
         reset_peak_memory();
         let started = Instant::now();
-        let loaded = load_with(scene, None, |s| s.mesh = Box::new(GmshMesh::new(file))).map_err(fail)?;
+        let loaded = load_with(scene, None, |s| {
+            s.mesh = Box::new(GmshMesh::new(file));
+            Ok(())
+        })
+        .map_err(fail)?;
         let outcome = solve_and_write(&loaded, &out.join(&stem), &mut Silent).map_err(fail)?;
         let wall_s = started.elapsed().as_secs_f64();
         let s = outcome.summary;
