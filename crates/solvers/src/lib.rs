@@ -19,6 +19,7 @@ pub mod distributed_basis;
 pub mod distributed_projection;
 pub mod distributed_system;
 mod fallback;
+pub mod forcing;
 pub mod friction;
 pub mod friction_qp;
 pub mod kh_projection;
@@ -39,6 +40,7 @@ mod vector;
 mod warm_start;
 
 pub use active_set::LinearSolver;
+pub use forcing::ForcingRule;
 #[cfg(feature = "socp")]
 pub use limit::{Collapse, LimitAnalysis, LimitError};
 pub use newton::{Newton, Start};

@@ -46,6 +46,7 @@ use crate::active_set::{
 };
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
+use crate::forcing::{ForcingRule, ForcingTerms};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
@@ -96,6 +97,11 @@ pub struct Newton {
     /// [`CG_TOL_FLOOR`]). 1e-2 keeps the outer convergence quadratic to the end on the default
     /// scene while the first steps, far from the solution, cost few CG iterations.
     pub cg_forcing: f64,
+    /// How the forcing term follows Newton's progress (theory §4.2, [`ForcingRule`]):
+    /// `residual` (default, `cg_forcing · min(r, 1)`) or `eisenstat_walker` (η_max =
+    /// `cg_forcing`; fewer CG iterations on some scenes, more on others:
+    /// `docs/plastic_tangent.md`).
+    pub forcing: ForcingRule,
     /// CG iterations per solve before giving up on the forcing term (the last iterate is used
     /// and counted in `pcg_unconverged`). On the default scene a solve takes about ten (README:
     /// 263 for 12 Newton steps of two solves each): 2000 is a safety net, not a working limit.
@@ -211,6 +217,7 @@ impl Default for Newton {
             linear: LinearSolver::Auto,
             auto_amg_dofs: AUTO_AMG_DOFS,
             cg_forcing: 1e-2,
+            forcing: ForcingRule::default(),
             cg_max_iter: 2000,
             amg: AmgParams::default(),
             amg_refresh_cg: AMG_REFRESH_CG,
@@ -368,13 +375,9 @@ impl Newton {
     }
 
     /// The CG tolerance of the step from an iterate with KKT residual `r` (theory §4.2, linear
-    /// backends): the forcing term, or a margin below `tol` for a linear problem.
-    fn cg_tol(&self, r: f64, linear_problem: bool) -> f64 {
-        if linear_problem {
-            (LINEAR_CG_MARGIN * self.tol).max(CG_TOL_MIN)
-        } else {
-            (self.cg_forcing * r.min(1.0)).max(CG_TOL_FLOOR)
-        }
+    /// backends): the forcing term of `forcing`, or a margin below `tol` for a linear problem.
+    fn cg_tol(&self, forcing: &mut ForcingTerms, r: f64, linear_problem: bool) -> f64 {
+        if linear_problem { (LINEAR_CG_MARGIN * self.tol).max(CG_TOL_MIN) } else { forcing.next(r).max(CG_TOL_FLOOR) }
     }
 }
 
@@ -461,6 +464,8 @@ struct Run<'a> {
     work: Scratch,
     /// The KKT residual of every iterate.
     history: History,
+    /// The forcing terms of the linear solves (theory §4.2).
+    forcing: ForcingTerms,
 }
 
 /// Newton's linear systems: on one process the direct or multigrid backend, on a distributed
@@ -563,6 +568,7 @@ impl<'a> Run<'a> {
             count,
             work,
             history: History::new(name, settings.tol),
+            forcing: ForcingTerms::new(settings.forcing, settings.cg_forcing, settings.tol),
         })
     }
 
@@ -596,6 +602,7 @@ impl<'a> Run<'a> {
             count,
             work,
             history: History::new(name, settings.tol),
+            forcing: ForcingTerms::new(settings.forcing, settings.cg_forcing, settings.tol),
         })
     }
 
@@ -742,7 +749,7 @@ impl<'a> Run<'a> {
         let l = self.l;
         // a linear problem (no plasticity, no contact) is solved in one step to the tolerance
         let linear_problem = l.data.plasticity().is_none() && l.comm().sum_count(l.data.rows.n_rows()) == 0;
-        let cg_tol = self.settings.cg_tol(r, linear_problem);
+        let cg_tol = self.settings.cg_tol(&mut self.forcing, r, linear_problem);
         let (s, w) = (&self.state, &self.work);
         let step = match &mut self.system {
             Systems::Serial(system) => {

@@ -5,7 +5,7 @@ use saddle_contact::{Paraboloid, RigidPunch};
 use saddle_core::linalg::AmgParams;
 use saddle_core::{BoxMesh, Dirichlet, DiscreteProblem, Elasticity, PhaseTimer, Region, Silent, Solver, Workspace};
 use saddle_core::{P1P0Element, kkt};
-use saddle_solvers::{LinearSolver, Newton, Start, Uzawa};
+use saddle_solvers::{ForcingRule, LinearSolver, Newton, Start, Uzawa};
 
 mod common;
 use common::{SCALED, homogeneous};
@@ -71,6 +71,21 @@ fn amg_backend_agrees_with_the_direct_one() {
     assert_eq!((a.report.counters["factorisations"], a.report.counters["symbolic_analyses"]), (0.0, 0.0));
     assert!(a.report.counters["pcg_iterations"] > 0.0);
     assert!(kkt(&l.lagrangian(), &a.iterate(), &mut Workspace::new(&l.lagrangian())).max() <= 1e-11);
+}
+
+/// The Eisenstat–Walker forcing terms change how accurately each CG solve runs, not where Newton
+/// stops: the same solution as the direct backend, its KKT residual recomputed below `tol`.
+#[test]
+fn eisenstat_walker_forcing_reaches_the_direct_solution() {
+    let l = johnson(5.0);
+    let direct = Newton { tol: 1e-11, linear: LinearSolver::Direct, ..Newton::default() };
+    let ew =
+        Newton { tol: 1e-11, linear: LinearSolver::Amg, forcing: ForcingRule::EisenstatWalker, ..Newton::default() };
+    let (d, e) = (direct.solve(&l.lagrangian(), &mut Silent).unwrap(), ew.solve(&l.lagrangian(), &mut Silent).unwrap());
+    assert!(e.report.converged, "{:?}", e.report.residual_history);
+    assert!((d.extras[0] - e.extras[0]).abs() <= 1e-9 * d.extras[0], "{} vs {}", e.extras[0], d.extras[0]);
+    assert_eq!(d.stress.plastic, e.stress.plastic);
+    assert!(kkt(&l.lagrangian(), &e.iterate(), &mut Workspace::new(&l.lagrangian())).max() <= 1e-11);
 }
 
 #[test]
@@ -143,7 +158,7 @@ fn amg_settings_reach_the_backend() {
 fn settings_from_a_scene_table_and_invalid_values_name_the_field() {
     let s: Box<dyn Solver> = toml::from_str("type = \"newton\"").unwrap();
     assert_eq!((s.name(), s.tolerance()), ("newton", 1e-10));
-    let text = "type = \"newton\"\nlinear = \"amg\"\ncg_forcing = 0.1\ncg_max_iter = 100\nauto_amg_dofs = 5\n\
+    let text = "type = \"newton\"\nlinear = \"amg\"\ncg_forcing = 0.1\nforcing = \"eisenstat_walker\"\ncg_max_iter = 100\nauto_amg_dofs = 5\n\
                 [amg]\ncoarse_size = 500";
     let s: Box<dyn Solver> = toml::from_str(text).unwrap();
     assert!(s.validate("solver").is_ok());
