@@ -432,6 +432,9 @@ struct Scratch {
     tangents: Vec<SymOp>,
     /// The tangent stiffness on L's pattern.
     k: Vec<f64>,
+    /// `k` holds the elastic stiffness (assembled in the elastic phase, unchanged since): the
+    /// elastic phase's steps then reuse it.
+    k_is_elastic: bool,
     /// ∇J(u) (the elastic one in the elastic phase).
     grad: Vec<f64>,
     /// g(u, V).
@@ -442,6 +445,16 @@ struct Scratch {
     g_trial: Vec<f64>,
     /// Cε in the elastic phase (empty without one).
     elastic_sigma: Vec<Sym>,
+}
+
+impl Scratch {
+    /// `k` := the elastic stiffness, assembled unless `k` holds it already.
+    fn assemble_elastic(&mut self, l: &Lagrangian<'_>, c: &SymOp) {
+        if !self.k_is_elastic {
+            l.assemble(Material::Uniform(c), &mut self.k);
+            self.k_is_elastic = true;
+        }
+    }
 }
 
 /// One Newton solve: what it reads, its linear system, state, counters and scratch.
@@ -628,6 +641,7 @@ impl<'a> Run<'a> {
             ws: Workspace::new(l),
             tangents: vec![SymOp::zeros(); np],
             k: vec![0.0; l.pattern().nnz()],
+            k_is_elastic: false,
             grad: vec![0.0; n],
             gap: vec![0.0; nr],
             u_trial: vec![0.0; n],
@@ -724,12 +738,12 @@ impl<'a> Run<'a> {
     }
 
     /// Stage 4 (theory §4.2 step 3): the tangent K_t on L's pattern and the gradient ∇J(u) —
-    /// the elastic ones in the elastic phase.
+    /// the elastic ones in the elastic phase (K assembled once there: it does not change).
     fn assemble(&mut self, timer: &mut PhaseTimer) {
         let (l, c, w) = (self.l, &self.c_elastic, &mut self.work);
         if self.state.elastic_phase {
             timer.time("assembly", || {
-                l.assemble(Material::Uniform(c), &mut w.k);
+                w.assemble_elastic(l, c);
                 // C(ε − ε_p): the elastic response from the step's state (Cε without one)
                 l.data.elastic_stress(&w.ws.eps, &mut w.elastic_sigma);
                 l.divergence(&w.elastic_sigma, &mut w.grad);
@@ -739,6 +753,7 @@ impl<'a> Run<'a> {
             });
         } else {
             timer.time("assembly", || l.assemble(Material::PerPoint(&w.tangents), &mut w.k));
+            w.k_is_elastic = false;
             w.grad.copy_from_slice(&w.ws.force);
         }
     }
@@ -894,7 +909,7 @@ impl<'a> Run<'a> {
     /// body is held (an unrestrained body's stiffness is singular already; theory §4.2.1).
     fn elastic_tangent_is_regular(&mut self) -> bool {
         let (l, c, s, w) = (self.l, &self.c_elastic, &self.state, &mut self.work);
-        l.assemble(Material::Uniform(c), &mut w.k);
+        w.assemble_elastic(l, c);
         match &mut self.system {
             Systems::Serial(system) => system.step(l, &w.k, &s.active, &w.grad, &w.gap, CG_TOL_MIN).is_ok(),
             Systems::Distributed(system) => {
