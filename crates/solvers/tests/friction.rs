@@ -9,7 +9,7 @@ mod common;
 use common::{SCALED, johnson_with};
 use saddle_contact::{Coulomb, RigidSphere, Tresca};
 use saddle_core::FrictionLaw;
-use saddle_core::{DiscreteProblem, Solution, SolveError, Solver, Workspace, kkt};
+use saddle_core::{ConstraintRows, DiscreteProblem, Evolution, Silent, Solution, SolveError, Solver, Workspace, kkt};
 use saddle_solvers::{Newton, Penalty, Socp, Uzawa};
 
 /// The default scene's body (elastic, 8 × 8 × 4 cells) indented by a sphere of radius 5 moved
@@ -70,16 +70,22 @@ fn friction_conditions(p: &DiscreteProblem, sol: &Solution, bound: impl Fn(f64, 
     let rows = l.data.rows;
     let mut gap = vec![0.0; rows.n_rows()];
     rows.gap(&sol.u, &sol.extras, &mut gap);
-    let lam_s = sol.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    conditions(rows, &sol.lambda, &gap, bound)
+}
+
+/// The conditions of [`friction_conditions`] for the multipliers `lambda` and the rows' values
+/// `gap` (the normal rows' gaps and the tangential rows' slips).
+fn conditions(rows: &ConstraintRows, lambda: &[f64], gap: &[f64], bound: impl Fn(f64, f64) -> f64) -> f64 {
+    let lam_s = lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let s_s = gap.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let tangential = rows.friction.tangential_mask(rows.n_rows());
     let mut worst: f64 = 0.0;
     for i in (0..rows.n_rows()).filter(|&i| !tangential[i]) {
-        worst = worst.max((sol.lambda[i] / lam_s).min(gap[i] / s_s).abs());
+        worst = worst.max((lambda[i] / lam_s).min(gap[i] / s_s).abs());
     }
     for b in &rows.friction.blocks {
-        let (lt, s) = ([sol.lambda[b.tangent], sol.lambda[b.tangent + 1]], [gap[b.tangent], gap[b.tangent + 1]]);
-        let (nl, ns, r) = (lt[0].hypot(lt[1]), s[0].hypot(s[1]), bound(b.weight, sol.lambda[b.normal]));
+        let (lt, s) = ([lambda[b.tangent], lambda[b.tangent + 1]], [gap[b.tangent], gap[b.tangent + 1]]);
+        let (nl, ns, r) = (lt[0].hypot(lt[1]), s[0].hypot(s[1]), bound(b.weight, lambda[b.normal]));
         worst = worst.max((nl - r).max(0.0) / lam_s);
         // s ∥ −λ_t: the component of s along λ_t's normal direction vanishes, and s·λ_t ≤ 0
         let cross = (s[0] * lt[1] - s[1] * lt[0]).abs() / (s_s * lam_s);
@@ -240,4 +246,63 @@ fn coulomb_full_sliding_under_prescribed_motion() {
     assert!((tangential - mu * normal).abs() <= 1e-10 * mu * normal, "{tangential:e} against {:e}", mu * normal);
     let r = friction_conditions(&p, &sol, |_, ln| mu * ln.max(0.0));
     assert!(r < 1e-7, "Coulomb conditions {r:e}");
+}
+
+/// A load path (theory §11.6) on the partial-slip Tresca scene: the sphere pressed and moved
+/// across (factors 0.5, 1), then half-way back (0.5). Each step's slip is the increment against
+/// the previous step: recomputed here from the obstacle's own geometry (its exact gap's total
+/// slip t·(u − V d − W) at this step minus the previous step's, not from the rows' shifted
+/// offsets), it meets Tresca's conditions at every step; the dissipated energy the obstacles
+/// report is Σ_steps Σ_i g w_i |Δs_i| recomputed from those increments (on the rim
+/// −λ_t·Δs = r|Δs|); and the path matters: at the last step (factor 0.5 again, unloading) the
+/// tangential force differs from the first step's (the total form at 0.5) — the hysteresis.
+#[test]
+fn a_load_path_slips_incrementally_and_dissipates() {
+    let g = 0.1;
+    let p = scene(Some(g), Some([0.001, 0.0]));
+    let (mesh, dofs) = (p.element.mesh(), p.element.dofs());
+    let mut evolution = Evolution::new(&p);
+    let (mut previous, mut dissipated) = (None::<Vec<f64>>, 0.0);
+    let mut force_x = Vec::new();
+    for factor in [0.5, 1.0, 0.5] {
+        let step = evolution.step(factor, &uzawa(), &mut Silent).unwrap();
+        assert!(step.converged(), "factor {factor}: {:?}", step.solution.report.kkt);
+        let sol = &step.solution;
+        let obstacles = step.problem.obstacles();
+        let rows = obstacles.rows();
+        let mut total = vec![0.0; rows.n_rows()];
+        obstacles.gap(mesh, dofs, &sol.u, &sol.extras, &mut total);
+        // the normal rows' linear gaps, the tangential rows' increments of the exact slip
+        let mut values = vec![0.0; rows.n_rows()];
+        rows.gap(&sol.u, &sol.extras, &mut values);
+        let mut step_dissipation = 0.0;
+        for b in &rows.friction.blocks {
+            for t in [b.tangent, b.tangent + 1] {
+                values[t] = total[t] - previous.as_ref().map_or(0.0, |s| s[t]);
+            }
+            let ds = values[b.tangent].hypot(values[b.tangent + 1]);
+            let on_rim = sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]) >= (1.0 - 1e-6) * g * b.weight;
+            step_dissipation += if on_rim { g * b.weight * ds } else { 0.0 };
+        }
+        let r = conditions(rows, &sol.lambda, &values, |w, _| g * w);
+        dissipated += step_dissipation;
+        let reported = obstacles.dissipated(&sol.u, &sol.extras, &sol.lambda)[0];
+        let reports = step.problem.view().contact_reports(&sol.extras, &sol.lambda);
+        let report = &reports[0].report;
+        force_x.push(report.get("force_x").unwrap());
+        println!(
+            "factor {factor}: conditions {r:.2e}, step dissipation {step_dissipation:.6e}, total {dissipated:.9e}, \
+             reported {reported:.9e}, stick {:?}, slip {:?}, force_x {:?}",
+            report.get("stick_nodes"),
+            report.get("slip_nodes"),
+            force_x.last()
+        );
+        // uzawa's tolerance 1e-11; the increments carry the exact slip's round-off
+        assert!(r < 1e-6, "factor {factor}: incremental conditions {r:e}");
+        assert!(step_dissipation > 0.0, "factor {factor}: no slip");
+        assert!((reported - dissipated).abs() <= 1e-8 * dissipated, "{reported:e} against {dissipated:e}");
+        previous = Some(total);
+    }
+    let (first, last) = (force_x[0], force_x[2]);
+    assert!((last - first).abs() > 0.1 * first.abs(), "force_x at 0.5 loading {first:e}, unloading {last:e}");
 }
