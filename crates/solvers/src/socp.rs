@@ -252,10 +252,17 @@ impl Socp {
     ) -> Result<(ConeProgramme, IpmResult), SolveError> {
         monitor.phase("cone programme");
         let mut prog = timer.time("cone programme", || ConeProgramme::build(l))?;
+        let quasi = l.data.rows.friction.quasi_law().is_some();
+        if quasi {
+            prog.set_radii(l, &vec![coulomb_start(l); l.data.rows.friction.blocks.len()]);
+        }
         monitor.phase("interior point");
         let ipm = timer.time("interior point", || prog.solve(self))?;
+        if quasi {
+            sliding(l, &ipm, 0)?;
+        }
         finite(&ipm)?;
-        if l.data.rows.friction.quasi_law().is_none() {
+        if !quasi {
             return Ok((prog, ipm));
         }
         let ipm = timer.time("interior point", || self.coulomb_fixed_point(l, &mut prog, ipm, monitor))?;
@@ -263,8 +270,8 @@ impl Socp {
     }
 
     /// Stage 1c (theory §8.3, a law whose bound depends on λ_n: Coulomb): the fixed point of
-    /// Tresca problems. From the solve `ipm` (the first: bounds r(w, 0), frictionless for
-    /// Coulomb), each disc's bound is set to the law's radius at the last solve's normal
+    /// Tresca problems. From the solve `ipm` (the first: bounds at [`coulomb_start`]), each
+    /// disc's bound is set to the law's radius at the last solve's normal
     /// multiplier, r_i = μ λ_n,i, and the programme solved again, until no λ_n changes by more
     /// than `coulomb_tol` of the largest; at `coulomb_max_iter` solves the last one is returned
     /// with a warning in the programme's counters (its KKT residual then says how far it is).
@@ -279,6 +286,7 @@ impl Socp {
         for it in 1..=self.coulomb_max_iter {
             prog.set_radii(l, &normal);
             ipm = prog.solve(self)?;
+            sliding(l, &ipm, it)?;
             finite(&ipm)?;
             let next = prog.normal_multipliers(l, &ipm);
             let change = next.iter().zip(&normal).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
@@ -346,6 +354,34 @@ impl Socp {
         report.iterations += iterations;
         Ok(sol)
     }
+}
+
+/// The normal force at which Coulomb's fixed point sets its first bounds (theory §8.3): the
+/// largest prescribed force (on the extras or the body), a bound of every node's normal force
+/// under one load, so that the first Tresca problem can balance a tangential load; 0 (the
+/// frictionless problem) when every load is a prescribed motion.
+fn coulomb_start(l: &Lagrangian<'_>) -> f64 {
+    l.data.load.iter().chain(l.data.nodal_load).fold(0.0, |m, f| m.max(f.abs()))
+}
+
+/// Coulomb's fixed point (theory §8.3, §4.6): a Tresca problem of the fixed point (`iteration`
+/// solves after the first) certified infeasible — no tangential forces within the discs
+/// μ λ_n of the last normal forces balance the prescribed loads — is the error
+/// [`SolveError::BeyondCollapse`]: the obstacle slides, the force-controlled problem has no
+/// solution.
+fn sliding(l: &Lagrangian<'_>, ipm: &IpmResult, iteration: usize) -> Result<(), SolveError> {
+    if !matches!(ipm.status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible) || !l.forced() {
+        return Ok(());
+    }
+    Err(SolveError::BeyondCollapse {
+        solver: NAME.into(),
+        evidence: format!(
+            "Coulomb's fixed point (theory §8.3): after {iteration} update(s) of the friction discs to μ λ_n, \
+             Clarabel certifies ({:?}) that no contact forces within them balance the loads: the tangential load \
+             exceeds the friction μ Σλ_n the contact can give, and the obstacle slides",
+            ipm.status
+        ),
+    })
 }
 
 /// An error unless the interior point's solution is finite.

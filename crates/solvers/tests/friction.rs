@@ -306,3 +306,57 @@ fn a_load_path_slips_incrementally_and_dissipates() {
     let (first, last) = (force_x[0], force_x[2]);
     assert!((last - first).abs() > 0.1 * first.abs(), "force_x at 0.5 loading {first:e}, unloading {last:e}");
 }
+
+/// The scene of [`scene`] with the sphere pushed by the force `f` and pulled across by
+/// `q = [Qx, 0]`, Coulomb's law of coefficient `mu`.
+fn pulled(f: f64, qx: f64, mu: f64) -> DiscreteProblem {
+    johnson_with([8, 8, 4], None, SCALED, |zone, _, _| {
+        let k = RigidSphere::pushed([0.0, 0.0, -5.0], 5.0, [0.0, 0.0, 1.0], f, zone);
+        Box::new(RigidSphere { Q: Some([qx, 0.0]), ..k.with_friction(Box::new(Coulomb { mu })) })
+    })
+}
+
+/// uzawa with the extras' metric the projection with friction needs (theory §8.3).
+fn uzawa_forced() -> Uzawa {
+    Uzawa { extra_metric: 1.0, ..uzawa() }
+}
+
+/// Coulomb under force control (theory §8.3): pushed by F and pulled by Q = 0.5 μF, uzawa
+/// and socp agree (to 1e-7 in u and the extras `V`, `Ux`, `Uy`, 3e-7 in λ) and the sphere's
+/// resultants balance F and Q; pulled by Q = 2 μF — more than friction and the tilt of the
+/// contact normals can balance (bound in the test) — both report that the problem has no
+/// solution (theory §4.6), never a number. (At Q = 1.2 μF the linearised rows still have a
+/// solution: socp finds it at Ux = 0.30, the sphere climbing the tilted tangent planes of the
+/// reference configuration far beyond the linearisation's validity; theory §8.3.)
+#[test]
+fn coulomb_force_control_partial_slip_and_sliding() {
+    let (f, mu) = (0.5, 0.3);
+    let p = pulled(f, 0.5 * mu * f, mu);
+    let (su, ss) = (solve(&uzawa_forced(), &p), solve(&socp(), &p));
+    let (du, dl, dv) = (rel(&ss.u, &su.u), rel(&ss.lambda, &su.lambda), rel(&ss.extras, &su.extras));
+    let reports = p.view().contact_reports(&su.extras, &su.lambda);
+    let report = &reports[0].report;
+    println!("socp against uzawa: u {du:.2e}, λ {dl:.2e}, extras {dv:.2e}; {:?}", report.quantities);
+    // measured u 2.8e-8, λ 1.15e-7, extras 3.0e-9: socp's interior point (no polish with friction)
+    assert!(du < 1e-7 && dl < 3e-7 && dv < 1e-7, "u {du:e}, λ {dl:e}, extras {dv:e}");
+    let (force, force_x) = (report.get("force").unwrap(), report.get("force_x").unwrap());
+    assert!((force - f).abs() < 1e-8 * f && (force_x - 0.5 * mu * f).abs() < 1e-8 * f, "{force}, {force_x}");
+    assert!(report.get("stick_nodes").unwrap() > 0.0 && report.get("slip_nodes").unwrap() > 0.0);
+    // Q = 2μF: the resultants Q = Σλ_n n_i·e₁ + Σλ_t·t_i·e₁ ≤ Σλ_n (sin θ + μ) and
+    // F = Σλ_n n_i·d + Σλ_t·t_i·d ≥ Σλ_n (cos θ − μ sin θ), θ the largest tilt of a contact
+    // normal from d (cos θ_i = n_i·d = −H_i of V): no λ balances Q/F above the ratio of the two
+    let p = pulled(f, 2.0 * mu * f, mu);
+    let l = p.lagrangian();
+    let rows = l.data.rows;
+    let tilt =
+        rows.friction.blocks.iter().map(|b| (1.0 - rows.extra_row(b.normal)[0].powi(2)).sqrt()).fold(0.0, f64::max);
+    let bound = (tilt + mu) / ((1.0 - tilt * tilt).sqrt() - mu * tilt);
+    println!("largest tilt sin θ = {tilt:.4}: Q/F ≤ {bound:.4} < {}", 2.0 * mu);
+    assert!(bound < 2.0 * mu);
+    for s in [&uzawa_forced() as &dyn Solver, &socp()] {
+        match s.solve(&p.lagrangian(), &mut Silent) {
+            Err(SolveError::BeyondCollapse { solver, evidence }) => println!("{solver}: {evidence}"),
+            other => panic!("{}: {:?}", s.name(), other.map(|s| (s.report.converged, s.extras))),
+        }
+    }
+}
