@@ -124,7 +124,7 @@ pub mod tilting_punch;
 pub mod zone;
 
 pub use conformance::{KitFailure, check_all};
-pub use friction::Tresca;
+pub use friction::{Coulomb, Tresca};
 pub use gap::{EllipticParaboloid, Flat, GapShape, Paraboloid};
 pub use punch::{RigidPunch, RigidPunchDisplacement};
 pub use rigid_sphere::RigidSphere;

@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use saddle_contact::conformance::check_friction;
-use saddle_contact::{RigidSphere, Tresca, check_all};
+use saddle_contact::{Coulomb, RigidSphere, Tresca, check_all};
 use saddle_core::{AdmissibleDisplacements, FrictionLaw, ParameterError};
 use serde::{Deserialize, Serialize};
 
@@ -23,6 +23,18 @@ fn moved(v: f64) -> RigidSphere {
 
 fn pushed() -> RigidSphere {
     RigidSphere::pushed(CENTER, 3.0, [3.0, 0.0, 4.0], 0.3, disc(0.5))
+}
+
+/// Coulomb's law passes the kit (its projection onto the disc of radius μ λ_n and the
+/// derivative in t and λ_n against central differences), prescribed and force-controlled.
+#[test]
+fn the_kit_passes_with_coulomb_prescribed_and_forced() {
+    let (m, d) = (mesh(), dofs(&mesh()));
+    let coulomb = || Box::new(Coulomb { mu: 0.4 }) as Box<dyn FrictionLaw>;
+    let w = RigidSphere { W: Some([0.003, -0.002]), ..moved(0.004).with_friction(coulomb()) };
+    check_all(&w, &m, &d, 5, 0.01).unwrap();
+    let q = RigidSphere { Q: Some([0.05, 0.01]), ..pushed().with_friction(coulomb()) };
+    check_all(&q, &m, &d, 6, 0.01).unwrap();
 }
 
 #[test]
@@ -99,6 +111,8 @@ fn bad_friction_input_is_named_by_field_and_value() {
     };
     check(pushed().with_friction(tresca(-1.0)), "obstacle.friction.g", "-1");
     check(pushed().with_friction(tresca(f64::NAN)), "obstacle.friction.g", "NaN");
+    check(pushed().with_friction(Box::new(Coulomb { mu: -0.2 })), "obstacle.friction.mu", "-0.2");
+    check(pushed().with_friction(Box::new(Coulomb { mu: f64::INFINITY })), "obstacle.friction.mu", "inf");
     check(RigidSphere { Q: Some([0.1, 0.0]), ..pushed() }, "obstacle.Q", "[0.1, 0]");
     check(
         RigidSphere { W: Some([f64::INFINITY, 0.0]), ..moved(0.0).with_friction(tresca(1.0)) },

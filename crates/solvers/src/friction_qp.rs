@@ -1,18 +1,22 @@
 //! The dual of Uzawa's projection with friction (theory §8.3, §4.1): the dense programme
 //!
 //! `min ½ μᵀ S μ + μᵀ q`  over  μ_i ≥ 0 (normal rows),  |μ_t,b| ≤ R_b (each node's tangential
-//! pair, R_b = ρ × the law's radius),
+//! pair, R_b = ρ r(w_b, μ_n,b/ρ), the law's radius at the pair's current normal multiplier),
 //!
 //! S the Delassus matrix. Solved by block Gauss–Seidel: a normal row is the scalar step
 //! `μ_i = max(0, μ_i − (Sμ + q)_i / S_ii)`, a tangential pair the exact minimiser of its 2 × 2
-//! quadratic over its disc ([`disc_qp`]). Each block step lowers the convex objective and the
-//! blocks are the programme's own product structure, so the sweeps converge to its minimiser;
-//! they are warm-started from the last solution (the projections of successive Uzawa iterations
-//! differ little) and stop when a sweep moves no multiplier by more than [`SWEEP_TOL`] of the
-//! largest one.
+//! quadratic over its disc ([`disc_qp`]), the disc's radius taken from its normal row's current
+//! multiplier. For a given bound (Tresca: R_b = ρ g w_b) each block step lowers the convex
+//! objective and the blocks are the programme's own product structure, so the sweeps converge
+//! to its minimiser. For Coulomb (R_b = μ_c μ_n,b) the sweeps are a fixed-point iteration whose
+//! fixed points are exactly the discrete Coulomb conditions (theory §8.3: it converges when the
+//! normal–tangential coupling of S times μ_c is small enough, and is reported as not converged
+//! otherwise). They are warm-started from the last solution (the projections of successive Uzawa
+//! iterations differ little) and stop when a sweep moves no multiplier by more than
+//! [`SWEEP_TOL`] of the largest one.
 
 use nalgebra::DMatrix;
-use saddle_core::{ConstraintRows, SolveError};
+use saddle_core::{ConstraintRows, FrictionLaw, SolveError};
 
 /// A sweep that changes no multiplier by more than this fraction of max|μ| ends the iteration:
 /// a hundred times the round-off of the residual update.
@@ -21,11 +25,12 @@ pub const SWEEP_TOL: f64 = 1e-14;
 /// Sweeps before the iteration is reported as not converged.
 pub const MAX_SWEEPS: usize = 200_000;
 
-/// One block of the programme: a normal row or a tangential pair with its disc's radius.
+/// One block of the programme: a normal row, or a tangential pair (its first row) with its
+/// normal row, its law (index into [`FrictionQp`]'s laws) and its weight.
 #[derive(Clone, Copy, Debug)]
 enum Block {
     Normal(usize),
-    Pair(usize, f64),
+    Pair { tangent: usize, normal: usize, law: usize, weight: f64 },
 }
 
 /// The programme's matrix, its blocks and the last solution.
@@ -33,6 +38,9 @@ enum Block {
 pub struct FrictionQp {
     s: DMatrix<f64>,
     blocks: Vec<Block>,
+    laws: Vec<Box<dyn FrictionLaw>>,
+    /// ρ: the multipliers μ are ρ times the contact forces.
+    rho: f64,
     mu: Vec<f64>,
     /// Scratch: Sμ + q.
     r: Vec<f64>,
@@ -42,28 +50,19 @@ pub struct FrictionQp {
 
 impl FrictionQp {
     /// The programme with Delassus matrix `s` on `rows` (friction blocks from their laws), discs
-    /// of radius `rho` × the law's radius. Errors name `solver`: a law whose radius depends on
-    /// λ_n (a quasi-variational inequality).
-    pub fn new(s: DMatrix<f64>, rows: &ConstraintRows, rho: f64, solver: &str) -> Result<Self, SolveError> {
-        if let Some(law) = rows.friction.quasi_law() {
-            return Err(SolveError::Unsupported {
-                solver: solver.into(),
-                message: format!(
-                    "the friction law {law:?} bounds the tangential force by the normal one (a quasi-variational \
-                     inequality); this projection solves laws with a given bound (tresca)"
-                ),
-            });
-        }
+    /// of radius `rho` × the law's radius at the normal force μ_n/ρ.
+    pub fn new(s: DMatrix<f64>, rows: &ConstraintRows, rho: f64) -> Self {
         let n = rows.n_rows();
         let tangential = rows.friction.tangential_mask(n);
         let mut blocks: Vec<Block> = (0..n).filter(|&i| !tangential[i]).map(Block::Normal).collect();
-        blocks.extend(
-            rows.friction
-                .blocks
-                .iter()
-                .map(|b| Block::Pair(b.tangent, rho * rows.friction.law(b).radius(b.weight, 0.0))),
-        );
-        Ok(Self { s, blocks, mu: vec![0.0; n], r: vec![0.0; n], last_sweeps: 0 })
+        blocks.extend(rows.friction.blocks.iter().map(|b| Block::Pair {
+            tangent: b.tangent,
+            normal: b.normal,
+            law: b.law,
+            weight: b.weight,
+        }));
+        let laws = rows.friction.laws.clone();
+        Self { s, blocks, laws, rho, mu: vec![0.0; n], r: vec![0.0; n], last_sweeps: 0 }
     }
 
     /// The minimiser for the linear term `q`, from the last one.
@@ -88,7 +87,8 @@ impl FrictionQp {
         Err(SolveError::Unsupported {
             solver: solver.into(),
             message: format!(
-                "the projection onto K_h with friction did not converge in {MAX_SWEEPS} Gauss–Seidel sweeps (theory §8.3)"
+                "the projection onto K_h with friction did not converge in {MAX_SWEEPS} Gauss–Seidel sweeps (theory \
+                 §8.3; with Coulomb's law the sweeps are a fixed point, which a large μ can keep from converging)"
             ),
         })
     }
@@ -102,7 +102,8 @@ impl FrictionQp {
                 self.update(i, d);
                 d.abs()
             }
-            Block::Pair(t, radius) => {
+            Block::Pair { tangent: t, normal, law, weight } => {
+                let radius = self.rho * self.laws[law].radius(weight, self.mu[normal] / self.rho);
                 let a = [[self.s[(t, t)], self.s[(t, t + 1)]], [self.s[(t + 1, t)], self.s[(t + 1, t + 1)]]];
                 let x = [self.mu[t], self.mu[t + 1]];
                 // the block's linear term without its own part: r − A x

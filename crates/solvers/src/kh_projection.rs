@@ -140,7 +140,7 @@ impl MetricProjection {
                     ),
                 });
             }
-            Dual::Friction(FrictionQp::new(s, rows, rho, solver)?)
+            Dual::Friction(FrictionQp::new(s, rows, rho))
         } else {
             let e_mat = DMatrix::from_fn(zero.len(), nr, |r, i| h[(i, zero[r])]);
             let e_rhs = DVector::from_fn(zero.len(), |r, _| -rho * f[zero[r]]);

@@ -86,6 +86,16 @@ pub const REFINEMENT_TOL_RANGE: (f64, f64) = (1e-13, 1e-7);
 /// 2.8e-8 at 1e-13 (Clarabel's floor there); the default tol = 1e-8 is then not met, and says so.
 pub const FRICTION_IPM_PER_TOL: f64 = 1e-5;
 
+/// The default relative change of the normal multipliers that ends Coulomb's fixed point of
+/// Tresca problems (theory §8.3). Measured on the partial-slip scene of `tests/friction.rs`
+/// (μ = 0.3, ipm_tol = 1e-13): the change falls about 20× per solve (6 solves to 6e-9, 8 to
+/// 1.2e-11), and tightening 1e-8 to 1e-10 leaves the answer's distance from uzawa's at 8.0e-8
+/// in λ: beyond 1e-8 the interior point's own accuracy, not the fixed point, limits it.
+pub const COULOMB_TOL: f64 = 1e-8;
+
+/// The default cap on Coulomb's fixed-point iterations (each one interior point solve).
+pub const COULOMB_MAX_ITER: usize = 50;
+
 /// `type = "socp"`: the stress form of theory §3 as a second-order cone programme solved by
 /// Clarabel (theory §4.4), polished by active-set Newton.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -114,6 +124,13 @@ pub struct Socp {
     pub polish_max_iter: usize,
     /// Clarabel's threads (0: Clarabel chooses); 1 measured fastest on these problems.
     pub threads: usize,
+    /// Coulomb's law (theory §8.3): the fixed point of Tresca problems (bounds g_i w_i := μ λ_n,i
+    /// of the last solve) stops when no normal multiplier changes by more than this fraction of
+    /// the largest one.
+    pub coulomb_tol: f64,
+    /// Coulomb's law: the cap on the fixed point's interior point solves; reaching it is
+    /// reported (a warning, and the KKT residual of the last solve).
+    pub coulomb_max_iter: usize,
 }
 
 impl Socp {
@@ -138,6 +155,8 @@ impl Default for Socp {
             polish: true,
             polish_max_iter: 20,
             threads: 1,
+            coulomb_tol: COULOMB_TOL,
+            coulomb_max_iter: COULOMB_MAX_ITER,
         }
     }
 }
@@ -149,6 +168,7 @@ impl Solver for Socp {
     fn validate(&self, path: &str) -> Result<(), ParameterError> {
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
         check::open_interval(path, "ipm_tol", self.ipm_tol, 0.0, 1.0)?;
+        check::open_interval(path, "coulomb_tol", self.coulomb_tol, 0.0, 1.0)?;
         if let Some(t) = self.ipm_refinement_tol {
             check::open_interval(path, "ipm_refinement_tol", t, 0.0, 1.0)?;
         }
@@ -161,6 +181,7 @@ impl Solver for Socp {
         };
         count("ipm_max_iter", self.ipm_max_iter, 1)?;
         count("polish_max_iter", self.polish_max_iter, 1)?;
+        count("coulomb_max_iter", self.coulomb_max_iter, 1)?;
         count("threads", self.threads, 0)?;
         Ok(())
     }
@@ -190,7 +211,14 @@ impl Solver for Socp {
                 iteration: ipm.iterations,
             });
         }
-        let report = IpmReport::new(&prog, &ipm, r_ipm, found.return_mappings);
+        let mut report = IpmReport::new(&prog, &ipm, r_ipm, found.return_mappings);
+        if let Some((it, change)) = prog.coulomb.filter(|c| c.1 > self.coulomb_tol) {
+            report.warnings.push(format!(
+                "Coulomb's fixed point of Tresca problems (theory §8.3) stopped at solver.coulomb_max_iter = {it} with \
+                 the normal multipliers still changing by {change:.2e} > solver.coulomb_tol = {:e}",
+                self.coulomb_tol
+            ));
+        }
         if self.polish {
             self.polished(l, found, report, monitor, timer)
         } else {
@@ -223,17 +251,54 @@ impl Socp {
         timer: &mut PhaseTimer,
     ) -> Result<(ConeProgramme, IpmResult), SolveError> {
         monitor.phase("cone programme");
-        let prog = timer.time("cone programme", || ConeProgramme::build(l))?;
+        let mut prog = timer.time("cone programme", || ConeProgramme::build(l))?;
+        let quasi = l.data.rows.friction.quasi_law().is_some();
+        if quasi {
+            prog.set_radii(l, &vec![coulomb_start(l); l.data.rows.friction.blocks.len()]);
+        }
         monitor.phase("interior point");
         let ipm = timer.time("interior point", || prog.solve(self))?;
-        if ipm.x.iter().chain(&ipm.z).any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                solver: NAME.into(),
-                what: format!("the interior point solution (Clarabel status {:?})", ipm.status),
-                iteration: ipm.iterations,
-            });
+        if quasi {
+            sliding(l, &ipm, 0)?;
         }
+        finite(&ipm)?;
+        if !quasi {
+            return Ok((prog, ipm));
+        }
+        let ipm = timer.time("interior point", || self.coulomb_fixed_point(l, &mut prog, ipm, monitor))?;
         Ok((prog, ipm))
+    }
+
+    /// Stage 1c (theory §8.3, a law whose bound depends on λ_n: Coulomb): the fixed point of
+    /// Tresca problems. From the solve `ipm` (the first: bounds at [`coulomb_start`]), each
+    /// disc's bound is set to the law's radius at the last solve's normal
+    /// multiplier, r_i = μ λ_n,i, and the programme solved again, until no λ_n changes by more
+    /// than `coulomb_tol` of the largest; at `coulomb_max_iter` solves the last one is returned
+    /// with a warning in the programme's counters (its KKT residual then says how far it is).
+    fn coulomb_fixed_point(
+        &self,
+        l: &Lagrangian<'_>,
+        prog: &mut ConeProgramme,
+        mut ipm: IpmResult,
+        monitor: &mut dyn Monitor,
+    ) -> Result<IpmResult, SolveError> {
+        let mut normal = prog.normal_multipliers(l, &ipm);
+        for it in 1..=self.coulomb_max_iter {
+            prog.set_radii(l, &normal);
+            ipm = prog.solve(self)?;
+            sliding(l, &ipm, it)?;
+            finite(&ipm)?;
+            let next = prog.normal_multipliers(l, &ipm);
+            let change = next.iter().zip(&normal).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+            let size = next.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            normal = next;
+            prog.coulomb = Some((it, change / size.max(f64::MIN_POSITIVE)));
+            monitor.iteration(it, change / size.max(f64::MIN_POSITIVE), self.coulomb_tol);
+            if change <= self.coulomb_tol * size {
+                break;
+            }
+        }
+        Ok(ipm)
     }
 
     /// Stage 3a (theory §4.4, `polish = false`): the interior point's solution is the answer,
@@ -289,6 +354,46 @@ impl Socp {
         report.iterations += iterations;
         Ok(sol)
     }
+}
+
+/// The normal force at which Coulomb's fixed point sets its first bounds (theory §8.3): the
+/// largest prescribed force (on the extras or the body), a bound of every node's normal force
+/// under one load, so that the first Tresca problem can balance a tangential load; 0 (the
+/// frictionless problem) when every load is a prescribed motion.
+fn coulomb_start(l: &Lagrangian<'_>) -> f64 {
+    l.data.load.iter().chain(l.data.nodal_load).fold(0.0, |m, f| m.max(f.abs()))
+}
+
+/// Coulomb's fixed point (theory §8.3, §4.6): a Tresca problem of the fixed point (`iteration`
+/// solves after the first) certified infeasible — no tangential forces within the discs
+/// μ λ_n of the last normal forces balance the prescribed loads — is the error
+/// [`SolveError::BeyondCollapse`]: the obstacle slides, the force-controlled problem has no
+/// solution.
+fn sliding(l: &Lagrangian<'_>, ipm: &IpmResult, iteration: usize) -> Result<(), SolveError> {
+    if !matches!(ipm.status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible) || !l.forced() {
+        return Ok(());
+    }
+    Err(SolveError::BeyondCollapse {
+        solver: NAME.into(),
+        evidence: format!(
+            "Coulomb's fixed point (theory §8.3): after {iteration} update(s) of the friction discs to μ λ_n, \
+             Clarabel certifies ({:?}) that no contact forces within them balance the loads: the tangential load \
+             exceeds the friction μ Σλ_n the contact can give, and the obstacle slides",
+            ipm.status
+        ),
+    })
+}
+
+/// An error unless the interior point's solution is finite.
+fn finite(ipm: &IpmResult) -> Result<(), SolveError> {
+    if ipm.x.iter().chain(&ipm.z).any(|v| !v.is_finite()) {
+        return Err(SolveError::NonFinite {
+            solver: NAME.into(),
+            what: format!("the interior point solution (Clarabel status {:?})", ipm.status),
+            iteration: ipm.iterations,
+        });
+    }
+    Ok(())
 }
 
 /// Stage 1b (theory §4.6): Clarabel's certificate that the cone programme is infeasible —
@@ -445,7 +550,8 @@ struct Layout {
     sign_row: Vec<usize>,
     /// Normal rows (the nonnegative cone's dimension).
     n_normal: usize,
-    /// Each friction disc's first constraint row and radius (the law's, a given bound).
+    /// Each friction disc's first constraint row and radius (the law's at λ_n = 0; Coulomb's
+    /// fixed point resets them).
     discs: Vec<(usize, f64)>,
     /// Second-order cones.
     n_soc: usize,
@@ -543,6 +649,9 @@ struct ConeProgramme {
     scales: Scales,
     /// Positions of the unknowns.
     layout: Layout,
+    /// Coulomb's fixed point (theory §8.3): its solves after the first and the last relative
+    /// change of the normal multipliers; `None` for laws with a given bound.
+    coulomb: Option<(usize, f64)>,
 }
 
 /// The cone programme that `socp` hands Clarabel for `l` (theory §4.4, module docs), as JSON,
@@ -845,15 +954,9 @@ impl ConeMap {
 impl ConeProgramme {
     /// Builds the programme of theory §3 form 3 for `l`, non-dimensionalised (module docs), in
     /// stages: P's cones and hardening metric, the layout of x, the units, the objective, the
-    /// constraints and their cones. A friction law whose radius depends on λ_n (a
-    /// quasi-variational inequality) is refused by name.
+    /// constraints and their cones. A friction law whose radius depends on λ_n (Coulomb) gets
+    /// the discs of λ_n = 0 ([`Socp::coulomb_fixed_point`] sets them).
     fn build(l: &Lagrangian<'_>) -> Result<Self, SolveError> {
-        if let Some(law) = l.data.rows.friction.quasi_law() {
-            return Err(unsupported(format!(
-                "the friction law {law:?} bounds the tangential force by the normal one (a quasi-variational \
-                 inequality, not a cone programme); socp runs laws with a given bound (tresca)"
-            )));
-        }
         let blocks = yield_cones(l)?;
         let (free_q, hinv) = hardening_metric(l)?;
         let layout = Layout::new(l, free_q, blocks.len());
@@ -870,7 +973,7 @@ impl ConeProgramme {
         let a = a.into_csc(m, layout.n_vars());
         let b = right_hand_side(l, &layout, &blocks, &scales, m);
         let cones = cones(&layout, &blocks);
-        Ok(Self { p, q, a, b, cones, scales, layout })
+        Ok(Self { p, q, a, b, cones, scales, layout, coulomb: None })
     }
 
     /// Runs Clarabel with the settings of `s`.
@@ -931,10 +1034,31 @@ impl ConeProgramme {
         (u, extras, stress, lambda)
     }
 
+    /// The normal multiplier λ_n of every friction block (in the units of `l`) of the solve `r`.
+    fn normal_multipliers(&self, l: &Lagrangian<'_>, r: &IpmResult) -> Vec<f64> {
+        let f = self.scales.force();
+        l.data.rows.friction.blocks.iter().map(|b| f * r.x[self.layout.lambda_col(b.normal)]).collect()
+    }
+
+    /// Each friction disc's bound set to its law's radius at the normal multiplier `normal` of
+    /// its block (theory §8.3: the Tresca problem of Coulomb's fixed point).
+    fn set_radii(&mut self, l: &Lagrangian<'_>, normal: &[f64]) {
+        let fr = &l.data.rows.friction;
+        let s_f = self.scales.force();
+        for ((disc, b), &ln) in self.layout.discs.iter_mut().zip(&fr.blocks).zip(normal) {
+            disc.1 = fr.law(b).radius(b.weight, ln);
+            self.b[disc.0] = disc.1 / s_f;
+        }
+    }
+
     /// Sizes and scales of the programme, for the report.
     fn counters(&self) -> BTreeMap<String, f64> {
         let lay = &self.layout;
         let mut c = BTreeMap::new();
+        if let Some((iterations, change)) = self.coulomb {
+            c.insert("coulomb_iterations".into(), iterations as f64);
+            c.insert("coulomb_change".into(), change);
+        }
         c.insert("ipm_variables".into(), lay.n_vars() as f64);
         c.insert("ipm_constraints".into(), self.b.len() as f64);
         c.insert("ipm_soc_cones".into(), lay.n_soc as f64);

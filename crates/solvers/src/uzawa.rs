@@ -553,13 +553,17 @@ impl<'a> Run<'a> {
             + s.v.iter().zip(&w.v_mark).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
         let (chord, path) = (chord.sqrt(), wt.path);
         let escaping = path > 0.0 && chord >= ESCAPE_STRAIGHTNESS * path && wt.last_step >= ESCAPE_SPEED * wt.mark_step;
-        if escaping && wt.escaping && it >= ESCAPE_START && l.data.plasticity().is_some() && l.forced() {
+        // a perfectly plastic body, or friction (theory §8.3: a tangential force above the
+        // friction the contact can give slides the obstacle away), under prescribed forces
+        let can_escape = l.data.plasticity().is_some() || l.data.rows.has_friction();
+        if escaping && wt.escaping && it >= ESCAPE_START && can_escape && l.forced() {
             return Err(SolveError::BeyondCollapse {
                 solver: "uzawa".into(),
                 evidence: format!(
                     "from iteration {} to {it} the iterates ran along a straight line at undiminished speed (step \
                      length {:.3e} in the metric, {:.3e} at iteration {}; chord {:.4} of the path), the KKT residual \
-                     still {r:.3e}: the displacement runs away along a collapse mechanism",
+                     still {r:.3e}: the displacement runs away along a collapse mechanism (with friction: the obstacle \
+                     slides, no tangential force within the friction discs balancing its load)",
                     it / 4,
                     wt.last_step,
                     wt.mark_step,

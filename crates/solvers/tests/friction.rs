@@ -7,18 +7,22 @@
 mod common;
 
 use common::{SCALED, johnson_with};
-use saddle_contact::{RigidSphere, Tresca};
-use saddle_core::{DiscreteProblem, Solution, SolveError, Solver, Workspace, kkt};
+use saddle_contact::{Coulomb, RigidSphere, Tresca};
+use saddle_core::FrictionLaw;
+use saddle_core::{ConstraintRows, DiscreteProblem, Evolution, Silent, Solution, SolveError, Solver, Workspace, kkt};
 use saddle_solvers::{Newton, Penalty, Socp, Uzawa};
 
 /// The default scene's body (elastic, 8 × 8 × 4 cells) indented by a sphere of radius 5 moved
 /// up by 0.02 and across by `w`, with Tresca's law of bound `g` (`None`: frictionless).
 fn scene(g: Option<f64>, w: Option<[f64; 2]>) -> DiscreteProblem {
+    scene_with(g.map(|g| Box::new(Tresca { g }) as Box<dyn FrictionLaw>), w)
+}
+
+/// The scene of [`scene`] with the friction law `law`.
+fn scene_with(law: Option<Box<dyn FrictionLaw>>, w: Option<[f64; 2]>) -> DiscreteProblem {
     johnson_with([8, 8, 4], None, SCALED, |zone, _, _| {
         let mut k = RigidSphere::moved([0.0, 0.0, -5.0], 5.0, [0.0, 0.0, 1.0], 0.02, zone);
-        if let Some(g) = g {
-            k = k.with_friction(Box::new(Tresca { g }));
-        }
+        k.friction = law.clone();
         k.W = w;
         Box::new(k)
     })
@@ -56,25 +60,32 @@ fn rel(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// The friction conditions of theory §8.3 recomputed from the rows: for each node with friction
-/// (normal multiplier λ_n, tangential λ_t, slip s = the tangential rows' values, bound r = g w),
+/// (normal multiplier λ_n, tangential λ_t, slip s = the tangential rows' values, bound
+/// r = `bound(w, λ_n)`: g w for Tresca, μ λ_n for Coulomb),
 /// |λ_t| ≤ r, and s = −κ λ_t with κ ≥ 0 (stick: s = 0 inside the disc; slip: s opposite to
 /// λ_t on its rim), each violation relative to the largest |λ| and |s|. Also the normal rows'
 /// min(λ, g). Returns the largest violation.
-fn friction_conditions(p: &DiscreteProblem, sol: &Solution, g: f64) -> f64 {
+fn friction_conditions(p: &DiscreteProblem, sol: &Solution, bound: impl Fn(f64, f64) -> f64) -> f64 {
     let l = p.lagrangian();
     let rows = l.data.rows;
     let mut gap = vec![0.0; rows.n_rows()];
     rows.gap(&sol.u, &sol.extras, &mut gap);
-    let lam_s = sol.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    conditions(rows, &sol.lambda, &gap, bound)
+}
+
+/// The conditions of [`friction_conditions`] for the multipliers `lambda` and the rows' values
+/// `gap` (the normal rows' gaps and the tangential rows' slips).
+fn conditions(rows: &ConstraintRows, lambda: &[f64], gap: &[f64], bound: impl Fn(f64, f64) -> f64) -> f64 {
+    let lam_s = lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let s_s = gap.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let tangential = rows.friction.tangential_mask(rows.n_rows());
     let mut worst: f64 = 0.0;
     for i in (0..rows.n_rows()).filter(|&i| !tangential[i]) {
-        worst = worst.max((sol.lambda[i] / lam_s).min(gap[i] / s_s).abs());
+        worst = worst.max((lambda[i] / lam_s).min(gap[i] / s_s).abs());
     }
     for b in &rows.friction.blocks {
-        let (lt, s) = ([sol.lambda[b.tangent], sol.lambda[b.tangent + 1]], [gap[b.tangent], gap[b.tangent + 1]]);
-        let (nl, ns, r) = (lt[0].hypot(lt[1]), s[0].hypot(s[1]), g * b.weight);
+        let (lt, s) = ([lambda[b.tangent], lambda[b.tangent + 1]], [gap[b.tangent], gap[b.tangent + 1]]);
+        let (nl, ns, r) = (lt[0].hypot(lt[1]), s[0].hypot(s[1]), bound(b.weight, lambda[b.normal]));
         worst = worst.max((nl - r).max(0.0) / lam_s);
         // s ∥ −λ_t: the component of s along λ_t's normal direction vanishes, and s·λ_t ≤ 0
         let cross = (s[0] * lt[1] - s[1] * lt[0]).abs() / (s_s * lam_s);
@@ -106,6 +117,16 @@ fn tresca_with_zero_bound_is_frictionless() {
     }
 }
 
+/// `p` solved by uzawa, every one of its (more than 4) contact nodes slipping.
+fn solve_slipping_everywhere(p: &DiscreteProblem) -> Solution {
+    let sol = solve(&uzawa(), p);
+    let reports = p.view().contact_reports(&sol.extras, &sol.lambda);
+    let report = &reports[0].report;
+    let (contact, slip) = (report.contact_nodes, report.get("slip_nodes").unwrap() as usize);
+    assert!(contact > 4 && slip == contact, "{contact} contact nodes, {slip} slip");
+    sol
+}
+
 /// A prescribed tangential motion W with a bound g that every contact node's need exceeds: all
 /// slip, |λ_t| = g w at every contact node, so Σ|λ_t| = g × (the contact nodes' area) — to 1e-10
 /// with uzawa, whose projection puts λ_t on the rim exactly; and the friction conditions hold.
@@ -113,13 +134,9 @@ fn tresca_with_zero_bound_is_frictionless() {
 fn small_bound_under_prescribed_motion_slips_everywhere_at_g_times_area() {
     let g = 1e-4;
     let p = scene(Some(g), Some([0.01, 0.005]));
-    let sol = solve(&uzawa(), &p);
+    let sol = solve_slipping_everywhere(&p);
     let l = p.lagrangian();
     let rows = l.data.rows;
-    let reports = p.view().contact_reports(&sol.extras, &sol.lambda);
-    let report = &reports[0].report;
-    let (contact, slip) = (report.contact_nodes, report.get("slip_nodes").unwrap() as usize);
-    assert!(contact > 4 && slip == contact, "{contact} contact nodes, {slip} slip");
     let contact_rows = saddle_core::normal_contact_set(rows, &sol.lambda);
     let in_contact = |n: usize| contact_rows.contains(&n);
     let (mut sum, mut area) = (0.0, 0.0);
@@ -129,7 +146,7 @@ fn small_bound_under_prescribed_motion_slips_everywhere_at_g_times_area() {
     }
     println!("Σ|λ_t| = {sum:.15e}, g × area = {:.15e}", g * area);
     assert!((sum - g * area).abs() <= 1e-10 * g * area, "Σ|λ_t| = {sum:e}, g × area = {:e}", g * area);
-    let r = friction_conditions(&p, &sol, g);
+    let r = friction_conditions(&p, &sol, |w, _| g * w);
     assert!(r < 1e-7, "friction conditions {r:e}");
 }
 
@@ -158,22 +175,28 @@ fn a_bound_above_every_need_sticks_and_no_longer_matters() {
 #[test]
 fn uzawa_and_socp_agree_on_partial_slip() {
     let g = 0.1;
-    let p = scene(Some(g), Some([0.001, 0.0]));
-    let (su, ss) = (solve(&uzawa(), &p), solve(&socp(), &p));
+    agree_on_partial_slip(&scene(Some(g), Some([0.001, 0.0])), |w, _| g * w);
+}
+
+/// uzawa and socp on the scene `p` of partial slip: some contact nodes stick, some slip, the
+/// two agree to 1e-7 in u and λ, and each meets the friction conditions of the bound
+/// `bound(w, λ_n)` recomputed here to 1e-6 and the library's KKT residual to its own tolerance
+/// (uzawa 1e-11, socp 1e-7: measured 2.8e-8 with Tresca, 1.8e-8 with Coulomb).
+fn agree_on_partial_slip(p: &DiscreteProblem, bound: impl Fn(f64, f64) -> f64 + Copy) {
+    let (su, ss) = (solve(&uzawa(), p), solve(&socp(), p));
     let reports = p.view().contact_reports(&su.extras, &su.lambda);
     let report = &reports[0].report;
     let (stick, slip) = (report.get("stick_nodes").unwrap(), report.get("slip_nodes").unwrap());
-    println!("stick {stick}, slip {slip}, report {:?}", report.quantities);
+    println!("stick {stick}, slip {slip}, report {:?}, socp {:?}", report.quantities, ss.report.counters);
     assert!(stick > 0.0 && slip > 0.0, "partial slip wanted: {stick} stick, {slip} slip");
     let (du, dl) = (rel(&ss.u, &su.u), rel(&ss.lambda, &su.lambda));
     println!("socp against uzawa: u {du:.2e}, λ {dl:.2e}");
     assert!(du < 1e-7 && dl < 1e-7, "u {du:e}, λ {dl:e}");
     for sol in [&su, &ss] {
-        let r = friction_conditions(&p, sol, g);
+        let r = friction_conditions(p, sol, bound);
         let l = p.lagrangian();
         let k = kkt(&l, &sol.iterate(), &mut Workspace::new(&l));
         println!("{}: friction conditions {r:.2e}, kkt {:?}", sol.report.solver, k);
-        // each solver's own tolerance: uzawa 1e-11, socp 1e-7 (measured 2.8e-8)
         assert!(r < 1e-6 && k.max() < sol.report.tolerance, "{}: {r:e} {k:?}", sol.report.solver);
     }
 }
@@ -189,6 +212,151 @@ fn solvers_without_friction_refuse_it_by_name() {
                 assert!(message.contains("tresca"), "{message}");
             }
             other => panic!("{}: {:?}", s.name(), other.map(|s| s.report.kkt)),
+        }
+    }
+}
+
+/// Coulomb's law (μ = 0.3) on the partial-slip scene (15 contact nodes stick, 6 slip): uzawa
+/// (the disc of the current normal multiplier inside its projection's sweeps) and socp (the
+/// fixed point of Tresca problems, 6 solves) agree to 1e-7 (measured: u 1.5e-8, λ 8.0e-8 — the
+/// interior point's accuracy: with coulomb_tol = 1e-10, 8 solves, the same 8.0e-8), and each
+/// meets Coulomb's conditions |λ_t| ≤ μ λ_n, s = −κ λ_t recomputed here from the rows.
+#[test]
+fn coulomb_uzawa_and_socp_agree_on_partial_slip() {
+    let mu = 0.3;
+    agree_on_partial_slip(&scene_with(Some(Box::new(Coulomb { mu })), Some([0.001, 0.0])), |_, ln| mu * ln.max(0.0));
+}
+
+/// Full sliding under a prescribed tangential motion (theory §8.3): every contact node on the
+/// rim of its cone, so Σ|λ_t| = μ Σλ_n over the contact nodes to 1e-10 (uzawa's projection
+/// puts each λ_t on its rim exactly, at the radius of its own λ_n).
+#[test]
+fn coulomb_full_sliding_under_prescribed_motion() {
+    let mu = 0.3;
+    let p = scene_with(Some(Box::new(Coulomb { mu })), Some([0.02, 0.01]));
+    let sol = solve_slipping_everywhere(&p);
+    let l = p.lagrangian();
+    let rows = l.data.rows;
+    let (mut tangential, mut normal) = (0.0, 0.0);
+    for b in &rows.friction.blocks {
+        tangential += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
+        normal += sol.lambda[b.normal];
+    }
+    println!("Σ|λ_t| = {tangential:.15e}, μ Σλ_n = {:.15e}", mu * normal);
+    assert!((tangential - mu * normal).abs() <= 1e-10 * mu * normal, "{tangential:e} against {:e}", mu * normal);
+    let r = friction_conditions(&p, &sol, |_, ln| mu * ln.max(0.0));
+    assert!(r < 1e-7, "Coulomb conditions {r:e}");
+}
+
+/// A load path (theory §11.6) on the partial-slip Tresca scene: the sphere pressed and moved
+/// across (factors 0.5, 1), then half-way back (0.5). Each step's slip is the increment against
+/// the previous step: recomputed here from the obstacle's own geometry (its exact gap's total
+/// slip t·(u − V d − W) at this step minus the previous step's, not from the rows' shifted
+/// offsets), it meets Tresca's conditions at every step; the dissipated energy the obstacles
+/// report is Σ_steps Σ_i g w_i |Δs_i| recomputed from those increments (on the rim
+/// −λ_t·Δs = r|Δs|); and the path matters: at the last step (factor 0.5 again, unloading) the
+/// tangential force differs from the first step's (the total form at 0.5) — the hysteresis.
+#[test]
+fn a_load_path_slips_incrementally_and_dissipates() {
+    let g = 0.1;
+    let p = scene(Some(g), Some([0.001, 0.0]));
+    let (mesh, dofs) = (p.element.mesh(), p.element.dofs());
+    let mut evolution = Evolution::new(&p);
+    let (mut previous, mut dissipated) = (None::<Vec<f64>>, 0.0);
+    let mut force_x = Vec::new();
+    for factor in [0.5, 1.0, 0.5] {
+        let step = evolution.step(factor, &uzawa(), &mut Silent).unwrap();
+        assert!(step.converged(), "factor {factor}: {:?}", step.solution.report.kkt);
+        let sol = &step.solution;
+        let obstacles = step.problem.obstacles();
+        let rows = obstacles.rows();
+        let mut total = vec![0.0; rows.n_rows()];
+        obstacles.gap(mesh, dofs, &sol.u, &sol.extras, &mut total);
+        // the normal rows' linear gaps, the tangential rows' increments of the exact slip
+        let mut values = vec![0.0; rows.n_rows()];
+        rows.gap(&sol.u, &sol.extras, &mut values);
+        let mut step_dissipation = 0.0;
+        for b in &rows.friction.blocks {
+            for t in [b.tangent, b.tangent + 1] {
+                values[t] = total[t] - previous.as_ref().map_or(0.0, |s| s[t]);
+            }
+            let ds = values[b.tangent].hypot(values[b.tangent + 1]);
+            let on_rim = sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]) >= (1.0 - 1e-6) * g * b.weight;
+            step_dissipation += if on_rim { g * b.weight * ds } else { 0.0 };
+        }
+        let r = conditions(rows, &sol.lambda, &values, |w, _| g * w);
+        dissipated += step_dissipation;
+        let reported = obstacles.dissipated(&sol.u, &sol.extras, &sol.lambda)[0];
+        let reports = step.problem.view().contact_reports(&sol.extras, &sol.lambda);
+        let report = &reports[0].report;
+        force_x.push(report.get("force_x").unwrap());
+        println!(
+            "factor {factor}: conditions {r:.2e}, step dissipation {step_dissipation:.6e}, total {dissipated:.9e}, \
+             reported {reported:.9e}, stick {:?}, slip {:?}, force_x {:?}",
+            report.get("stick_nodes"),
+            report.get("slip_nodes"),
+            force_x.last()
+        );
+        // uzawa's tolerance 1e-11; the increments carry the exact slip's round-off
+        assert!(r < 1e-6, "factor {factor}: incremental conditions {r:e}");
+        assert!(step_dissipation > 0.0, "factor {factor}: no slip");
+        assert!((reported - dissipated).abs() <= 1e-8 * dissipated, "{reported:e} against {dissipated:e}");
+        previous = Some(total);
+    }
+    let (first, last) = (force_x[0], force_x[2]);
+    assert!((last - first).abs() > 0.1 * first.abs(), "force_x at 0.5 loading {first:e}, unloading {last:e}");
+}
+
+/// The scene of [`scene`] with the sphere pushed by the force `f` and pulled across by
+/// `q = [Qx, 0]`, Coulomb's law of coefficient `mu`.
+fn pulled(f: f64, qx: f64, mu: f64) -> DiscreteProblem {
+    johnson_with([8, 8, 4], None, SCALED, |zone, _, _| {
+        let k = RigidSphere::pushed([0.0, 0.0, -5.0], 5.0, [0.0, 0.0, 1.0], f, zone);
+        Box::new(RigidSphere { Q: Some([qx, 0.0]), ..k.with_friction(Box::new(Coulomb { mu })) })
+    })
+}
+
+/// uzawa with the extras' metric the projection with friction needs (theory §8.3).
+fn uzawa_forced() -> Uzawa {
+    Uzawa { extra_metric: 1.0, ..uzawa() }
+}
+
+/// Coulomb under force control (theory §8.3): pushed by F and pulled by Q = 0.5 μF, uzawa
+/// and socp agree (to 1e-7 in u and the extras `V`, `Ux`, `Uy`, 3e-7 in λ) and the sphere's
+/// resultants balance F and Q; pulled by Q = 2 μF — more than friction and the tilt of the
+/// contact normals can balance (bound in the test) — both report that the problem has no
+/// solution (theory §4.6), never a number. (At Q = 1.2 μF the linearised rows still have a
+/// solution: socp finds it at Ux = 0.30, the sphere climbing the tilted tangent planes of the
+/// reference configuration far beyond the linearisation's validity; theory §8.3.)
+#[test]
+fn coulomb_force_control_partial_slip_and_sliding() {
+    let (f, mu) = (0.5, 0.3);
+    let p = pulled(f, 0.5 * mu * f, mu);
+    let (su, ss) = (solve(&uzawa_forced(), &p), solve(&socp(), &p));
+    let (du, dl, dv) = (rel(&ss.u, &su.u), rel(&ss.lambda, &su.lambda), rel(&ss.extras, &su.extras));
+    let reports = p.view().contact_reports(&su.extras, &su.lambda);
+    let report = &reports[0].report;
+    println!("socp against uzawa: u {du:.2e}, λ {dl:.2e}, extras {dv:.2e}; {:?}", report.quantities);
+    // measured u 2.8e-8, λ 1.15e-7, extras 3.0e-9: socp's interior point (no polish with friction)
+    assert!(du < 1e-7 && dl < 3e-7 && dv < 1e-7, "u {du:e}, λ {dl:e}, extras {dv:e}");
+    let (force, force_x) = (report.get("force").unwrap(), report.get("force_x").unwrap());
+    assert!((force - f).abs() < 1e-8 * f && (force_x - 0.5 * mu * f).abs() < 1e-8 * f, "{force}, {force_x}");
+    assert!(report.get("stick_nodes").unwrap() > 0.0 && report.get("slip_nodes").unwrap() > 0.0);
+    // Q = 2μF: the resultants Q = Σλ_n n_i·e₁ + Σλ_t·t_i·e₁ ≤ Σλ_n (sin θ + μ) and
+    // F = Σλ_n n_i·d + Σλ_t·t_i·d ≥ Σλ_n (cos θ − μ sin θ), θ the largest tilt of a contact
+    // normal from d (cos θ_i = n_i·d = −H_i of V): no λ balances Q/F above the ratio of the two
+    let p = pulled(f, 2.0 * mu * f, mu);
+    let l = p.lagrangian();
+    let rows = l.data.rows;
+    let tilt =
+        rows.friction.blocks.iter().map(|b| (1.0 - rows.extra_row(b.normal)[0].powi(2)).sqrt()).fold(0.0, f64::max);
+    let bound = (tilt + mu) / ((1.0 - tilt * tilt).sqrt() - mu * tilt);
+    println!("largest tilt sin θ = {tilt:.4}: Q/F ≤ {bound:.4} < {}", 2.0 * mu);
+    assert!(bound < 2.0 * mu);
+    for s in [&uzawa_forced() as &dyn Solver, &socp()] {
+        match s.solve(&p.lagrangian(), &mut Silent) {
+            Err(SolveError::BeyondCollapse { solver, evidence }) => println!("{solver}: {evidence}"),
+            other => panic!("{}: {:?}", s.name(), other.map(|s| (s.report.converged, s.extras))),
         }
     }
 }

@@ -245,6 +245,8 @@ fn invalid_parameters_name_the_field() {
         (Socp { ipm_tol: -1e-8, ..Socp::default() }, "solver.ipm_tol", "-0.00000001"),
         (Socp { ipm_max_iter: 0, ..Socp::default() }, "solver.ipm_max_iter", "0"),
         (Socp { polish_max_iter: 0, ..Socp::default() }, "solver.polish_max_iter", "0"),
+        (Socp { coulomb_tol: 1.5, ..Socp::default() }, "solver.coulomb_tol", "1.5"),
+        (Socp { coulomb_max_iter: 0, ..Socp::default() }, "solver.coulomb_max_iter", "0"),
         (Socp { threads: usize::MAX, ..Socp::default() }, "solver.threads", &usize::MAX.to_string()),
     ] {
         let e = s.validate("solver").unwrap_err();

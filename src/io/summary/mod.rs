@@ -410,8 +410,9 @@ pub fn single_quantity(p: ProblemView<'_>, sol: &Solution, quantity: &str) -> Op
 
 /// Each obstacle's report on the solution (`u`, `extras`, `lambda`), with its imprint
 /// max_i (G u)_i over its rows, the largest displacement of its candidate nodes away from it
-/// (theory §11.4; generic, from the rows), and the quantities named like an extra in
-/// `undetermined` (theory §11.3) NaN: written null.
+/// (theory §11.4; generic, from the rows), the quantities named like an extra in
+/// `undetermined` (theory §11.3) NaN: written null, and with friction `dissipated_energy`, the
+/// energy friction has dissipated up to the solution (theory §11.6).
 fn reports_with_imprints(
     p: ProblemView<'_>,
     u: &[f64],
@@ -421,6 +422,12 @@ fn reports_with_imprints(
 ) -> Vec<ObstacleReport> {
     let mut reports = p.contact_reports(extras, lambda);
     complete_reports(p, &mut reports, &imprints(p, u), undetermined);
+    let dissipated = p.obstacles.dissipated(u, extras, lambda);
+    for ((r, part), d) in reports.iter_mut().zip(p.obstacles.parts()).zip(dissipated) {
+        if part.rows.has_friction() {
+            r.report.quantities.push(("dissipated_energy".into(), d));
+        }
+    }
     reports
 }
 

@@ -1,5 +1,6 @@
 //! The steps of a load path one after another (theory §11.2): each step is solved from the
-//! state the previous one left, warm-started from its solution, and leaves its own state.
+//! state the previous one left (the plastic state and the friction rows' slip, theory §11.6),
+//! warm-started from its solution, and leaves its own state.
 
 use crate::error::SceneError;
 use crate::evolution::reduced::Reduced;
@@ -8,6 +9,7 @@ use crate::fem::DiscreteProblem;
 use crate::problem::fields::{PlasticState, StressField};
 use crate::problem::lagrangian::Lagrangian;
 use crate::problem::obstacles::OBSTACLE_PATH;
+use crate::problem::slip::SlipHistory;
 use crate::problem::solver::{Monitor, Solution, SolveError, Solver, Start};
 use crate::problem::tensor::Sym;
 use thiserror::Error;
@@ -78,6 +80,8 @@ impl StepSolution<'_> {
 pub struct Evolution<'a> {
     base: &'a DiscreteProblem,
     state: PlasticState,
+    /// The friction rows' slip and dissipation so far (theory §11.6).
+    slip: SlipHistory,
     start: Option<Start>,
     steps: usize,
 }
@@ -86,12 +90,23 @@ impl<'a> Evolution<'a> {
     /// A path of `base` from the zero state (the first step is the stationary problem).
     pub fn new(base: &'a DiscreteProblem) -> Self {
         let l = base.lagrangian();
-        Self { base, state: PlasticState::zero(l.n_points(), l.data.hardening_dim()), start: None, steps: 0 }
+        Self {
+            base,
+            state: PlasticState::zero(l.n_points(), l.data.hardening_dim()),
+            slip: SlipHistory::default(),
+            start: None,
+            steps: 0,
+        }
     }
 
     /// The state the next step starts from.
     pub fn state(&self) -> &PlasticState {
         &self.state
+    }
+
+    /// The friction rows' slip history the next step starts from (theory §11.6).
+    pub fn slip_history(&self) -> &SlipHistory {
+        &self.slip
     }
 
     /// Steps solved so far (converged or not).
@@ -110,11 +125,9 @@ impl<'a> Evolution<'a> {
     ) -> Result<StepSolution<'a>, PathError> {
         let index = self.steps;
         self.steps += 1;
-        let problem = LoadStep::new(self.base, factor, self.state.clone()).map_err(|source| PathError::Scene {
-            step: index,
-            factor,
-            source,
-        })?;
+        let problem = LoadStep::new(self.base, factor, self.state.clone())
+            .map_err(|source| PathError::Scene { step: index, factor, source })?
+            .with_slip_history(self.slip.clone());
         let l = problem.lagrangian();
         let unloaded = unloaded_obstacles(&problem);
         let start = self.start.as_ref().filter(|s| s.check(&l, solver.name()).is_ok());
@@ -141,6 +154,7 @@ impl<'a> Evolution<'a> {
         };
         if solution.report.converged {
             self.state = state_after(&l, &solution.u);
+            self.slip = problem.obstacles().history_after(&solution.u, &solution.extras, &solution.lambda);
             self.start = Some(Start::from_solution(&solution));
         }
         Ok(StepSolution { index, problem, solution, warnings })

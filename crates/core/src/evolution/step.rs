@@ -9,6 +9,7 @@ use crate::problem::fields::PlasticState;
 use crate::problem::kkt::locked_in_force;
 use crate::problem::lagrangian::{Data, Lagrangian};
 use crate::problem::obstacles::DiscreteObstacles;
+use crate::problem::slip::SlipHistory;
 
 /// L at load factor `factor` from a state (theory §11.1): the base problem's element and
 /// material, its obstacles at the scaled load ([`DiscreteObstacles::at_factor`]: the rows kept
@@ -46,6 +47,13 @@ impl<'a> LoadStep<'a> {
         let state = element.comm().any(!state.is_zero()).then_some(state);
         let locked_in = state.as_ref().map_or(0.0, |st| locked_in_force(element, &base.elasticity, st));
         Ok(Self { base, factor, state, locked_in, obstacles, nodal_load })
+    }
+
+    /// The step with its friction rows giving the slip increments against `history`, the
+    /// previous step's slip (theory §11.6; the zero history: the total form).
+    pub fn with_slip_history(mut self, history: SlipHistory) -> Self {
+        self.obstacles = self.obstacles.with_history(history);
+        self
     }
 
     /// The load factor.

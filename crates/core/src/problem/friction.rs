@@ -39,7 +39,7 @@ pub trait FrictionLaw: Debug + Send + Sync + dyn_clone::DynClone {
     fn radius(&self, weight: f64, lambda_n: f64) -> f64;
 
     /// ∂r/∂λ_n: 0 for a given bound (Tresca), μ for Coulomb. A law with a nonzero slope is a
-    /// quasi-variational inequality: solvers of the convex problem refuse it.
+    /// quasi-variational inequality: the solvers run it as a fixed point of given bounds.
     fn radius_slope(&self, weight: f64) -> f64;
 
     /// The projection P_D(t) onto the dual set at a node (a disc: [`project_disc`]).

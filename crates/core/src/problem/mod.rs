@@ -13,6 +13,7 @@
 //! * [`fields`] — fields at the stress points: stresses σ̂ and the plastic state a load step
 //!   starts from (theory §11);
 //! * [`return_mapping`] — the steps yield surfaces' return mappings share;
+//! * [`slip`] — the friction rows' slip history along a load path (theory §11.6);
 //! * [`solver`] — the solver interface: [`solver::Solver`], [`solver::Solution`], the report;
 //! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
 //! * [`pattern`] — the sparsity pattern of assembled matrices, as plain data.
@@ -30,6 +31,7 @@ pub mod obstacles;
 pub mod operators;
 pub mod pattern;
 pub mod return_mapping;
+pub mod slip;
 pub mod solver;
 pub mod stresses;
 pub mod tensor;

@@ -28,6 +28,7 @@ use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
 use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
+use crate::problem::slip::{SlipHistory, dissipation};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeSeq, Serializer};
 use serde::{Deserialize, Serialize};
@@ -356,6 +357,8 @@ pub struct DiscreteObstacles {
     rows: ConstraintRows,
     load: Vec<f64>,
     parts: Vec<ObstacleRows>,
+    /// The slip carried from a load path's previous step (theory §11.6; zero: the total form).
+    history: SlipHistory,
 }
 
 impl DiscreteObstacles {
@@ -397,7 +400,7 @@ impl DiscreteObstacles {
             all.warnings.extend(part.rows.warnings.iter().cloned());
         }
         let load = obstacles.load();
-        Self { obstacles, rows: all, load, parts }
+        Self { obstacles, rows: all, load, parts, history: SlipHistory::default() }
     }
 
     /// K_h with every obstacle's load multiplied by `factor` (theory §11.2): the obstacles
@@ -478,6 +481,61 @@ impl DiscreteObstacles {
     /// Each obstacle's rows and ranges, in the order of [`Obstacles::iter`].
     pub fn parts(&self) -> &[ObstacleRows] {
         &self.parts
+    }
+
+    /// These obstacles with the slip history `history` of a load path's previous step (theory
+    /// §11.6): every tangential row's offset, in the concatenation and in its obstacle's rows,
+    /// lowered by the slip it carries, so that the rows give the step's slip increments. A
+    /// history of other rows (another problem's) is an error of the caller: it panics.
+    pub fn with_history(mut self, history: SlipHistory) -> Self {
+        if !history.slip.is_empty() {
+            assert_eq!(history.slip.len(), self.rows.n_rows(), "a slip history of other rows");
+            history.shift_offsets(&mut self.rows, 0);
+            for part in &mut self.parts {
+                history.shift_offsets(&mut part.rows, part.row_range.start);
+            }
+        }
+        self.history = history;
+        self
+    }
+
+    /// The slip history these rows start from (theory §11.6).
+    pub fn history(&self) -> &SlipHistory {
+        &self.history
+    }
+
+    /// Each obstacle's energy dissipated by friction up to the solution (u, V, λ) of these rows:
+    /// the history's, plus the step's `−Σ λ_t·Δs` ([`dissipation`]); 0 without friction.
+    pub fn dissipated(&self, u: &[f64], extras: &[f64], lambda: &[f64]) -> Vec<f64> {
+        if !self.rows.has_friction() {
+            return vec![0.0; self.parts.len()];
+        }
+        let mut increments = vec![0.0; self.rows.n_rows()];
+        self.rows.gap(u, extras, &mut increments);
+        self.parts
+            .iter()
+            .enumerate()
+            .map(|(o, p)| {
+                let r = p.row_range.clone();
+                let before = self.history.dissipated.get(o).copied().unwrap_or(0.0);
+                before + dissipation(&p.rows, &lambda[r.clone()], &increments[r])
+            })
+            .collect()
+    }
+
+    /// The slip history after the solution (u, V, λ) of these rows: every tangential row's
+    /// slip S + Δs, and [`Self::dissipated`].
+    pub fn history_after(&self, u: &[f64], extras: &[f64], lambda: &[f64]) -> SlipHistory {
+        if !self.rows.has_friction() {
+            return SlipHistory::default();
+        }
+        let mut slip = vec![0.0; self.rows.n_rows()];
+        self.rows.gap(u, extras, &mut slip);
+        let tangential = self.rows.friction.tangential_mask(slip.len());
+        for (i, s) in slip.iter_mut().enumerate() {
+            *s = if tangential[i] { *s + self.history.slip.get(i).copied().unwrap_or(0.0) } else { 0.0 };
+        }
+        SlipHistory { slip, dissipated: self.dissipated(u, extras, lambda) }
     }
 
     /// g(u, V) of the concatenation evaluated directly from the geometry: each obstacle's

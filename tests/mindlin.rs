@@ -1,0 +1,121 @@
+//! Cattaneo–Mindlin partial slip (theory §8.3, issue 29): a rigid sphere pressed by P and pulled
+//! by Q < μP, Coulomb's law, against K. L. Johnson, *Contact Mechanics* (1985), §7.2: stick
+//! radius c/a = (1 − Q/μP)^{1/3} (eq. 7.40) and tangential displacement
+//! δ = 3μP(2 − ν)/(16Ga)·[1 − (1 − Q/μP)^{2/3}] (eq. 7.42), a the Hertz radius
+//! (3PR/4E*)^{1/3}. The formulas neglect the coupling of the normal and tangential problems,
+//! which vanishes for a rigid sphere on an incompressible body (Johnson's β = 0 at ν = 1/2): the
+//! study takes ν = 0.49 (β = 0.02) with P2 and B̄. At ν = 0.3 with P1 (β = 0.29) the same
+//! comparison is off by +24 % (Q/μP = 0.3) and +16 % (0.7) in δ — the coupling, stated in
+//! theory §8.3.
+//!
+//! The body: the box [−6, 6]² × [0, 6] (28 contact radii) graded toward the contact (24 × 24 × 12
+//! cells, ratio 79.5), clamped on its far faces; 159,048 P2 dofs, 1023 contact rows. One solve
+//! takes 5 min and 3.6 GB on one core: a study, not a CI test.
+//!
+//!   cargo test --release --test mindlin -- --ignored --nocapture
+
+use saddle::core::problem::displacements::contact_status;
+use saddle::core::problem::friction::ContactStatus;
+use saddle::core::{Silent, Solver};
+use saddle::io::scene::Scene;
+use saddle::solvers::Uzawa;
+
+const E: f64 = 100.0;
+const NU: f64 = 0.49;
+const R: f64 = 5.0;
+const P: f64 = 0.3;
+const MU: f64 = 0.3;
+
+/// The scene at tangential force `q` (the whole sphere's: no symmetry plane, the contact is not
+/// symmetric under a tangential load).
+fn scene(q: f64) -> String {
+    format!(
+        r#"
+title = "Cattaneo–Mindlin partial slip"
+[mesh]
+type = "box"
+min = [-6.0, -6.0, 0.0]
+max = [6.0, 6.0, 6.0]
+cells = [24, 24, 12]
+grading = {{ toward = [0.0, 0.0, 0.0], ratio = 79.5 }}
+[material]
+E = {E}
+nu = {NU}
+[[dirichlet]]
+on = {{ any = [ {{ group = "xmin" }}, {{ group = "xmax" }}, {{ group = "ymin" }}, {{ group = "ymax" }}, {{ group = "zmax" }} ] }}
+[obstacle]
+type = "rigid_sphere"
+center = [0.0, 0.0, -{R}]
+R = {R}
+direction = [0.0, 0.0, 1.0]
+F = {P}
+Q = [{q}, 0.0]
+zone = {{ all = [ {{ group = "zmin" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.3 }} }} ] }}
+friction = {{ type = "coulomb", mu = {MU} }}
+"#
+    )
+}
+
+/// The stick radius of the solution: the radius c that separates the contact nodes of the
+/// plane z = 0 into stick (r ≤ c) and slip (r > c) with the fewest misclassified, and their
+/// number. (The discrete stick zone is not exactly a disc: the nodes near c are close to the rim.)
+fn stick_radius(nodes: &[([f64; 3], ContactStatus)]) -> (f64, usize) {
+    let radius = |x: [f64; 3]| x[0].hypot(x[1]);
+    let wrong = |c: f64| {
+        nodes
+            .iter()
+            .filter(|(x, s)| match s {
+                ContactStatus::Stick => radius(*x) > c,
+                ContactStatus::Slip => radius(*x) <= c,
+                ContactStatus::Separated => false,
+            })
+            .count()
+    };
+    nodes
+        .iter()
+        .filter(|(_, s)| *s != ContactStatus::Separated)
+        .map(|(x, _)| (radius(*x), wrong(radius(*x))))
+        .min_by_key(|c| c.1)
+        .unwrap()
+}
+
+/// δ within 3 % of Johnson's at Q/μP = 0.5 and 0.8, c/a within 10 %. Measured (the same scene
+/// and solver run by `saddle run`): Q/μP = 0.5: δ = 1.3365e-3 against 1.3742e-3 (−2.7 %),
+/// c/a = 0.805 against 0.794 (+1.4 %, 19 of 201 contact nodes on the wrong side of the circle);
+/// 0.8: δ = 2.3802e-3 against 2.4436e-3 (−2.6 %), c/a = 0.534 against 0.585 (−8.6 %, 6 of 198).
+/// The stick radius is resolved by the nodes only: at 0.8 the largest stick node and the
+/// smallest slipping one lie at r = 0.125 and 0.088 (c/a between 0.43 and 0.61), a node spacing
+/// of 15 % of a there, hence 10 % on c/a and not 3 %.
+#[test]
+#[ignore = "a study: 2 × 5 min, 3.6 GB"]
+fn cattaneo_mindlin_stick_radius_and_displacement() {
+    let (e_star, g) = (E / (1.0 - NU * NU), E / (2.0 * (1.0 + NU)));
+    let a = (3.0 * P * R / (4.0 * e_star)).cbrt();
+    for ratio in [0.5, 0.8] {
+        let scene = Scene::from_toml(&scene(ratio * MU * P), std::path::Path::new("mindlin.toml")).unwrap();
+        let (problem, _) = scene.into_problem().unwrap();
+        let uzawa = Uzawa { tol: 1e-9, max_iter: 100_000, extra_metric: 1.0, ..Uzawa::default() };
+        let sol = uzawa.solve(&problem.lagrangian(), &mut Silent).unwrap();
+        assert!(sol.report.converged, "{:?}", sol.report.kkt);
+        let l = problem.lagrangian();
+        let rows = l.data.rows;
+        let mesh = problem.element.mesh();
+        let nodes: Vec<([f64; 3], ContactStatus)> =
+            contact_status(rows, &sol.lambda).into_iter().map(|(n, s)| (mesh.nodes[n], s)).collect();
+        let (c, wrong) = stick_radius(&nodes);
+        let reports = problem.view().contact_reports(&sol.extras, &sol.lambda);
+        let delta = reports[0].report.get("Ux").unwrap();
+        let delta_exact = 3.0 * MU * P * (2.0 - NU) / (16.0 * g * a) * (1.0 - (1.0 - ratio).powf(2.0 / 3.0));
+        let c_exact = (1.0 - ratio).cbrt();
+        println!(
+            "Q/μP = {ratio}: δ = {delta:.4e} against {delta_exact:.4e} ({:+.1} %), c/a = {:.3} against {c_exact:.3} \
+             ({:+.1} %, {wrong} misclassified of {})",
+            100.0 * (delta / delta_exact - 1.0),
+            c / a,
+            100.0 * (c / a / c_exact - 1.0),
+            nodes.len()
+        );
+        assert!((delta / delta_exact - 1.0).abs() < 0.03, "δ {delta:e} against {delta_exact:e}");
+        assert!((c / a / c_exact - 1.0).abs() < 0.10, "c/a {} against {c_exact}", c / a);
+    }
+}
