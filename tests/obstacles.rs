@@ -249,3 +249,29 @@ fn saddle_run_prints_each_obstacle_by_name() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert!(summary["extras"]["left.U"].is_f64() && summary["extras"]["right.U"].is_f64(), "{summary}");
 }
+
+/// The imprint is read off the normal rows only: a sphere pressed in by V and dragged across by
+/// W ≫ V with a bound that sticks every contact node moves those nodes by about W along the
+/// tangential rows (theory §8.3), but indents the body by no more than V — n·u = V n·d − φ ≤ V
+/// at a contact node.
+#[test]
+fn the_imprint_of_a_dragged_sphere_is_its_indentation_not_its_slip() {
+    let (v, w) = (0.01, 0.05);
+    let mut t: toml::Table = toml::from_str(&base()).unwrap();
+    t.remove("yield");
+    let sphere = format!(
+        "type = \"rigid_sphere\"\ncenter = [0.0, 0.0, -5.0]\nR = 5.0\ndirection = [0.0, 0.0, 1.0]\nV = {v:?}\n\
+         W = [{w:?}, 0.0]\nfriction = {{ type = \"tresca\", g = 100.0 }}\n\
+         zone = {{ all = [ {{ group = \"zmin\" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.5 }} }} ] }}"
+    );
+    t.insert("obstacle".into(), toml::Value::Table(toml::from_str(&sphere).unwrap()));
+    let (l, solver) = scene(&toml::to_string(&t).unwrap()).into_problem().unwrap();
+    let sol = solver.unwrap().solve(&l.lagrangian(), &mut Silent).unwrap();
+    assert!(sol.report.converged, "{:?}", sol.report.stop_reason);
+    let json = serde_json::to_value(Summary::new(l.view(), &sol, None)).unwrap();
+    let o = &json["obstacles"][0];
+    assert!(o["stick_nodes"].as_f64().unwrap() > 0.0 && o["slip_nodes"].as_f64() == Some(0.0), "{o}");
+    assert!((o["Ux"].as_f64().unwrap() - w).abs() < 1e-15, "{o}");
+    let imprint = o["imprint"].as_f64().unwrap();
+    assert!(imprint > 0.5 * v && imprint <= v * (1.0 + 1e-9), "imprint {imprint:e} against V = {v:e}, W = {w:e}");
+}

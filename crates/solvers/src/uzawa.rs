@@ -66,10 +66,10 @@ pub enum UzawaMetric {
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum UzawaAcceleration {
-    /// The plain step from the iterate: the paper's method (default).
+    /// The plain step from the iterate: the paper's method.
     None,
-    /// Nesterov's momentum (FISTA) with adaptive restart and a monotone safeguard (for ρ ≤ 1;
-    /// not the default: theory §4.1, acceleration, names the case it fails).
+    /// Nesterov's momentum (FISTA) with adaptive restart and a monotone safeguard, for ρ ≤ 1
+    /// (default).
     Fista,
 }
 
@@ -88,7 +88,7 @@ pub struct Uzawa {
     pub tol: f64,
     /// Iteration budget.
     pub max_iter: usize,
-    /// The acceleration: none (default) or FISTA with restart.
+    /// The acceleration: FISTA with restart (default) or none.
     pub acceleration: UzawaAcceleration,
 }
 
@@ -100,7 +100,7 @@ impl Default for Uzawa {
             extra_metric: 0.0,
             tol: 1e-8,
             max_iter: 20_000,
-            acceleration: UzawaAcceleration::None,
+            acceleration: UzawaAcceleration::Fista,
         }
     }
 }

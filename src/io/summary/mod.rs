@@ -431,7 +431,7 @@ fn reports_with_imprints(
     reports
 }
 
-/// Each obstacle's imprint max_i (G u)_i over its rows (theory §11.4), the maximum over the
+/// Each obstacle's imprint max_i (G u)_i over its normal rows (theory §11.4), the maximum over the
 /// ranks; −∞ for an obstacle without rows. Collective.
 pub fn imprints(p: ProblemView<'_>, u: &[f64]) -> Vec<f64> {
     let comm = p.l.comm();
@@ -439,7 +439,10 @@ pub fn imprints(p: ProblemView<'_>, u: &[f64]) -> Vec<f64> {
     parts
         .iter()
         .map(|part| {
-            comm.max((0..part.rows.n_rows()).map(|i| part.rows.row_times(i, u)).fold(f64::NEG_INFINITY, f64::max))
+            // the normal rows: a tangential row (theory §8.3) measures slip, not indentation
+            let tangential = part.rows.friction.tangential_mask(part.rows.n_rows());
+            let normal = (0..part.rows.n_rows()).filter(|&i| !tangential[i]);
+            comm.max(normal.map(|i| part.rows.row_times(i, u)).fold(f64::NEG_INFINITY, f64::max))
         })
         .collect()
 }

@@ -1,7 +1,10 @@
 //! A small dense convex quadratic programme with non-negative variables and a few equality
 //! constraints, `min ½ xᵀ S x + qᵀ x` subject to `x ≥ 0`, `E x = e`, solved exactly by a finite
 //! primal active-set method, warm-started from the previous call and reusing the Cholesky
-//! factor of the free block while the active set does not change.
+//! factor of the free block while the active set does not change. Degenerate vertices (fewer
+//! free variables than equalities, or free columns of E that span less than its rows) are
+//! handled by keeping the working set linearly independent, completed by column-pivoted
+//! Gram–Schmidt, and by Bland's least-index rule after a step of length zero (theory §4.1).
 //!
 //! Solvers use it for projections onto polyhedral sets by duality: the variables are the
 //! multipliers of the constraint rows and S their Delassus matrix (theory §4.1).
@@ -18,6 +21,13 @@ pub enum QpError {
     /// A block of S that should be positive definite is not (dependent rows in K_h).
     #[error("the Delassus matrix of K_h is singular on the active rows (linearly dependent constraint rows)")]
     Singular,
+    /// The equality rows restricted to the free variables stay rank-deficient (numerically
+    /// dependent columns of E even after completing the working set, theory §4.1).
+    #[error(
+        "the equality constraints of the K_h projection (E x = e) are numerically dependent on every set of free \
+         multipliers"
+    )]
+    DependentEqualities,
     /// The active-set iteration did not terminate within its budget (cycling).
     #[error("the active-set iteration did not terminate in {0} steps")]
     NoTermination(usize),
@@ -100,64 +110,116 @@ impl DenseQp {
         &self.s
     }
 
-    /// Solves for linear term `q`, warm-started from the previous solution.
+    /// Solves for linear term `q`, warm-started from the previous solution: the primal
+    /// active-set method with a linearly independent working set (Nocedal & Wright, Numerical
+    /// Optimization, 2nd ed. 2006, §16.5, Algorithm 16.3; Fletcher, Practical Methods of
+    /// Optimization, 2nd ed. 1987, §10.3). The working set is the equalities and the bounds of
+    /// the bound variables; a degenerate vertex (more zero variables than its dimension needs,
+    /// E_F of rank below m) is first completed to an independent set by freeing zero variables
+    /// ([`Self::span_equalities`]); a blocked step binds one variable, which keeps it
+    /// independent. After the first step of length zero both choices follow the least-index
+    /// rule (Bland 1977), against cycling among degenerate working sets.
     pub fn solve(&mut self, q: &DVector<f64>) -> Result<QpSolution<'_>, QpError> {
         let n = self.n();
-        let m = self.e_mat.nrows();
         let budget = 10 * n + 50;
         let scale = q.amax() + self.s.amax() * self.x.amax();
         let tol = 1e-13 * scale.max(f64::MIN_POSITIVE);
+        let mut least_index = false;
         for step in 0..budget {
-            let (xf, y) = self.solve_free(q)?;
+            let (xf, y, terms) = self.solve_free(q)?;
             let idx: Vec<usize> = (0..n).filter(|&i| self.free[i]).collect();
-            let blocking = idx.iter().zip(xf.iter()).any(|(_, v)| *v < 0.0);
-            if !blocking {
-                for (k, &i) in idx.iter().enumerate() {
-                    self.x[i] = xf[k];
-                }
-                for i in 0..n {
-                    if !self.free[i] {
-                        self.x[i] = 0.0;
-                    }
-                }
-                // optimality on the bound set: w = S x + q + Eᵀ y ≥ 0
-                let w = &self.s * &self.x + q + self.e_mat.transpose() * &y;
-                let worst = (0..n).filter(|&i| !self.free[i]).min_by(|&a, &b| w[a].total_cmp(&w[b]));
-                match worst {
-                    Some(i) if w[i] < -tol => self.free[i] = true,
-                    _ => {
-                        self.last_steps = step + 1;
-                        return Ok(QpSolution { x: &self.x, y });
-                    }
-                }
-            } else {
-                // step toward the free solution until the first variable hits zero; it leaves
-                let mut alpha = 1.0f64;
-                let mut block = 0;
-                for (k, &i) in idx.iter().enumerate() {
-                    if xf[k] < 0.0 {
-                        let r = self.x[i] / (self.x[i] - xf[k]);
-                        if r < alpha {
-                            alpha = r;
-                            block = i;
+            match Self::blocking(&self.x, &idx, &xf, -ROUND_OFF * terms) {
+                None => {
+                    self.take_free_minimiser(&idx, &xf);
+                    match self.released(q, &y, tol, least_index) {
+                        Some(i) => self.free[i] = true,
+                        None => {
+                            self.last_steps = step + 1;
+                            return Ok(QpSolution { x: &self.x, y });
                         }
                     }
                 }
-                for (k, &i) in idx.iter().enumerate() {
-                    self.x[i] = (self.x[i] + alpha * (xf[k] - self.x[i])).max(0.0);
-                }
-                self.x[block] = 0.0;
-                for i in idx {
-                    if self.x[i] == 0.0 {
-                        self.free[i] = false;
+                Some((alpha, block)) => {
+                    // step toward the free minimiser until `block` reaches 0; it alone is bound
+                    for (k, &i) in idx.iter().enumerate() {
+                        self.x[i] = (self.x[i] + alpha * (xf[k] - self.x[i])).max(0.0);
                     }
+                    self.x[block] = 0.0;
+                    self.free[block] = false;
+                    least_index |= alpha == 0.0;
                 }
-            }
-            if m > 0 && !self.free.iter().any(|f| *f) {
-                return Err(QpError::Infeasible);
             }
         }
         Err(QpError::NoTermination(budget))
+    }
+
+    /// The ratio test: the step length α < 1 toward the free minimiser `xf` (on the free
+    /// indices `idx`) at which the first variable reaches 0, and that variable (the least index
+    /// among ties); `None` when `xf` is feasible. A component above `floor` (round-off below
+    /// 0) counts as 0, not as a block.
+    fn blocking(x: &DVector<f64>, idx: &[usize], xf: &DVector<f64>, floor: f64) -> Option<(f64, usize)> {
+        let mut best: Option<(f64, usize)> = None;
+        for (k, &i) in idx.iter().enumerate() {
+            if xf[k] < floor {
+                let r = x[i] / (x[i] - xf[k]);
+                if best.is_none_or(|(a, _)| r < a) {
+                    best = Some((r, i));
+                }
+            }
+        }
+        best
+    }
+
+    /// x := the free minimiser `xf` on `idx` (round-off below 0 cut to 0), 0 on the bound set.
+    fn take_free_minimiser(&mut self, idx: &[usize], xf: &DVector<f64>) {
+        self.x.fill(0.0);
+        for (k, &i) in idx.iter().enumerate() {
+            self.x[i] = xf[k].max(0.0);
+        }
+    }
+
+    /// The bound variable to release at a minimiser of the working set: one whose multiplier
+    /// w = S x + q + Eᵀ y is below −`tol` — the most negative (Dantzig), or the least index
+    /// (Bland) once a degenerate step was taken; `None` at the optimum.
+    fn released(&self, q: &DVector<f64>, y: &DVector<f64>, tol: f64, least_index: bool) -> Option<usize> {
+        let w = &self.s * &self.x + q + self.e_mat.transpose() * y;
+        let mut candidates = (0..self.n()).filter(|&i| !self.free[i] && w[i] < -tol);
+        if least_index { candidates.next() } else { candidates.min_by(|&a, &b| w[a].total_cmp(&w[b])) }
+    }
+
+    /// Completes the working set to a linearly independent one (theory §4.1, the dense QP): when
+    /// the columns E_F of the free variables span less than the m dimensions of the equalities
+    /// (a degenerate vertex: the tilting punch held along a line of nodes), zero variables are
+    /// freed, each the bound column farthest from the span so far — Gram–Schmidt with column
+    /// pivoting (Businger & Golub 1965) on E with rows scaled to unit maximum, run first over
+    /// the free columns (the rank of E_F), then over the bound ones. x does not move: a freed
+    /// variable is 0. Then E_F has rank m and the Schur complement E_F S_FF⁻¹ E_Fᵀ is definite.
+    fn span_equalities(&mut self) -> Result<(), QpError> {
+        let (m, n) = self.e_mat.shape();
+        if m == 0 {
+            return Ok(());
+        }
+        let scaled = scaled_rows(&self.e_mat);
+        let reference = (0..n).map(|j| scaled.column(j).norm()).fold(0.0, f64::max);
+        let mut basis: Vec<DVector<f64>> = Vec::with_capacity(m);
+        for from_free in [true, false] {
+            loop {
+                if basis.len() == m {
+                    return Ok(());
+                }
+                let candidates = (0..n).filter(|&j| self.free[j] == from_free);
+                let farthest = candidates
+                    .map(|j| (j, residual(&basis, scaled.column(j).into_owned())))
+                    .filter(|(_, r)| r.norm() > RANK_TOL * reference)
+                    .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()));
+                let Some((j, r)) = farthest else { break };
+                basis.push(r.normalize());
+                if !from_free {
+                    self.free[j] = true;
+                }
+            }
+        }
+        Err(QpError::DependentEqualities)
     }
 
     /// The Cholesky factor of S_FF for the free set `free` (indices `idx`) from the cached
@@ -183,11 +245,15 @@ impl DenseQp {
     }
 
     /// Minimiser on the free set with the bound variables at 0: x_F and the equality
-    /// multipliers y, from the (cached) Cholesky factor of S_FF and the small Schur system.
-    fn solve_free(&mut self, q: &DVector<f64>) -> Result<(DVector<f64>, DVector<f64>), QpError> {
-        let idx: Vec<usize> = (0..self.n()).filter(|&i| self.free[i]).collect();
+    /// multipliers y, from the (cached) Cholesky factor of S_FF and the small Schur system; and
+    /// the size of the two terms whose difference x_F is, by which its round-off scales.
+    fn solve_free(&mut self, q: &DVector<f64>) -> Result<(DVector<f64>, DVector<f64>, f64), QpError> {
         let m = self.e_mat.nrows();
         let fresh = !matches!(&self.cached, Some(b) if b.free == self.free);
+        if fresh {
+            self.span_equalities()?;
+        }
+        let idx: Vec<usize> = (0..self.n()).filter(|&i| self.free[i]).collect();
         if fresh {
             // one variable more or less than the cached block: an O(n²) update of its factor
             // (the active-set steps move one variable at a time); else a new factorisation
@@ -204,16 +270,55 @@ impl DenseQp {
             let z = chol.solve(&ef.transpose());
             let schur =
                 (&ef * z).cholesky().or_else(|| if m == 0 { DMatrix::<f64>::zeros(0, 0).cholesky() } else { None });
-            let schur = schur.ok_or(QpError::Infeasible)?;
+            let schur = schur.ok_or(QpError::DependentEqualities)?;
             self.cached = Some(FreeBlock { free: self.free.clone(), chol, ef, schur });
         }
         let FreeBlock { chol, ef, schur, .. } = self.cached.as_ref().unwrap();
         let qf = DVector::from_iterator(idx.len(), idx.iter().map(|&i| q[i]));
         let sq = chol.solve(&qf);
         let y = if m == 0 { DVector::zeros(0) } else { schur.solve(&(-(ef * &sq) - &self.e_rhs)) };
-        let xf = -(sq + chol.solve(&(ef.transpose() * &y)));
-        Ok((xf, y))
+        let sy = chol.solve(&(ef.transpose() * &y));
+        let terms = sq.amax() + sy.amax();
+        let xf = -(sq + sy);
+        Ok((xf, y, terms))
     }
+}
+
+/// A column of the row-scaled E whose distance from the span of the others is below this
+/// fraction of the longest column counts as dependent on them ([`DenseQp::span_equalities`]):
+/// the Schur complement squares E_F's condition, so columns closer than 1e-8 would leave it
+/// with a condition near 1e16, where its Cholesky factor carries no digit.
+const RANK_TOL: f64 = 1e-8;
+
+/// A component of the free minimiser x_F = −S_FF⁻¹(q_F + E_Fᵀ y) less than this fraction of its
+/// two terms below 0 is their cancellation's round-off, not a blocking variable. Measured on the
+/// tilting punch held along a line of nodes (tests/robust_newton.rs): a vertex variable freed
+/// to complete the working set, exactly 0, came out −1.1e-16 from terms of 0.90 (half an ulp);
+/// 1e-14 allows ~45 ulps for the conditioning of the small systems.
+const ROUND_OFF: f64 = 1e-14;
+
+/// E with every row scaled to unit maximum modulus: the ranks of its column sets then do not
+/// depend on the units of the equalities (a force and moments about an axis).
+fn scaled_rows(e: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut scaled = e.clone();
+    for mut row in scaled.row_iter_mut() {
+        let amax = row.amax();
+        if amax > 0.0 {
+            row /= amax;
+        }
+    }
+    scaled
+}
+
+/// The component of `v` orthogonal to the orthonormal `basis` (Gram–Schmidt twice, which is
+/// enough for orthogonality to working precision: Giraud et al. 2005).
+fn residual(basis: &[DVector<f64>], mut v: DVector<f64>) -> DVector<f64> {
+    for _ in 0..2 {
+        for b in basis {
+            v -= b * b.dot(&v);
+        }
+    }
+    v
 }
 
 /// Relative residual of E x = e below which the non-negative least-squares start counts as
@@ -351,5 +456,60 @@ mod tests {
         // no point at all: x₂ + 2x₃ = 2.5 > 2 max(x) with Σx = 1
         let rhs = DVector::from_column_slice(&[1.0, 2.5]);
         assert_eq!(DenseQp::new(s, e, rhs).unwrap_err(), QpError::Infeasible);
+    }
+
+    /// A degenerate programme, the tilting punch's in miniature: multipliers at the points
+    /// (0,0), (1,0), (0,1), (1,1), (½,0) carry a unit force at (½, 0), E x = e being the force
+    /// and its moments (3 equalities). The moment about the x₁ axis forces x₃ = x₄ = 0, so every
+    /// feasible point has at most 3 positive multipliers on a line, whose columns of E span only
+    /// 2 dimensions: x = (t, t, 0, 0, 1 − 2t) with t ∈ [0, ½], and for S = I the minimiser of
+    /// ½|x|² + qᵀx is t = clamp((2 − q₁ − q₂ + 2q₅)/6, 0, ½) (closed form: the objective on the
+    /// line is 3t² − t(2 − q₁ − q₂ + 2q₅) + const). For q₅ large it is the vertex t = ½, two
+    /// positive multipliers for three equalities. Before the working set was completed to an
+    /// independent one, the first solve failed ("no feasible starting point": a singular Schur
+    /// complement of E_F).
+    #[test]
+    fn a_degenerate_vertex_with_fewer_free_columns_than_equalities_is_solved_exactly() {
+        let points = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.0)];
+        let e = DMatrix::from_fn(3, 5, |r, j| [1.0, points[j].0, points[j].1][r]);
+        let rhs = DVector::from_column_slice(&[1.0, 0.5, 0.0]);
+        let s = DMatrix::identity(5, 5);
+        let mut qp = DenseQp::new(s.clone(), e.clone(), rhs.clone()).unwrap();
+        // q₃, q₄ < 0 pull toward the off-line points, which the moment forbids; warm starts go
+        // from the interior of the edge to its degenerate vertex and back
+        for q5 in [0.2, 2.0, 0.2, -3.0, 0.2] {
+            let q = DVector::from_column_slice(&[0.3, -0.1, -1.0, -2.0, q5]);
+            let sol = qp.solve(&q).unwrap();
+            let (x, y) = (sol.x.clone(), sol.y.clone());
+            let t = ((2.0 - 0.3 + 0.1 + 2.0 * q5) / 6.0).clamp(0.0, 0.5);
+            let exact = DVector::from_column_slice(&[t, t, 0.0, 0.0, 1.0 - 2.0 * t]);
+            assert!((&x - &exact).amax() < 1e-14, "q₅ = {q5}: x = {x}, expected {exact}");
+            assert_kkt(&s, &e, &rhs, &q, &x, &y);
+        }
+    }
+
+    /// Random programmes of the same kind, with several points on the line of the load among
+    /// random ones, warm-started through many linear terms: KKT holds at every solve.
+    #[test]
+    fn degenerate_programmes_with_collinear_multipliers_meet_kkt() {
+        let mut rng = StdRng::seed_from_u64(3);
+        for n in [6, 12, 40] {
+            let points: Vec<(f64, f64)> = (0..n)
+                .map(|j| if j % 3 == 0 { (rng.random_range(0.0..1.0), 0.0) } else { (rng.random(), rng.random()) })
+                .collect();
+            let e = DMatrix::from_fn(3, n, |r, j| [1.0, points[j].0, points[j].1][r]);
+            // the load inside the hull of the collinear points: every feasible x sits on the line
+            let (lo, hi) =
+                points.iter().filter(|p| p.1 == 0.0).fold((1.0f64, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
+            let rhs = DVector::from_column_slice(&[2.0, 2.0 * (lo + hi) / 2.0, 0.0]);
+            let s = random_spd(n, &mut rng);
+            let mut qp = DenseQp::new(s.clone(), e.clone(), rhs.clone()).unwrap();
+            for _ in 0..20 {
+                let q = DVector::from_fn(n, |_, _| rng.random_range(-3.0..3.0));
+                let sol = qp.solve(&q).unwrap();
+                let (x, y) = (sol.x.clone(), sol.y.clone());
+                assert_kkt(&s, &e, &rhs, &q, &x, &y);
+            }
+        }
     }
 }
