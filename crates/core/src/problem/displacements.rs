@@ -10,6 +10,7 @@ use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
 use crate::problem::friction::{ContactStatus, FrictionRows, SLIP_TOL};
+use crate::problem::row_combination::RowCombination;
 use std::borrow::Cow;
 use std::fmt::Debug;
 
@@ -35,6 +36,9 @@ pub struct ConstraintRows {
     /// Which rows are tangential, and their friction laws (theory §8.3); empty without
     /// friction, every row then a normal row with λ_i ≥ 0.
     pub friction: FrictionRows,
+    /// `Some` when these rows are nodal rows recombined, `g = T⁻¹ g_nodal` (theory §10.1): the
+    /// nodal rows and T, from which the active-set solvers build a sparse change of basis.
+    pub combination: Option<Box<RowCombination>>,
 }
 
 impl ConstraintRows {

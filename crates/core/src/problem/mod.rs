@@ -12,6 +12,7 @@
 //! * [`energies`], [`kkt`] — the energies and KKT residuals of any iterate, free functions of L;
 //! * [`fields`] — fields at the stress points: stresses σ̂ and the plastic state a load step
 //!   starts from (theory §11);
+//! * [`row_combination`] — rows recombined from nodal rows by a sparse T (theory §10.1);
 //! * [`return_mapping`] — the steps yield surfaces' return mappings share;
 //! * [`solver`] — the solver interface: [`solver::Solver`], [`solver::Solution`], the report;
 //! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
@@ -30,6 +31,7 @@ pub mod obstacles;
 pub mod operators;
 pub mod pattern;
 pub mod return_mapping;
+pub mod row_combination;
 pub mod solver;
 pub mod stresses;
 pub mod tensor;
