@@ -142,5 +142,17 @@ fn newton_and_penalty_on_dual_rows_agree_with_uzawa_and_socp() {
     let reference = solve(&Newton { tol: 1e-12, ..Newton::default() }, &l);
     let force: f64 = reference.lambda.iter().sum();
     assert!((force - 0.3).abs() < 1e-10, "Σλ̃ = {force} (the resultant of the recombined rows is F)");
+    // the areas ∫Ñ_j = Σ_k T_kj ∫N_k partition the contact face as the nodal ∫N_k do (Σ_j T_kj = 1),
+    // and give the vertex rows the area the nodal ones lack (∫N_v = 0)
+    let mesh = p.element.mesh();
+    let (dual, nodal) = (
+        saddle_contact::zone::row_areas(mesh, l.data.rows),
+        saddle_contact::zone::row_areas(mesh, &l.data.rows.combination.as_ref().unwrap().nodal),
+    );
+    let (sd, sn) = (dual.iter().sum::<f64>(), nodal.iter().sum::<f64>());
+    assert!((sd - sn).abs() < 1e-14 * sn, "Σ∫Ñ = {sd}, Σ∫N = {sn}");
+    let positive = |a: &[f64]| a.iter().filter(|&&x| x > 0.0).count();
+    println!("rows with area: dual {} of {}, nodal {}", positive(&dual), dual.len(), positive(&nodal));
+    assert!(positive(&dual) > positive(&nodal));
     agree_with_uzawa_and_socp(&l);
 }

@@ -28,6 +28,13 @@ pub enum ContactRows {
     DualQuadratic,
 }
 
+impl ContactRows {
+    /// True for [`ContactRows::Nodal`] (the default, not written back to scenes).
+    pub fn is_nodal(&self) -> bool {
+        *self == ContactRows::Nodal
+    }
+}
+
 /// T of the dual quadratic rows for the nodal rows `rows` on the second-order `mesh`: an edge
 /// node's row combines the rows of its edge's two vertices when both carry one; every other
 /// row is kept. An error when a node carries two rows of one obstacle (friction's tangential

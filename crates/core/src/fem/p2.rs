@@ -44,8 +44,8 @@ pub struct P2 {
     /// B̄: the volumetric strain is the element mean.
     #[serde(default = "yes")]
     pub mean_dilatation: bool,
-    /// The contact rows: `nodal` or `dual_quadratic` (theory §10.1).
-    #[serde(default)]
+    /// The contact rows: `nodal` (the default) or `dual_quadratic` (theory §10.1).
+    #[serde(default, skip_serializing_if = "ContactRows::is_nodal")]
     pub contact_rows: ContactRows,
 }
 
