@@ -35,7 +35,7 @@
 //! [`MAX_BLOCK_DOFS`] dofs (a row coupling a whole surface; the change of basis would be dense
 //! there).
 
-use saddle_core::problem::row_combination::RowCombination;
+use saddle_core::problem::displacements::RowCombination;
 use saddle_core::{ConstraintRows, SolveError, SymmetricPattern};
 
 /// The largest block (dofs coupled through shared rows) given a dense change of basis. Node-to-

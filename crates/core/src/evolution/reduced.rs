@@ -4,8 +4,8 @@
 //! are undetermined: any position out of contact is admissible.
 
 use crate::problem::displacements::ConstraintRows;
+use crate::problem::displacements::RowCombination;
 use crate::problem::lagrangian::{Data, Lagrangian};
-use crate::problem::row_combination::RowCombination;
 
 /// The rows `rows_kept` of `all` on the extras `extras_kept`.
 fn kept(all: &ConstraintRows, rows_kept: &[usize], extras_kept: &[usize]) -> ConstraintRows {

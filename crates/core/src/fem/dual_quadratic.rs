@@ -9,7 +9,7 @@
 
 use crate::mesh::{TET_EDGES, TetMesh};
 use crate::problem::displacements::ConstraintRows;
-use crate::problem::row_combination::RowCombination;
+use crate::problem::displacements::RowCombination;
 use serde::{Deserialize, Serialize};
 
 /// α of the modified quadratic basis: the share of an edge function moved to each of its

@@ -2,7 +2,7 @@
 //!
 //! * [`stresses`] — **P**, the admissible generalised stresses (a yield surface, theory §1–§2);
 //! * [`displacements`] — **K**, the admissible displacements with their extra unknowns (an
-//!   obstacle, theory §1, §3, §8);
+//!   obstacle, theory §1, §3, §8), and rows recombined from nodal rows (theory §10.1);
 //! * [`obstacles`] — several obstacles, K = K₁ ∩ K₂ ∩ … (theory §8): rows and extras
 //!   concatenated, each obstacle reporting on its own part;
 //! * [`comm`] — reductions over the ranks of a distributed problem (the identity on one process);
@@ -12,7 +12,6 @@
 //! * [`energies`], [`kkt`] — the energies and KKT residuals of any iterate, free functions of L;
 //! * [`fields`] — fields at the stress points: stresses σ̂ and the plastic state a load step
 //!   starts from (theory §11);
-//! * [`row_combination`] — rows recombined from nodal rows by a sparse T (theory §10.1);
 //! * [`return_mapping`] — the steps yield surfaces' return mappings share;
 //! * [`solver`] — the solver interface: [`solver::Solver`], [`solver::Solution`], the report;
 //! * [`tensor`], [`elasticity`] — symmetric tensors in Mandel notation and Hooke's law;
@@ -31,7 +30,6 @@ pub mod obstacles;
 pub mod operators;
 pub mod pattern;
 pub mod return_mapping;
-pub mod row_combination;
 pub mod solver;
 pub mod stresses;
 pub mod tensor;

@@ -27,8 +27,8 @@
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
+use crate::problem::displacements::RowCombination;
 use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
-use crate::problem::row_combination::RowCombination;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeSeq, Serializer};
 use serde::{Deserialize, Serialize};
