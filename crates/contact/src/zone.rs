@@ -199,9 +199,16 @@ fn norm(v: [f64; 3]) -> f64 {
 /// facet at each of its nodes; on a second-order one ∫N = 0 at a 6-node facet's vertices and a
 /// third of the facet at each edge node (theory §10.1): a vertex row carries no force under a
 /// smooth pressure and has no area, so its pressure is not defined (and not reported).
-/// [`node_areas_facing`] with "facing" = n₃ < 0.
+/// [`node_areas_facing`] with "facing" = n₃ < 0. Rows recombined from nodal rows get the
+/// recombined weights (theory §10.1: 2|F|/15 at a dual quadratic facet's vertices, |F|/5 at
+/// its edge nodes).
 pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
-    node_areas_facing(mesh, &rows.node, |normal, _| normal[2] < -FACING_TOL * norm(normal))
+    let area = node_areas_facing(mesh, &rows.node, |normal, _| normal[2] < -FACING_TOL * norm(normal));
+    // recombined rows (P2's dual quadratic rows, theory §10.1): ∫Ñ_j = Σ_k T_kj ∫N_k
+    match &rows.combination {
+        None => area,
+        Some(c) => c.weights_from_nodal(&area),
+    }
 }
 
 /// The share of the contact face of each node of `nodes`, ∫_Γ N_i over the boundary facets

@@ -169,6 +169,14 @@ fn whole_problem(
         .map_err(|e| SceneError::Region { field: "mesh".into(), message: e.to_string() })?;
     let dofs = DofMap::new(&mesh, dirichlet)?;
     dofs.check_rigid_motions(&mesh)?;
+    if element.recombines_contact_rows() {
+        return Err(SceneError::Region {
+            field: "discretisation.contact_rows".into(),
+            message: "recombined contact rows (theory §10.1) are not distributed yet: their change of basis couples \
+                      nodes across ranks; use contact_rows = \"nodal\" or run the scene on one process"
+                .into(),
+        });
+    }
     let obstacles = obstacles.discretise(&mesh, &dofs, OBSTACLE_PATH)?;
     if obstacles.rows().has_friction() {
         return Err(SceneError::Region {
@@ -409,6 +417,7 @@ fn decode_part(bytes: &[u8]) -> RankPart {
             node: r.words(),
             warnings: (0..r.word()).map(|_| r.text()).collect(),
             friction: Default::default(),
+            combination: None,
         })
         .collect();
     let global_rows = r.words();

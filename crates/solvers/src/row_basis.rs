@@ -22,12 +22,20 @@
 //! unchanged. Its pattern and the recipe of its values are built once (symbolic/numeric
 //! split): each step only re-weights K's values.
 //!
+//! **Recombined rows** (`rows.combination`, theory §8.1, §10.1: P2's dual quadratic rows) are
+//! `g̃ = T⁻¹ g` of nodal rows g, with a sparse T of one level. An edge row then acts on three
+//! nodes, and a contact zone would be one block; instead the blocks are built for the nodal
+//! rows, and a sparse second factor T_C recombines their coordinates: `x = T_D T_C z`, with
+//! `z_{s_i} = G̃_i x`. T_C couples a row's coordinate with those of the rows it combines (an
+//! edge node and its two vertices, which share every element), so TᵀKT keeps K's pattern.
+//!
 //! Rows that cannot be given coordinates of their own are refused with the rows named: rows
 //! acting on no displacement dof, linearly dependent rows in a block (parallel normals of two
 //! obstacles at one node: the contact forces are then not unique), and blocks of more than
 //! [`MAX_BLOCK_DOFS`] dofs (a row coupling a whole surface; the change of basis would be dense
 //! there).
 
+use saddle_core::problem::displacements::RowCombination;
 use saddle_core::{ConstraintRows, SolveError, SymmetricPattern};
 
 /// The largest block (dofs coupled through shared rows) given a dense change of basis. Node-to-
@@ -55,6 +63,94 @@ struct Block {
     t_inv: Vec<f64>,
 }
 
+/// The sparse change of basis T_C of rows recombined from nodal rows, `g̃ = T⁻¹ g` (theory
+/// §8.1, §10.1): after the blocks have made every nodal row k a coordinate, `G_k x = a_k y_{s_k}`,
+/// a recombined row i gets the coordinate `z_{s_i} = G̃_i x = Σ_k S_ik a_k y_{s_k}` (S = T⁻¹);
+/// kept rows keep theirs. A combined row mixes only kept rows' coordinates and its own, so
+/// T_C and T_C⁻¹ are applied in place, in any order.
+#[derive(Clone, Debug, Default)]
+struct Mix {
+    /// For each recombined row: its coordinate s_i, the row s_i of T_C (y = T_C z) and of T_C⁻¹.
+    rows: Vec<MixRow>,
+    /// The entry of `rows` of each coordinate (`usize::MAX`: a coordinate T_C keeps).
+    of: Vec<usize>,
+}
+
+impl Mix {
+    /// T_C for the recombination `c` of nodal rows made coordinates `dof` with coefficients
+    /// `coef` (module docs); the recombined rows' coefficients become 1.
+    fn new(c: &RowCombination, n: usize, dof: &[usize], coef: &mut [f64]) -> Self {
+        let mut mix = Self { rows: Vec::new(), of: vec![usize::MAX; n] };
+        for (i, t) in c.t.iter().enumerate() {
+            if t.len() == 1 && t[0] == (i, 1.0) {
+                continue;
+            }
+            // y_{s_i} = (T_ii z_{s_i} + Σ_k T_ik a_k z_{s_k}) / a_i,  z_{s_i} = Σ_k S_ik a_k y_{s_k}
+            let forward = t.iter().map(|&(k, w)| (dof[k], if k == i { w } else { w * coef[k] } / coef[i])).collect();
+            let inverse = c.inverse_row(i).map(|(k, s)| (dof[k], s * coef[k])).collect();
+            mix.of[dof[i]] = mix.rows.len();
+            mix.rows.push(MixRow { s: dof[i], forward, inverse });
+        }
+        for (i, t) in c.t.iter().enumerate() {
+            if !(t.len() == 1 && t[0] == (i, 1.0)) {
+                coef[i] = 1.0;
+            }
+        }
+        mix
+    }
+
+    /// v ← M v with M = T_C (`inverse` false) or T_C⁻¹ (true).
+    fn apply(&self, v: &mut [f64], inverse: bool) {
+        for r in &self.rows {
+            v[r.s] = r.of(inverse).iter().map(|&(c, w)| w * v[c]).sum();
+        }
+    }
+
+    /// v ← Mᵀ v with M = T_C (`inverse` false) or T_C⁻¹ (true).
+    fn apply_transpose(&self, v: &mut [f64], inverse: bool) {
+        // a row adds to kept coordinates and its own only: the rows never read each other's
+        for r in &self.rows {
+            let x = std::mem::take(&mut v[r.s]);
+            r.of(inverse).iter().for_each(|&(c, w)| v[c] += w * x);
+        }
+    }
+
+    /// An upper bound of cond₂(T_C): (‖T_C‖₁‖T_C‖_∞‖T_C⁻¹‖₁‖T_C⁻¹‖_∞)^{1/2}, 1 without rows.
+    fn condition(&self) -> f64 {
+        (self.norms(false) * self.norms(true)).sqrt()
+    }
+
+    /// ‖M‖₁‖M‖_∞ of M = T_C (`inverse` false) or T_C⁻¹ (true); kept coordinates are unit rows.
+    fn norms(&self, inverse: bool) -> f64 {
+        let mut col: std::collections::HashMap<usize, f64> = Default::default();
+        let mut row_max: f64 = 1.0;
+        for r in &self.rows {
+            let m = r.of(inverse);
+            row_max = row_max.max(m.iter().map(|e| e.1.abs()).sum());
+            for &(c, w) in m {
+                *col.entry(c).or_insert(if self.of[c] == usize::MAX { 1.0 } else { 0.0 }) += w.abs();
+            }
+        }
+        row_max * col.values().copied().fold(1.0, f64::max)
+    }
+}
+
+/// A recombined row's coordinate s_i and the rows s_i of T_C (`forward`, y = T_C z) and of
+/// T_C⁻¹ (`inverse`), as (coordinate, weight), its own first.
+#[derive(Clone, Debug)]
+struct MixRow {
+    s: usize,
+    forward: Vec<(usize, f64)>,
+    inverse: Vec<(usize, f64)>,
+}
+
+impl MixRow {
+    /// The row of T_C⁻¹ (`inverse`) or of T_C.
+    fn of(&self, inverse: bool) -> &[(usize, f64)] {
+        if inverse { &self.inverse } else { &self.forward }
+    }
+}
+
 /// How each entry of TᵀKT is computed from the entries of K (built once).
 #[derive(Clone, Debug)]
 struct Recipe {
@@ -75,6 +171,9 @@ pub struct RowBasis {
     blocks: Vec<Block>,
     /// Block of each dof (`usize::MAX`: none).
     block_of: Vec<usize>,
+    /// The rows recombined from nodal rows (theory §8.1, §10.1), after the blocks: T_C (boxed:
+    /// a basis travels inside the solvers' projectors, which stay small without recombination).
+    mix: Box<Mix>,
     /// The pattern of TᵀKT and the recipe of its values (`None`: T = I).
     transformed: Option<(SymmetricPattern, Recipe)>,
     /// The largest condition number of a block's T (1 when T = I).
@@ -86,6 +185,9 @@ impl RowBasis {
     /// and the rows it cannot handle.
     pub fn new(rows: &ConstraintRows, n: usize, p: &SymmetricPattern, solver: &str) -> Result<Self, SolveError> {
         let unsupported = |message: String| SolveError::Unsupported { solver: solver.into(), message };
+        let combination = rows.combination.as_deref();
+        // recombined rows: the blocks make the nodal rows coordinates, T_C recombines them
+        let rows = combination.map_or(rows, |c| &c.nodal);
         let nr = rows.n_rows();
         // rows and dofs connected through shared dofs: union–find over dofs
         let mut parent: Vec<usize> = (0..n).collect();
@@ -153,6 +255,7 @@ impl RowBasis {
             }
             blocks.push(block);
         }
+        let mix = Box::new(combination.map_or_else(Mix::default, |c| Mix::new(c, n, &dof, &mut coef)));
         let condition = blocks
             .iter()
             .map(|b| {
@@ -160,9 +263,10 @@ impl RowBasis {
                 let sv = nalgebra::DMatrix::from_row_slice(d, d, &b.t).singular_values();
                 sv.max() / sv.min()
             })
-            .fold(1.0, f64::max);
-        let mut basis = Self { n, dof, coef, blocks, block_of, transformed: None, condition };
-        if !basis.blocks.is_empty() {
+            .fold(1.0, f64::max)
+            * mix.condition();
+        let mut basis = Self { n, dof, coef, blocks, block_of, mix, transformed: None, condition };
+        if !basis.blocks.is_empty() || !basis.mix.rows.is_empty() {
             basis.transformed = Some(basis.recipe(p));
         }
         Ok(basis)
@@ -255,6 +359,9 @@ impl RowBasis {
     /// on its local dofs, its ghost nodes' blocks received from their owners (theory §12.2).
     /// An error when a T_D is singular.
     pub fn with_blocks(&self, more: Vec<DenseBlock>, p: &SymmetricPattern) -> Result<Self, String> {
+        if !self.mix.rows.is_empty() {
+            return Err("recombined contact rows (theory §10.1) are not distributed".into());
+        }
         let mut basis = self.clone();
         for (dofs, t) in more {
             let d = dofs.len();
@@ -277,21 +384,30 @@ impl RowBasis {
         let (cp, ri) = (p.col_ptr(), p.row_idx());
         // x_j = Σ_a T_ja y_a: the coordinates a dof is made of
         let coords = |j: usize| -> Vec<(usize, f64)> {
-            match self.block_of[j] {
+            let y: Vec<(usize, f64)> = match self.block_of[j] {
                 usize::MAX => vec![(j, 1.0)],
                 b => {
                     let blk = &self.blocks[b];
                     let (d, lj) = (blk.dofs.len(), blk.dofs.binary_search(&j).unwrap());
                     (0..d).map(|a| (blk.dofs[a], blk.t[lj * d + a])).filter(|(_, w)| *w != 0.0).collect()
                 }
-            }
+            };
+            // then y = T_C z
+            y.into_iter()
+                .flat_map(|(a, w)| match self.mix.of.get(a).copied().unwrap_or(usize::MAX) {
+                    usize::MAX => vec![(a, w)],
+                    m => self.mix.rows[m].forward.iter().map(|&(c, v)| (c, w * v)).collect(),
+                })
+                .collect()
         };
         // (K')_ab += T_ia K_ij T_jb over both triangles of K, kept for a ≥ b
         let mut touched: Vec<(usize, usize, usize, f64)> = Vec::new(); // (column b, row a, entry, weight)
         let mut plain: Vec<(usize, usize, usize)> = Vec::new(); // (column, row, entry)
         for j in 0..p.n() {
             for (q, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j]) {
-                if self.block_of[i] == usize::MAX && self.block_of[j] == usize::MAX {
+                let kept =
+                    |k: usize| self.block_of[k] == usize::MAX && self.mix.of.get(k).is_none_or(|&m| m == usize::MAX);
+                if kept(i) && kept(j) {
                     plain.push((j, i, q));
                     continue;
                 }
@@ -396,20 +512,24 @@ impl RowBasis {
                 out[b.dofs[a]] = (0..d).map(|j| b.t[j * d + a] * f[b.dofs[j]]).sum();
             }
         }
+        self.mix.apply_transpose(out, false);
     }
 
     /// `x` = T y in place: a displacement from the new coordinates.
     pub fn displacement_from_coordinates(&self, y: &mut [f64]) {
+        self.mix.apply(y, false);
         self.apply_blocks(y, |b| &b.t);
     }
 
     /// `y` = T⁻¹ x in place: a displacement in the new coordinates.
     pub fn displacement_to_coordinates(&self, x: &mut [f64]) {
         self.apply_blocks(x, |b| &b.t_inv);
+        self.mix.apply(x, true);
     }
 
     /// `r` = T⁻ᵀ r in place: a force from the new coordinates.
     pub fn force_from_coordinates(&self, r: &mut [f64]) {
+        self.mix.apply_transpose(r, true);
         let mut tmp = [0.0; MAX_BLOCK_DOFS];
         for b in &self.blocks {
             let d = b.dofs.len();
@@ -473,6 +593,39 @@ mod tests {
         (k, vals)
     }
 
+    /// `basis` is exact for `rows` on the full pattern `p`: G_i x = a_i y_{s_i} for a random x,
+    /// T T⁻¹ = I, Tᵀ(Kx) = (TᵀKT)y for a random SPD K, and T⁻ᵀ undoes Tᵀ.
+    fn assert_exact(basis: &RowBasis, rows: &ConstraintRows, p: &SymmetricPattern) {
+        let n = p.n();
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut y = x.clone();
+        basis.displacement_to_coordinates(&mut y);
+        let mut g = vec![0.0; rows.n_rows()];
+        rows.gap(&x, &vec![0.0; rows.n_extras], &mut g);
+        for (i, gi) in g.iter().enumerate() {
+            let gx = gi - rows.offset[i];
+            assert!((gx - basis.coef[i] * y[basis.dof[i]]).abs() < 1e-14, "row {i}: {gx} vs {}", y[basis.dof[i]]);
+        }
+        let mut back = y.clone();
+        basis.displacement_from_coordinates(&mut back);
+        assert!(back.iter().zip(&x).all(|(a, b)| (a - b).abs() < 1e-14));
+        // TᵀKT against dense algebra: Tᵀ(Kx) = (TᵀKT)y with x = Ty
+        let (k, vals) = spd(n);
+        let mut kt = vec![0.0; basis.pattern(p).nnz()];
+        basis.stiffness(&vals, &mut kt);
+        let mut kty = vec![0.0; n];
+        basis.pattern(p).matvec(&kt, &y, &mut kty);
+        let kx = &k * nalgebra::DVector::from_column_slice(&x);
+        let mut tkx = vec![0.0; n];
+        basis.force_to_coordinates(kx.as_slice(), &mut tkx);
+        for j in 0..n {
+            assert!((tkx[j] - kty[j]).abs() < 1e-12 * kx.amax(), "{j}: {} vs {}", tkx[j], kty[j]);
+        }
+        // T⁻ᵀ undoes Tᵀ
+        basis.force_from_coordinates(&mut tkx);
+        assert!(tkx.iter().zip(kx.iter()).all(|(a, b)| (a - b).abs() < 1e-12 * kx.amax()));
+    }
+
     #[test]
     fn rows_become_coordinates_and_the_stiffness_transforms_like_t_transpose_k_t() {
         // dof 0..3 one node, 3..6 another; row 0: a unit normal (0.6, 0, 0.8) on node 0; row 1 on
@@ -485,35 +638,27 @@ mod tests {
         let basis = RowBasis::new(&rows, 6, &p, "newton").unwrap();
         assert!(!basis.is_identity());
         assert_eq!((basis.dof[2], basis.coef[2]), (5, 2.0));
-        // row values are coordinates: G_i x = a_i y_{s_i} for a random x
-        let x: Vec<f64> = (0..6).map(|i| (i as f64 * 0.37).sin()).collect();
-        let mut y = x.clone();
-        basis.displacement_to_coordinates(&mut y);
-        let mut g = vec![0.0; 3];
-        rows.gap(&x, &[0.0], &mut g);
-        for i in 0..3 {
-            let gx = g[i] - rows.offset[i];
-            assert!((gx - basis.coef[i] * y[basis.dof[i]]).abs() < 1e-14, "row {i}: {gx} vs {}", y[basis.dof[i]]);
-        }
-        let mut back = y.clone();
-        basis.displacement_from_coordinates(&mut back);
-        assert!(back.iter().zip(&x).all(|(a, b)| (a - b).abs() < 1e-14));
-        // TᵀKT against dense algebra: yᵀ(TᵀKT)y = xᵀKx with x = Ty
-        let (k, vals) = spd(6);
-        let mut kt = vec![0.0; basis.pattern(&p).nnz()];
-        basis.stiffness(&vals, &mut kt);
-        let mut kty = vec![0.0; 6];
-        basis.pattern(&p).matvec(&kt, &y, &mut kty);
-        let kx = &k * nalgebra::DVector::from_column_slice(&x);
-        // Tᵀ(Kx) = (TᵀKT)y
-        let mut tkx = vec![0.0; 6];
-        basis.force_to_coordinates(kx.as_slice(), &mut tkx);
-        for j in 0..6 {
-            assert!((tkx[j] - kty[j]).abs() < 1e-12 * kx.amax(), "{j}: {} vs {}", tkx[j], kty[j]);
-        }
-        // T⁻ᵀ undoes Tᵀ
-        basis.force_from_coordinates(&mut tkx);
-        assert!(tkx.iter().zip(kx.iter()).all(|(a, b)| (a - b).abs() < 1e-12 * kx.amax()));
+        assert_exact(&basis, &rows, &p);
+    }
+
+    #[test]
+    fn recombined_rows_become_coordinates_through_a_sparse_basis() {
+        // nodal rows: node 0 a normal (0.6, 0, 0.8) on dofs 0, 2; node 1 the row 2·u₃ (a = 2);
+        // node 2 between them (dofs 6..9), a normal (0, 0.6, 0.8); its row recombined as an
+        // edge row (g₂ − α(g₀ + g₁))/(1 − 2α) acts on all three nodes
+        let mut nodal = ConstraintRows::new(1);
+        nodal.push(&[(0, 0.6), (2, 0.8)], &[-1.0], 0.1, 0);
+        nodal.push(&[(5, 2.0)], &[-1.0], 0.3, 1);
+        nodal.push(&[(7, 0.6), (8, 0.8)], &[-1.0], 0.2, 2);
+        let t = vec![vec![(0, 1.0)], vec![(1, 1.0)], vec![(2, 0.6), (0, 0.2), (1, 0.2)]];
+        let rows = RowCombination::recombine(nodal, t).unwrap();
+        assert_eq!(rows.row(2).0.len(), 5);
+        let p = full(9);
+        let basis = RowBasis::new(&rows, 9, &p, "newton").unwrap();
+        assert_exact(&basis, &rows, &p);
+        assert_eq!(basis.coef, vec![1.0, 2.0, 1.0]);
+        // cond(T) ≥ 1, bounded by the norms of T_D and T_C
+        assert!(basis.condition() >= 1.0 && basis.condition() < 10.0, "{}", basis.condition());
     }
 
     #[test]

@@ -4,7 +4,21 @@
 //! are undetermined: any position out of contact is admissible.
 
 use crate::problem::displacements::ConstraintRows;
+use crate::problem::displacements::RowCombination;
 use crate::problem::lagrangian::{Data, Lagrangian};
+
+/// The rows `rows_kept` of `all` on the extras `extras_kept`.
+fn kept(all: &ConstraintRows, rows_kept: &[usize], extras_kept: &[usize]) -> ConstraintRows {
+    let mut rows = ConstraintRows::new(extras_kept.len());
+    for &i in rows_kept {
+        let (cols, vals) = all.row(i);
+        let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
+        let h: Vec<f64> = extras_kept.iter().map(|&k| all.extra_row(i)[k]).collect();
+        rows.push(&entries, &h, all.offset[i], all.node[i]);
+    }
+    rows.warnings = all.warnings.clone();
+    rows
+}
 
 /// The rows `rows_kept` and the extras `extras_kept` (both ascending) of a problem's K_h, and
 /// their load: the data a reduced L replaces ([`Reduced::lagrangian`]).
@@ -20,14 +34,15 @@ impl Reduced {
     /// The kept rows and extras of `l`'s K_h.
     pub fn new(l: &Lagrangian<'_>, rows_kept: Vec<usize>, extras_kept: Vec<usize>) -> Self {
         let all = l.data.rows;
-        let mut rows = ConstraintRows::new(extras_kept.len());
-        for &i in &rows_kept {
-            let (cols, vals) = all.row(i);
-            let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
-            let h: Vec<f64> = extras_kept.iter().map(|&k| all.extra_row(i)[k]).collect();
-            rows.push(&entries, &h, all.offset[i], all.node[i]);
+        let mut rows = kept(all, &rows_kept, &extras_kept);
+        if let Some(c) = &all.combination {
+            // whole obstacles are dropped, and T combines rows of one obstacle only
+            let mut index = vec![usize::MAX; all.n_rows()];
+            rows_kept.iter().enumerate().for_each(|(k, &i)| index[i] = k);
+            let t = rows_kept.iter().map(|&i| c.t[i].iter().map(|&(k, w)| (index[k], w)).collect()).collect();
+            let nodal = kept(&c.nodal, &rows_kept, &extras_kept);
+            rows.combination = Some(Box::new(RowCombination { nodal, t }));
         }
-        rows.warnings = all.warnings.clone();
         let load = extras_kept.iter().map(|&k| l.data.load[k]).collect();
         Self { rows, load, rows_kept, extras_kept }
     }

@@ -53,7 +53,9 @@ impl DiscreteProblem {
         if let Some(p) = &stresses {
             assert!(p.hardening_dim() <= MAX_HARDENING_DIM, "hardening_dim() exceeds MAX_HARDENING_DIM");
         }
-        let obstacles = obstacles.into().discretise(element.mesh(), element.dofs(), OBSTACLE_PATH)?;
+        let obstacles = obstacles
+            .into()
+            .discretise_with(element.mesh(), element.dofs(), OBSTACLE_PATH, |rows| element.contact_rows(rows))?;
         let nodal_load =
             if loads.is_empty() { Vec::new() } else { nodal_loads(element.mesh(), element.dofs(), loads)? };
         Ok(Self { element, elasticity, stresses, obstacles, nodal_load, supports: None, lifted: None })

@@ -5,6 +5,7 @@
 //! and the discrete problem — an element with the problem's data ([`discrete_problem`]).
 
 pub mod discrete_problem;
+pub mod dual_quadratic;
 pub mod loads;
 #[cfg(test)]
 mod operator_checks;
@@ -16,6 +17,7 @@ pub mod topology;
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::{Dirichlet, DofMap};
+use crate::problem::displacements::ConstraintRows;
 use crate::problem::operators::ElementOperators;
 use std::fmt::Debug;
 
@@ -47,6 +49,11 @@ pub trait FiniteElement: Debug + Send + Sync + dyn_clone::DynClone {
         let mesh = self.prepare_mesh(mesh);
         let dofs = DofMap::with_values(&mesh, dirichlet)?;
         Ok(self.build_with_dofs(mesh, dofs))
+    }
+    /// Whether the element's contact rows are the obstacles' nodal rows recombined
+    /// ([`Discretisation::contact_rows`]; false, the default: the nodal rows themselves).
+    fn recombines_contact_rows(&self) -> bool {
+        false
     }
 }
 
@@ -101,5 +108,11 @@ pub trait Discretisation: ElementOperators {
     /// default) for a rank's part of a distributed problem.
     fn unconstrained(&self) -> Option<Box<dyn Discretisation>> {
         None
+    }
+    /// The element's contact rows of an obstacle's nodal rows `nodal`: the nodal rows (the
+    /// default), or rows recombined from them (P2's dual quadratic rows, theory §10.1). An error
+    /// says why the rows cannot be recombined.
+    fn contact_rows(&self, nodal: ConstraintRows) -> Result<ConstraintRows, String> {
+        Ok(nodal)
     }
 }

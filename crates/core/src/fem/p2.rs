@@ -14,12 +14,14 @@
 //! Hot loops gather, as in [`super::p1p0`]: strains over elements, Bᵀσ over dofs, assembly
 //! over matrix columns.
 
+use super::dual_quadratic::{ContactRows, dual_quadratic_rows};
 use super::p1p0::{strain_of_unit, strain_of_unit_dot};
 use super::topology::{NodalParts, assemble_columns, element_topology};
 use super::{Discretisation, VtkCell};
 use crate::error::SceneError;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::mesh::{TET_EDGES, TetMesh};
+use crate::problem::displacements::ConstraintRows;
 use crate::problem::operators::{ElementOperators, Material, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::tensor::{SQRT2, Sym};
@@ -42,6 +44,9 @@ pub struct P2 {
     /// B̄: the volumetric strain is the element mean.
     #[serde(default = "yes")]
     pub mean_dilatation: bool,
+    /// The contact rows: `nodal` (the default) or `dual_quadratic` (theory §10.1).
+    #[serde(default, skip_serializing_if = "ContactRows::is_nodal")]
+    pub contact_rows: ContactRows,
 }
 
 fn yes() -> bool {
@@ -50,7 +55,7 @@ fn yes() -> bool {
 
 impl Default for P2 {
     fn default() -> Self {
-        Self { mean_dilatation: true }
+        Self { mean_dilatation: true, contact_rows: ContactRows::default() }
     }
 }
 
@@ -62,7 +67,15 @@ impl super::FiniteElement for P2 {
     }
 
     fn build_with_dofs(&self, mesh: TetMesh, dofs: DofMap) -> Box<dyn Discretisation> {
-        Box::new(P2Element::with_dofs(mesh, dofs).with_mean_dilatation(self.mean_dilatation))
+        Box::new(
+            P2Element::with_dofs(mesh, dofs)
+                .with_mean_dilatation(self.mean_dilatation)
+                .with_contact_rows(self.contact_rows),
+        )
+    }
+
+    fn recombines_contact_rows(&self) -> bool {
+        self.contact_rows != ContactRows::Nodal
     }
 }
 
@@ -78,6 +91,8 @@ pub struct P2Element {
     /// Whether the volumetric strain is the element mean (B̄; the default) or pointwise (plain
     /// P2, which locks as ν → ½).
     mean_dilatation: bool,
+    /// The contact rows (theory §10.1).
+    contact_rows: ContactRows,
 }
 
 /// ∇N_a at Gauss point q, from the gradients g of the barycentric coordinates: vertex functions
@@ -148,13 +163,19 @@ impl P2Element {
             .collect();
         let (parts, volumes) = NodalParts::new(mesh, dofs, |m, d| element_topology(&nodes, m.n_nodes(), d));
         let weights = volumes.iter().flat_map(|v| [v / POINTS as f64; POINTS]).collect();
-        Self { parts, weights, nodes, mean_dilatation: true }
+        Self { parts, weights, nodes, mean_dilatation: true, contact_rows: ContactRows::default() }
     }
 
     /// The same problem with the volumetric strain pointwise (`false`: plain P2, which locks as
     /// ν → ½) or the element mean (`true`, B̄: the default).
     pub fn with_mean_dilatation(mut self, on: bool) -> Self {
         self.mean_dilatation = on;
+        self
+    }
+
+    /// The same element with the contact rows `rows` (theory §10.1).
+    pub fn with_contact_rows(mut self, rows: ContactRows) -> Self {
+        self.contact_rows = rows;
         self
     }
 
@@ -211,7 +232,11 @@ impl Discretisation for P2Element {
 
     fn unconstrained(&self) -> Option<Box<dyn Discretisation>> {
         let dofs = DofMap::from_fixed(&vec![[false; 3]; self.parts.mesh.n_nodes()]);
-        Some(Box::new(Self::with_dofs(self.parts.mesh.clone(), dofs).with_mean_dilatation(self.mean_dilatation)))
+        Some(Box::new(
+            Self::with_dofs(self.parts.mesh.clone(), dofs)
+                .with_mean_dilatation(self.mean_dilatation)
+                .with_contact_rows(self.contact_rows),
+        ))
     }
 
     fn dofs(&self) -> &DofMap {
@@ -239,6 +264,13 @@ impl Discretisation for P2Element {
     /// Plain P2 (without B̄) locks as ν → ½; with B̄ it does not.
     fn locks(&self) -> bool {
         !self.mean_dilatation
+    }
+
+    fn contact_rows(&self, nodal: ConstraintRows) -> Result<ConstraintRows, String> {
+        match self.contact_rows {
+            ContactRows::Nodal => Ok(nodal),
+            ContactRows::DualQuadratic => dual_quadratic_rows(self.mesh(), nodal),
+        }
     }
 }
 

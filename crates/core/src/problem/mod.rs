@@ -2,7 +2,7 @@
 //!
 //! * [`stresses`] — **P**, the admissible generalised stresses (a yield surface, theory §1–§2);
 //! * [`displacements`] — **K**, the admissible displacements with their extra unknowns (an
-//!   obstacle, theory §1, §3, §8);
+//!   obstacle, theory §1, §3, §8), and rows recombined from nodal rows (theory §10.1);
 //! * [`obstacles`] — several obstacles, K = K₁ ∩ K₂ ∩ … (theory §8): rows and extras
 //!   concatenated, each obstacle reporting on its own part;
 //! * [`comm`] — reductions over the ranks of a distributed problem (the identity on one process);

@@ -27,6 +27,7 @@
 use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
+use crate::problem::displacements::RowCombination;
 use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
 use crate::problem::slip::{SlipHistory, dissipation};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
@@ -225,8 +226,25 @@ impl Obstacles {
     /// obstacle's H columns at its own offset among the concatenated extras; the loads
     /// concatenated; the warnings concatenated, each naming its obstacle's path.
     pub fn discretise(self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<DiscreteObstacles, SceneError> {
+        self.discretise_with(mesh, dofs, path, Ok)
+    }
+
+    /// [`Obstacles::discretise`] with every obstacle's rows passed through `rows` (the
+    /// element's contact rows, [`crate::Discretisation::contact_rows`]: the nodal rows, or
+    /// rows recombined from them, theory §10.1). Its error names the obstacle's path.
+    pub fn discretise_with(
+        self,
+        mesh: &TetMesh,
+        dofs: &DofMap,
+        path: &str,
+        rows: impl Fn(ConstraintRows) -> Result<ConstraintRows, String>,
+    ) -> Result<DiscreteObstacles, SceneError> {
         let rows = (self.list.iter().enumerate())
-            .map(|(i, o)| o.k.discretise(mesh, dofs, &self.path(path, i)))
+            .map(|(i, o)| {
+                let field = self.path(path, i);
+                let nodal = o.k.discretise(mesh, dofs, &field)?;
+                rows(nodal).map_err(|message| SceneError::Region { field, message })
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let discrete = DiscreteObstacles::concatenate(self, rows, path);
         discrete.obstacles.check_independent_at_shared_nodes(&discrete.parts, mesh, path)?;
@@ -304,6 +322,30 @@ impl Obstacles {
             ),
         })
     }
+}
+
+/// The rows `rows_of(part)` of every part concatenated, each part's H columns at its extras'
+/// offset among `n_extras`, its friction blocks shifted to its rows, its warnings appended.
+fn concatenated(
+    parts: &[ObstacleRows],
+    n_extras: usize,
+    rows_of: impl Fn(&ConstraintRows) -> &ConstraintRows,
+) -> ConstraintRows {
+    let mut all = ConstraintRows::new(n_extras);
+    let mut h = vec![0.0; n_extras];
+    for part in parts {
+        let rows = rows_of(&part.rows);
+        for i in 0..rows.n_rows() {
+            let (cols, vals) = rows.row(i);
+            let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
+            h.iter_mut().for_each(|x| *x = 0.0);
+            h[part.extra_range.clone()].copy_from_slice(rows.extra_row(i));
+            all.push(&entries, &h, rows.offset[i], rows.node[i]);
+        }
+        all.friction.extend_shifted(&rows.friction, part.row_range.start);
+        all.warnings.extend(rows.warnings.iter().cloned());
+    }
+    all
 }
 
 /// `warning`, prefixed `path: ` unless it already names the path (`obstacle.zone: …`).
@@ -386,18 +428,19 @@ impl DiscreteObstacles {
             parts.push(ObstacleRows { row_range, extra_range: n_extras..n_extras + n, rows });
             n_extras += n;
         }
-        let mut all = ConstraintRows::new(n_extras);
-        let mut h = vec![0.0; n_extras];
-        for part in &parts {
-            for i in 0..part.rows.n_rows() {
-                let (cols, vals) = part.rows.row(i);
-                let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
-                h.iter_mut().for_each(|x| *x = 0.0);
-                h[part.extra_range.clone()].copy_from_slice(part.rows.extra_row(i));
-                all.push(&entries, &h, part.rows.offset[i], part.rows.node[i]);
-            }
-            all.friction.extend_shifted(&part.rows.friction, part.row_range.start);
-            all.warnings.extend(part.rows.warnings.iter().cloned());
+        let mut all = concatenated(&parts, n_extras, |r| r);
+        if parts.iter().any(|p| p.rows.combination.is_some()) {
+            let nodal = concatenated(&parts, n_extras, |r| r.combination.as_ref().map_or(r, |c| &c.nodal));
+            let t = (parts.iter())
+                .flat_map(|p| {
+                    let shift = p.row_range.start;
+                    (0..p.rows.n_rows()).map(move |i| match &p.rows.combination {
+                        Some(c) => c.t[i].iter().map(|&(k, w)| (k + shift, w)).collect(),
+                        None => vec![(i + shift, 1.0)],
+                    })
+                })
+                .collect();
+            all.combination = Some(Box::new(RowCombination { nodal, t }));
         }
         let load = obstacles.load();
         Self { obstacles, rows: all, load, parts, history: SlipHistory::default() }
@@ -416,7 +459,13 @@ impl DiscreteObstacles {
         let rows = (self.obstacles.list.iter().zip(&self.parts).enumerate())
             .map(|(i, (o, part))| {
                 let path = self.obstacles.path(OBSTACLE_PATH, i);
-                o.k.rows_at_factor(factor, &part.rows, mesh, dofs, &path).map(|r| r.into_owned())
+                let Some(c) = &part.rows.combination else {
+                    return o.k.rows_at_factor(factor, &part.rows, mesh, dofs, &path).map(|r| r.into_owned());
+                };
+                // the plugin scales its own (nodal) rows; they are recombined as before
+                let nodal = o.k.rows_at_factor(factor, &c.nodal, mesh, dofs, &path)?.into_owned();
+                RowCombination::recombine(nodal, c.t.clone())
+                    .map_err(|message| SceneError::Region { field: path.clone(), message })
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self::concatenate(scaled, rows, OBSTACLE_PATH))
@@ -542,7 +591,16 @@ impl DiscreteObstacles {
     /// [`AdmissibleDisplacements::gap`] on its own rows, extras and slice of `out`.
     pub fn gap(&self, mesh: &TetMesh, dofs: &DofMap, u: &[f64], extras: &[f64], out: &mut [f64]) {
         for (o, p) in self.obstacles.iter().zip(&self.parts) {
-            o.k.gap(mesh, dofs, &p.rows, u, &extras[p.extra_range.clone()], &mut out[p.row_range.clone()]);
+            let (v, out) = (&extras[p.extra_range.clone()], &mut out[p.row_range.clone()]);
+            match &p.rows.combination {
+                None => o.k.gap(mesh, dofs, &p.rows, u, v, out),
+                // the plugin's gap is nodal: g̃ = T⁻¹ g (theory §10.1)
+                Some(c) => {
+                    let mut nodal = vec![0.0; out.len()];
+                    o.k.gap(mesh, dofs, &c.nodal, u, v, &mut nodal);
+                    c.from_nodal(&nodal, out);
+                }
+            }
         }
     }
 
