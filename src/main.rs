@@ -323,9 +323,10 @@ fn run(scene: PathBuf, out: Option<PathBuf>, overrides: Overrides, quiet: bool) 
     })?;
     if !quiet {
         eprintln!(
-            "{}: {} dofs, {} elements, {} contact rows, solver {}",
+            "{}: {} dofs, {} elements, {} stress points, {} contact rows, solver {}",
             scene.display(),
             loaded.problem.element.n_dofs(),
+            loaded.problem.element.mesh().n_elements(),
             loaded.problem.element.n_points(),
             loaded.problem.obstacles.rows().n_rows(),
             loaded.solver.name()
