@@ -81,20 +81,14 @@ impl Mix {
     /// `coef` (module docs); the recombined rows' coefficients become 1.
     fn new(c: &RowCombination, n: usize, dof: &[usize], coef: &mut [f64]) -> Self {
         let mut mix = Self { rows: Vec::new(), of: vec![usize::MAX; n] };
-        for (i, t) in c.t.iter().enumerate() {
-            if t.len() == 1 && t[0] == (i, 1.0) {
-                continue;
-            }
+        for (i, t) in c.t.iter().enumerate().filter(|&(i, _)| !c.is_kept(i)) {
             // y_{s_i} = (T_ii z_{s_i} + Σ_k T_ik a_k z_{s_k}) / a_i,  z_{s_i} = Σ_k S_ik a_k y_{s_k}
             let forward = t.iter().map(|&(k, w)| (dof[k], if k == i { w } else { w * coef[k] } / coef[i])).collect();
             let inverse = c.inverse_row(i).map(|(k, s)| (dof[k], s * coef[k])).collect();
             mix.of[dof[i]] = mix.rows.len();
             mix.rows.push(MixRow { s: dof[i], forward, inverse });
-        }
-        for (i, t) in c.t.iter().enumerate() {
-            if !(t.len() == 1 && t[0] == (i, 1.0)) {
-                coef[i] = 1.0;
-            }
+            // only row i itself reads a_i (the others combine kept rows), so it can change now
+            coef[i] = 1.0;
         }
         mix
     }

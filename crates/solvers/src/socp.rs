@@ -292,8 +292,9 @@ impl Socp {
             let change = next.iter().zip(&normal).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
             let size = next.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
             normal = next;
-            prog.coulomb = Some((it, change / size.max(f64::MIN_POSITIVE)));
-            monitor.iteration(it, change / size.max(f64::MIN_POSITIVE), self.coulomb_tol);
+            let relative = change / size.max(f64::MIN_POSITIVE);
+            prog.coulomb = Some((it, relative));
+            monitor.iteration(it, relative, self.coulomb_tol);
             if change <= self.coulomb_tol * size {
                 break;
             }

@@ -409,7 +409,7 @@ pub fn single_quantity(p: ProblemView<'_>, sol: &Solution, quantity: &str) -> Op
 }
 
 /// Each obstacle's report on the solution (`u`, `extras`, `lambda`), with its imprint
-/// max_i (G u)_i over its rows, the largest displacement of its candidate nodes away from it
+/// max_i (G u)_i over its normal rows, the largest displacement of its candidate nodes away from it
 /// (theory §11.4; generic, from the rows), the quantities named like an extra in
 /// `undetermined` (theory §11.3) NaN: written null, and with friction `dissipated_energy`, the
 /// energy friction has dissipated up to the solution (theory §11.6).

@@ -261,7 +261,7 @@ impl RowCombination {
         if t.len() != n {
             return Err(format!("T has {} rows for {n} rows", t.len()));
         }
-        let kept = |k: usize| t[k].len() == 1 && t[k][0] == (k, 1.0);
+        let kept = |k: usize| Self::is_kept_row(&t[k], k);
         for (i, r) in t.iter().enumerate() {
             match r.first() {
                 Some(&(k, d)) if k == i && d != 0.0 => {}
@@ -272,6 +272,16 @@ impl RowCombination {
             }
         }
         Ok(())
+    }
+
+    /// Row `r` of T is the unit row of its own row `i`: row i is kept, not recombined.
+    fn is_kept_row(r: &[(usize, f64)], i: usize) -> bool {
+        r.len() == 1 && r[0] == (i, 1.0)
+    }
+
+    /// Row i is kept (its row of T the unit row), not recombined.
+    pub fn is_kept(&self, i: usize) -> bool {
+        Self::is_kept_row(&self.t[i], i)
     }
 
     /// Row i of T⁻¹ as (row k, S_ik), its own entry first.

@@ -548,11 +548,6 @@ impl DiscreteObstacles {
         self
     }
 
-    /// The slip history these rows start from (theory §11.6).
-    pub fn history(&self) -> &SlipHistory {
-        &self.history
-    }
-
     /// Each obstacle's energy dissipated by friction up to the solution (u, V, λ) of these rows:
     /// the history's, plus the step's `−Σ λ_t·Δs` ([`dissipation`]); 0 without friction.
     pub fn dissipated(&self, u: &[f64], extras: &[f64], lambda: &[f64]) -> Vec<f64> {
@@ -561,6 +556,11 @@ impl DiscreteObstacles {
         }
         let mut increments = vec![0.0; self.rows.n_rows()];
         self.rows.gap(u, extras, &mut increments);
+        self.dissipated_with(&increments, lambda)
+    }
+
+    /// [`Self::dissipated`] from the rows' values `increments` at the solution.
+    fn dissipated_with(&self, increments: &[f64], lambda: &[f64]) -> Vec<f64> {
         self.parts
             .iter()
             .enumerate()
@@ -578,13 +578,14 @@ impl DiscreteObstacles {
         if !self.rows.has_friction() {
             return SlipHistory::default();
         }
-        let mut slip = vec![0.0; self.rows.n_rows()];
-        self.rows.gap(u, extras, &mut slip);
-        let tangential = self.rows.friction.tangential_mask(slip.len());
-        for (i, s) in slip.iter_mut().enumerate() {
-            *s = if tangential[i] { *s + self.history.slip.get(i).copied().unwrap_or(0.0) } else { 0.0 };
-        }
-        SlipHistory { slip, dissipated: self.dissipated(u, extras, lambda) }
+        let mut increments = vec![0.0; self.rows.n_rows()];
+        self.rows.gap(u, extras, &mut increments);
+        let dissipated = self.dissipated_with(&increments, lambda);
+        let tangential = self.rows.friction.tangential_mask(increments.len());
+        let slip = (increments.iter().enumerate())
+            .map(|(i, ds)| if tangential[i] { ds + self.history.slip.get(i).copied().unwrap_or(0.0) } else { 0.0 })
+            .collect();
+        SlipHistory { slip, dissipated }
     }
 
     /// g(u, V) of the concatenation evaluated directly from the geometry: each obstacle's

@@ -19,11 +19,6 @@ pub struct SlipHistory {
 }
 
 impl SlipHistory {
-    /// No slip carried and nothing dissipated.
-    pub fn is_zero(&self) -> bool {
-        self.slip.iter().all(|s| *s == 0.0) && self.dissipated.iter().all(|d| *d == 0.0)
-    }
-
     /// Lowers the offset of every tangential row of `rows` by its carried slip S (rows `first..`
     /// of the history's numbering): the rows then give the increments Δs = s − S.
     pub fn shift_offsets(&self, rows: &mut ConstraintRows, first: usize) {
