@@ -10,11 +10,10 @@ use crate::problem::lagrangian::{Data, Lagrangian};
 /// The rows `rows_kept` of `all` on the extras `extras_kept`.
 fn kept(all: &ConstraintRows, rows_kept: &[usize], extras_kept: &[usize]) -> ConstraintRows {
     let mut rows = ConstraintRows::new(extras_kept.len());
+    let mut h = vec![0.0; extras_kept.len()];
     for &i in rows_kept {
-        let (cols, vals) = all.row(i);
-        let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
-        let h: Vec<f64> = extras_kept.iter().map(|&k| all.extra_row(i)[k]).collect();
-        rows.push(&entries, &h, all.offset[i], all.node[i]);
+        h.iter_mut().zip(extras_kept).for_each(|(x, &k)| *x = all.extra_row(i)[k]);
+        rows.push_row_of(all, i, &h);
     }
     rows.warnings = all.warnings.clone();
     rows

@@ -64,6 +64,19 @@ impl ConstraintRows {
         self.node.push(node);
     }
 
+    /// Appends row i of `other` (its G row, offset and node) with the H row `extras`: a row
+    /// kept or moved from other rows, without an entry list per row.
+    pub fn push_row_of(&mut self, other: &ConstraintRows, i: usize, extras: &[f64]) {
+        assert_eq!(extras.len(), self.n_extras);
+        let (cols, vals) = other.row(i);
+        self.col.extend_from_slice(cols);
+        self.val.extend_from_slice(vals);
+        self.row_ptr.push(self.col.len());
+        self.extra.extend_from_slice(extras);
+        self.offset.push(other.offset[i]);
+        self.node.push(other.node[i]);
+    }
+
     /// True when some rows are tangential rows of a friction law (theory §8.3).
     pub fn has_friction(&self) -> bool {
         !self.friction.is_empty()

@@ -336,11 +336,9 @@ fn concatenated(
     for part in parts {
         let rows = rows_of(&part.rows);
         for i in 0..rows.n_rows() {
-            let (cols, vals) = rows.row(i);
-            let entries: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
             h.iter_mut().for_each(|x| *x = 0.0);
             h[part.extra_range.clone()].copy_from_slice(rows.extra_row(i));
-            all.push(&entries, &h, rows.offset[i], rows.node[i]);
+            all.push_row_of(rows, i, &h);
         }
         all.friction.extend_shifted(&rows.friction, part.row_range.start);
         all.warnings.extend(rows.warnings.iter().cloned());
