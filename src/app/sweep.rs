@@ -16,7 +16,8 @@ use crate::io::outdir::{OutDir, OutError};
 use crate::io::scene::{Scene, element_by_type};
 use crate::io::summary::{Summary, check_quantity, reaction_quantities, reported_quantities};
 use saddle_core::error::{check, number};
-use saddle_core::{DiscreteProblem, Evolution, SceneError, Silent, Solver};
+use saddle_core::evolution::SecantPredictor;
+use saddle_core::{DiscreteProblem, Evolution, SceneError, Silent, Solver, Start};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -195,10 +196,15 @@ fn solve_points(
     }
     *out_dir = Some(OutDir::claim(out)?);
     let mut points = Vec::with_capacity(opts.factors.len());
+    let mut predictor = SecantPredictor::default();
     for &factor in &opts.factors {
         let started = Instant::now();
-        let point = match Evolution::new(problem).step(factor, solver, &mut Silent) {
+        let mut path = Evolution::new(problem).starting_from(predictor.predict(factor));
+        let point = match path.step(factor, solver, &mut Silent) {
             Ok(step) => {
+                if step.solution.report.converged {
+                    predictor.record(factor, Start::from_solution(&step.solution));
+                }
                 let s = Summary::new(step.problem.view(), &step.solution, None);
                 SweepPoint {
                     factor,

@@ -18,9 +18,11 @@
 pub mod cutting;
 pub mod path;
 pub mod reduced;
+pub mod secant;
 pub mod step;
 
 pub use cutting::{Increment, StepCutting};
 pub use path::{Evolution, PathError, StepSolution, step_factors};
 pub use reduced::Reduced;
+pub use secant::SecantPredictor;
 pub use step::LoadStep;

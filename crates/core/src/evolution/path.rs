@@ -99,6 +99,14 @@ impl<'a> Evolution<'a> {
         }
     }
 
+    /// The same path with its first solve started from `start` (the iterate only: the state
+    /// stays zero, so the step is still the stationary problem; theory §11.2). A start whose
+    /// sizes do not fit the step is ignored, as a load step's is.
+    pub fn starting_from(mut self, start: Option<Start>) -> Self {
+        self.start = start;
+        self
+    }
+
     /// The state the next step starts from.
     pub fn state(&self) -> &PlasticState {
         &self.state
