@@ -24,6 +24,7 @@
 //! (inexact Newton).
 
 use crate::linear::{self, InSolver, lower, near_null_space};
+use crate::newton_friction::SlipPair;
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
 use saddle_core::linalg::{AmgParams, Csr, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
@@ -460,6 +461,9 @@ pub struct ActiveSetSystem {
     pub factorisations: usize,
     /// Triangular solve pairs (direct) or CG solves (AMG) so far.
     pub solves: usize,
+    /// The slipping friction pairs of the next step (theory §8.3, [`crate::newton_friction`]):
+    /// their Robin conditions enter the tangent and the forces; empty without friction.
+    pub slips: Vec<SlipPair>,
 }
 
 impl ActiveSetSystem {
@@ -583,6 +587,7 @@ impl ActiveSetSystem {
             symbolic_analyses: 0,
             factorisations: 0,
             solves: 0,
+            slips: Vec::new(),
         }
     }
 
@@ -657,6 +662,17 @@ impl ActiveSetSystem {
                 self.work[q] = 0.0;
             }
         }
+        // the slipping pairs' Robin conditions: a N a on their (free) coordinates
+        for sp in &self.slips {
+            for (pi, qi) in [(0, 0), (1, 1), (1, 0)] {
+                let (i, j) = (sp.tangent + pi, sp.tangent + qi);
+                let (si, sj) = (basis.dof[i], basis.dof[j]);
+                let (row, col) = (si.max(sj), si.min(sj));
+                let ri = p.row_idx();
+                let at = ri[cp[col]..cp[col + 1]].binary_search(&row).expect("a node's coordinates are coupled in L");
+                self.work[cp[col] + at] += basis.coef[i] * sp.n[pi][qi] * basis.coef[j];
+            }
+        }
         if let Some(chol) = self.backend.cholesky() {
             chol.factorise(&self.work).in_solver(&self.solver)?;
             self.factorisations += 1;
@@ -682,6 +698,18 @@ impl ActiveSetSystem {
             for i in (0..nr).filter(|&i| active[i]) {
                 let s = basis.dof[i];
                 xcol[s] = self.work[cp[s]] * dcol[s];
+            }
+            // a slipping pair's forces F₀ (column 0) and its coupling −a N h to the extras
+            for sp in &self.slips {
+                for pi in 0..2 {
+                    let i = sp.tangent + pi;
+                    let (s, a) = (basis.dof[i], basis.coef[i]);
+                    xcol[s] += a * if c == 0 {
+                        sp.force[pi]
+                    } else {
+                        -(0..2).map(|q| sp.n[pi][q] * rows.extra_row(sp.tangent + q)[c - 1]).sum::<f64>()
+                    };
+                }
             }
         }
         let switched = matches!(&self.backend, LinearBackend::Amg(it) if it.switched);
@@ -761,7 +789,21 @@ impl ActiveSetSystem {
                 }
             }
         }
-        let mut step = step_from_reactions(l, active, &x, &lam0, &lam_v, &self.solver)?;
+        // the slipping pairs' forces F₀ − N δs, δs = a dy + H dV with dy = dy⁰ + W dV
+        let mut carried = active.to_vec();
+        for sp in &self.slips {
+            for pi in 0..2 {
+                let i = sp.tangent + pi;
+                carried[i] = true;
+                let at = |q: usize, c: usize| x[c * n + basis.dof[sp.tangent + q]] * basis.coef[sp.tangent + q];
+                lam0[i] = sp.force[pi] - (0..2).map(|q| sp.n[pi][q] * at(q, 0)).sum::<f64>();
+                for kx in 0..ne {
+                    let h = |q: usize| rows.extra_row(sp.tangent + q)[kx];
+                    lam_v[(i, kx)] = -(0..2).map(|q| sp.n[pi][q] * (at(q, 1 + kx) + h(q))).sum::<f64>();
+                }
+            }
+        }
+        let mut step = step_from_reactions(l, &carried, &x, &lam0, &lam_v, &self.solver)?;
         basis.displacement_from_coordinates(&mut step.du);
         Ok(step)
     }
