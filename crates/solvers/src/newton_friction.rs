@@ -94,6 +94,10 @@ pub(crate) fn friction_active_set(
 
 /// The Robin condition of a pair slipping at the trial `trial` = λ_t − κ s (module docs).
 fn slip_pair(tangent: usize, r: f64, kappa: f64, lt: [f64; 2], trial: [f64; 2]) -> SlipPair {
+    if r <= 0.0 {
+        // an empty disc: no force, whatever the slip (also at t = 0, where P's derivative is I)
+        return SlipPair { tangent, n: [[0.0; 2]; 2], force: [0.0; 2] };
+    }
     let (m, _) = project_disc_derivative(r, trial);
     let p = project_disc(r, trial);
     let f = [lt[0] - p[0], lt[1] - p[1]];
