@@ -664,14 +664,7 @@ impl ActiveSetSystem {
         }
         // the slipping pairs' Robin conditions: a N a on their (free) coordinates
         for sp in &self.slips {
-            for (pi, qi) in [(0, 0), (1, 1), (1, 0)] {
-                let (i, j) = (sp.tangent + pi, sp.tangent + qi);
-                let (si, sj) = (basis.dof[i], basis.dof[j]);
-                let (row, col) = (si.max(sj), si.min(sj));
-                let ri = p.row_idx();
-                let at = ri[cp[col]..cp[col + 1]].binary_search(&row).expect("a node's coordinates are coupled in L");
-                self.work[cp[col] + at] += basis.coef[i] * sp.n[pi][qi] * basis.coef[j];
-            }
+            basis.add_pair_block(l.pattern(), sp.tangent, sp.n, &mut self.work);
         }
         if let Some(chol) = self.backend.cholesky() {
             chol.factorise(&self.work).in_solver(&self.solver)?;

@@ -50,7 +50,7 @@ use crate::forcing::{ForcingRule, ForcingTerms};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
-use crate::newton_friction::active_set_with_friction;
+use crate::newton_friction::{active_set_with_friction, touch_loaded_extras_with_friction};
 use crate::penalty::Penalty;
 use crate::residual::History;
 use crate::row_basis::RowBasis;
@@ -728,6 +728,7 @@ impl<'a> Run<'a> {
             let (cold, mut slips) = (self.cold && s.it == 0, Vec::new());
             let at = (&s.lambda[..], &w.gap[..], &self.row_stiffness[..]);
             active_set_with_friction(rows, self.system.basis(), at, cold, &mut s.active, &mut slips);
+            touch_loaded_extras_with_friction(l, &mut s.active, &slips, &w.gap);
             if let Some(system) = self.system.serial() {
                 system.slips = slips;
             }
@@ -740,7 +741,9 @@ impl<'a> Run<'a> {
         } else {
             primal_dual_update(&s.lambda, &self.row_stiffness, &w.gap, &mut s.active)
         };
-        changed += touch_loaded_extras(l, &mut s.active, &w.gap);
+        if !rows.has_friction() {
+            changed += touch_loaded_extras(l, &mut s.active, &w.gap);
+        }
         let changed = l.comm().sum_count(changed);
         // the elastic phase ends once its active set has settled: the last step solved it
         if s.elastic_phase && s.it > 0 && (changed == 0 || s.it >= ELASTIC_PHASE_MAX_STEPS) {

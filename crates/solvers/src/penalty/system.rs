@@ -379,7 +379,10 @@ impl PenaltySystem {
         for i in (0..l.data.rows.n_rows()).filter(|&i| active[i]) {
             self.hess[cp[self.slaves.dof[i]]] += self.k[i] * self.slaves.coef[i].powi(2);
         }
-        add_pair_hessians(&self.friction, &self.pair_hess, &self.slaves, l.pattern(), &mut self.hess);
+        // the friction pairs' Hessians D_f (a_i a_j ∂²φ_k/∂s_i∂s_j on their coordinates)
+        for (b, (t, _)) in self.friction.pairs().enumerate() {
+            self.slaves.add_pair_block(l.pattern(), t, self.pair_hess[b], &mut self.hess);
+        }
         let (dmin, dmax) = cp[..n].iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &q| {
             let x = self.hess[q];
             (lo.min(x), hi.max(x))
@@ -518,26 +521,4 @@ fn extra_stiffness(l: &Lagrangian<'_>) -> Result<Vec<f64>, SolveError> {
         }
     }
     Ok(k_v)
-}
-
-/// The friction pairs' Hessians D_f (`a_i a_j ∂²φ_k/∂s_i∂s_j` on each pair's coordinates, theory
-/// §4.3) added to `hess` on the rows' pattern (its lower triangle; L's pattern `p`).
-fn add_pair_hessians(
-    friction: &RegularisedFriction,
-    pair_hess: &[[[f64; 2]; 2]],
-    slaves: &RowBasis,
-    p: &saddle_core::SymmetricPattern,
-    hess: &mut [f64],
-) {
-    let pattern = slaves.pattern(p);
-    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-    for (b, (t, _)) in friction.pairs().enumerate() {
-        for (p, q) in [(0, 0), (1, 1), (1, 0)] {
-            let (i, j) = (t + p, t + q);
-            let (si, sj) = (slaves.dof[i], slaves.dof[j]);
-            let (row, col) = (si.max(sj), si.min(sj));
-            let at = ri[cp[col]..cp[col + 1]].binary_search(&row).expect("a node's coordinates are coupled in L");
-            hess[cp[col] + at] += slaves.coef[i] * slaves.coef[j] * pair_hess[b][p][q];
-        }
-    }
 }
