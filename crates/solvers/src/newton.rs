@@ -41,8 +41,8 @@
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{
-    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, analysis_due, direct_budget, direct_is_cheaper,
-    primal_dual_update, touch_loaded_extras,
+    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, active_set_with_friction, analysis_due, direct_budget,
+    direct_is_cheaper, primal_dual_update, touch_loaded_extras, touch_loaded_extras_with_friction,
 };
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
@@ -50,7 +50,6 @@ use crate::forcing::{ForcingRule, ForcingTerms};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
-use crate::newton_friction::{active_set_with_friction, touch_loaded_extras_with_friction};
 use crate::penalty::Penalty;
 use crate::residual::History;
 use crate::row_basis::RowBasis;

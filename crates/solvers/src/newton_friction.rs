@@ -21,10 +21,8 @@
 //! linearly where the radius still moves; the iteration stops on the KKT residual, whose
 //! friction part uses μ λ_n of the iterate itself.
 
-use crate::active_set::{primal_dual_update, touch_loaded_extras};
-use crate::row_basis::RowBasis;
+use saddle_core::ConstraintRows;
 use saddle_core::problem::friction::{project_disc, project_disc_derivative};
-use saddle_core::{ConstraintRows, Lagrangian};
 
 /// A slipping pair's Robin condition: its forces after the step are `force − n δs`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,58 +33,6 @@ pub struct SlipPair {
     pub n: [[f64; 2]; 2],
     /// F₀ = λ_t − (I − M)⁻¹ (λ_t − P_D(λ_t − κ s)).
     pub force: [f64; 2],
-}
-
-/// The active set with friction (theory §4.2 step 2, §8.3) at the multipliers, rows' values and
-/// rows' elastic stiffnesses `(lambda, gap, c)`: the normal rows by PDAS and the pairs by
-/// [`friction_active_set`]; at a `cold` start the closest normal row of each block of `basis`
-/// (as without friction), each pair bonded (stick) with its node's normal row.
-pub(crate) fn active_set_with_friction(
-    rows: &ConstraintRows,
-    basis: &RowBasis,
-    (lambda, gap, c): (&[f64], &[f64], &[f64]),
-    cold: bool,
-    active: &mut [bool],
-    slips: &mut Vec<SlipPair>,
-) {
-    if cold {
-        let tangential = rows.friction.tangential_mask(rows.n_rows());
-        let normal_gaps: Vec<f64> =
-            gap.iter().zip(&tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect();
-        active.copy_from_slice(&basis.closest_in_blocks(&normal_gaps));
-        for b in &rows.friction.blocks {
-            active[b.tangent] = active[b.normal];
-            active[b.tangent + 1] = active[b.normal];
-        }
-        slips.clear();
-    } else {
-        primal_dual_update(lambda, c, gap, active);
-        friction_active_set(rows, lambda, gap, c, active, slips);
-    }
-}
-
-/// Every loaded extra needs a row that determines it (theory §4.2 step 2): a slipping pair's
-/// Robin condition does, as an active row does; where neither holds it, the normal row with the
-/// smallest gap joins `active` (a tangential row alone is never made active: its pair is
-/// sorted by its own residual).
-pub(crate) fn touch_loaded_extras_with_friction(
-    l: &Lagrangian<'_>,
-    active: &mut [bool],
-    slips: &[SlipPair],
-    gap: &[f64],
-) {
-    let rows = l.data.rows;
-    let tangential = rows.friction.tangential_mask(rows.n_rows());
-    let mut holding = active.to_vec();
-    for sp in slips {
-        holding[sp.tangent] = true;
-        holding[sp.tangent + 1] = true;
-    }
-    let normal_gaps: Vec<f64> = gap.iter().zip(&tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect();
-    touch_loaded_extras(l, &mut holding, &normal_gaps);
-    for (i, h) in holding.iter().enumerate().filter(|(i, _)| !tangential[*i]) {
-        active[i] = *h;
-    }
 }
 
 /// The friction part of the active set (module docs): each pair of `rows` stick (both rows in
