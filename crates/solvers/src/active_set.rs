@@ -24,10 +24,11 @@
 //! (inexact Newton).
 
 use crate::linear::{self, InSolver, lower, near_null_space};
+use crate::newton_friction::{SlipPair, friction_active_set};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
 use saddle_core::linalg::{AmgParams, Csr, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
-use saddle_core::{Lagrangian, Material, SolveError, SymmetricPattern};
+use saddle_core::{ConstraintRows, Lagrangian, Material, SolveError, SymmetricPattern};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
 
@@ -377,6 +378,58 @@ pub(crate) fn touch_loaded_extras(l: &Lagrangian<'_>, active: &mut [bool], gap: 
     added
 }
 
+/// The active set with friction (theory §4.2 step 2, §8.3) at the multipliers, rows' values and
+/// rows' elastic stiffnesses `(lambda, gap, c)`: the normal rows by PDAS and the pairs by
+/// [`friction_active_set`]; at a `cold` start the closest normal row of each block of `basis`
+/// (as without friction), each pair bonded (stick) with its node's normal row.
+pub(crate) fn active_set_with_friction(
+    rows: &ConstraintRows,
+    basis: &RowBasis,
+    (lambda, gap, c): (&[f64], &[f64], &[f64]),
+    cold: bool,
+    active: &mut [bool],
+    slips: &mut Vec<SlipPair>,
+) {
+    if cold {
+        let tangential = rows.friction.tangential_mask(rows.n_rows());
+        let normal_gaps: Vec<f64> =
+            gap.iter().zip(&tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect();
+        active.copy_from_slice(&basis.closest_in_blocks(&normal_gaps));
+        for b in &rows.friction.blocks {
+            active[b.tangent] = active[b.normal];
+            active[b.tangent + 1] = active[b.normal];
+        }
+        slips.clear();
+    } else {
+        primal_dual_update(lambda, c, gap, active);
+        friction_active_set(rows, lambda, gap, c, active, slips);
+    }
+}
+
+/// Every loaded extra needs a row that determines it (theory §4.2 step 2): a slipping pair's
+/// Robin condition does, as an active row does; where neither holds it, the normal row with the
+/// smallest gap joins `active` (a tangential row alone is never made active: its pair is
+/// sorted by its own residual).
+pub(crate) fn touch_loaded_extras_with_friction(
+    l: &Lagrangian<'_>,
+    active: &mut [bool],
+    slips: &[SlipPair],
+    gap: &[f64],
+) {
+    let rows = l.data.rows;
+    let tangential = rows.friction.tangential_mask(rows.n_rows());
+    let mut holding = active.to_vec();
+    for sp in slips {
+        holding[sp.tangent] = true;
+        holding[sp.tangent + 1] = true;
+    }
+    let normal_gaps: Vec<f64> = gap.iter().zip(&tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect();
+    touch_loaded_extras(l, &mut holding, &normal_gaps);
+    for (i, h) in holding.iter().enumerate().filter(|(i, _)| !tangential[*i]) {
+        active[i] = *h;
+    }
+}
+
 /// The Newton step from the solves `x` = [du⁰, W_1, …] (n × (1 + n_extras)) and the reactions
 /// λ = λ⁰ + Λ dV of the `active` rows (theory §4.2 step 3): dV from −H_Aᵀ(λ⁰ + Λ dV) = f, with
 /// H_AᵀΛ and H_Aᵀλ⁰ summed over every rank's rows (theory §12), then du = du⁰ + W dV (in the
@@ -460,6 +513,9 @@ pub struct ActiveSetSystem {
     pub factorisations: usize,
     /// Triangular solve pairs (direct) or CG solves (AMG) so far.
     pub solves: usize,
+    /// The slipping friction pairs of the next step (theory §8.3, [`crate::newton_friction`]):
+    /// their Robin conditions enter the tangent and the forces; empty without friction.
+    pub slips: Vec<SlipPair>,
 }
 
 impl ActiveSetSystem {
@@ -583,6 +639,7 @@ impl ActiveSetSystem {
             symbolic_analyses: 0,
             factorisations: 0,
             solves: 0,
+            slips: Vec::new(),
         }
     }
 
@@ -657,6 +714,10 @@ impl ActiveSetSystem {
                 self.work[q] = 0.0;
             }
         }
+        // the slipping pairs' Robin conditions: a N a on their (free) coordinates
+        for sp in &self.slips {
+            basis.add_pair_block(l.pattern(), sp.tangent, sp.n, &mut self.work);
+        }
         if let Some(chol) = self.backend.cholesky() {
             chol.factorise(&self.work).in_solver(&self.solver)?;
             self.factorisations += 1;
@@ -682,6 +743,18 @@ impl ActiveSetSystem {
             for i in (0..nr).filter(|&i| active[i]) {
                 let s = basis.dof[i];
                 xcol[s] = self.work[cp[s]] * dcol[s];
+            }
+            // a slipping pair's forces F₀ (column 0) and its coupling −a N h to the extras
+            for sp in &self.slips {
+                for pi in 0..2 {
+                    let i = sp.tangent + pi;
+                    let (s, a) = (basis.dof[i], basis.coef[i]);
+                    xcol[s] += a * if c == 0 {
+                        sp.force[pi]
+                    } else {
+                        -(0..2).map(|q| sp.n[pi][q] * rows.extra_row(sp.tangent + q)[c - 1]).sum::<f64>()
+                    };
+                }
             }
         }
         let switched = matches!(&self.backend, LinearBackend::Amg(it) if it.switched);
@@ -761,7 +834,21 @@ impl ActiveSetSystem {
                 }
             }
         }
-        let mut step = step_from_reactions(l, active, &x, &lam0, &lam_v, &self.solver)?;
+        // the slipping pairs' forces F₀ − N δs, δs = a dy + H dV with dy = dy⁰ + W dV
+        let mut carried = active.to_vec();
+        for sp in &self.slips {
+            for pi in 0..2 {
+                let i = sp.tangent + pi;
+                carried[i] = true;
+                let at = |q: usize, c: usize| x[c * n + basis.dof[sp.tangent + q]] * basis.coef[sp.tangent + q];
+                lam0[i] = sp.force[pi] - (0..2).map(|q| sp.n[pi][q] * at(q, 0)).sum::<f64>();
+                for kx in 0..ne {
+                    let h = |q: usize| rows.extra_row(sp.tangent + q)[kx];
+                    lam_v[(i, kx)] = -(0..2).map(|q| sp.n[pi][q] * (at(q, 1 + kx) + h(q))).sum::<f64>();
+                }
+            }
+        }
+        let mut step = step_from_reactions(l, &carried, &x, &lam0, &lam_v, &self.solver)?;
         basis.displacement_from_coordinates(&mut step.du);
         Ok(step)
     }

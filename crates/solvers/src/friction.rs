@@ -1,7 +1,8 @@
 //! Which solvers run friction (theory §8.3): uzawa (the projection onto the discs,
-//! [`crate::friction_qp`]) and socp (second-order cones) run laws with a given bound (Tresca);
-//! the others refuse rows with friction by name, rather than treat tangential rows as
-//! unilateral ones.
+//! [`crate::friction_qp`]), socp (second-order cones), newton (the semismooth Newton of
+//! [`crate::newton_friction`]) and penalty (the regularised law of `penalty/friction.rs`) run
+//! Tresca's and Coulomb's laws on one process; newton and penalty refuse rows with friction on
+//! a distributed problem by name, rather than treat tangential rows as unilateral ones.
 
 use saddle_core::{ConstraintRows, SolveError};
 
@@ -11,7 +12,8 @@ pub fn refuse_friction(rows: &ConstraintRows, solver: &str) -> Result<(), SolveE
     Err(SolveError::Unsupported {
         solver: solver.into(),
         message: format!(
-            "does not run friction laws yet (the obstacle's friction = {{ type = {:?} }}, theory §8.3): use uzawa or socp",
+            "does not run friction laws here (the obstacle's friction = {{ type = {:?} }}, theory §8.3): run it on one \
+             process, or use uzawa or socp",
             law.name()
         ),
     })

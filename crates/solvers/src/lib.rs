@@ -28,6 +28,7 @@ pub mod limit;
 pub mod linear;
 mod local_law;
 pub mod newton;
+pub mod newton_friction;
 pub mod penalty;
 mod residual;
 pub mod row_basis;

@@ -41,8 +41,8 @@
 //! [`Newton::solve_from`] starts from another solver's iterate (SOCP polishing).
 
 use crate::active_set::{
-    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, analysis_due, direct_budget, direct_is_cheaper,
-    primal_dual_update, touch_loaded_extras,
+    AUTO_AMG_DOFS, ActiveSetSystem, LinearSolver, Step, active_set_with_friction, analysis_due, direct_budget,
+    direct_is_cheaper, primal_dual_update, touch_loaded_extras, touch_loaded_extras_with_friction,
 };
 use crate::distributed_system::DistributedSystem;
 use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
@@ -322,7 +322,9 @@ impl Newton {
         timer: &mut PhaseTimer,
         name: &str,
     ) -> Result<Solution, SolveError> {
-        crate::friction::refuse_friction(l.data.rows, name)?;
+        if l.is_distributed() {
+            crate::friction::refuse_friction(l.data.rows, &format!("{name} (distributed, theory §12.2)"))?;
+        }
         let robust_start = start.clone();
         let mut run = Run::set_up(self, l, start, reuse, name, monitor, timer)?;
         let mut guard = StallGuard::new(self.stall_window);
@@ -719,7 +721,18 @@ impl<'a> Run<'a> {
         // are released at the next iteration — but of rows that share dofs (two obstacles at
         // one node, theory §8.1) only the closest: activating all of them would pin the node
         // to every obstacle at once
-        let mut changed = if self.cold && s.it == 0 {
+        let mut changed = if rows.has_friction() {
+            // the normal rows by PDAS, the pairs by their natural residual (theory §8.3)
+            let before = s.active.clone();
+            let (cold, mut slips) = (self.cold && s.it == 0, Vec::new());
+            let at = (&s.lambda[..], &w.gap[..], &self.row_stiffness[..]);
+            active_set_with_friction(rows, self.system.basis(), at, cold, &mut s.active, &mut slips);
+            touch_loaded_extras_with_friction(l, &mut s.active, &slips, &w.gap);
+            if let Some(system) = self.system.serial() {
+                system.slips = slips;
+            }
+            s.active.iter().zip(&before).filter(|(a, b)| a != b).count()
+        } else if self.cold && s.it == 0 {
             let closest = self.system.basis().closest_in_blocks(&w.gap);
             let changed = closest.iter().zip(&s.active).filter(|(a, b)| a != b).count();
             s.active.copy_from_slice(&closest);
@@ -727,7 +740,9 @@ impl<'a> Run<'a> {
         } else {
             primal_dual_update(&s.lambda, &self.row_stiffness, &w.gap, &mut s.active)
         };
-        changed += touch_loaded_extras(l, &mut s.active, &w.gap);
+        if !rows.has_friction() {
+            changed += touch_loaded_extras(l, &mut s.active, &w.gap);
+        }
         let changed = l.comm().sum_count(changed);
         // the elastic phase ends once its active set has settled: the last step solved it
         if s.elastic_phase && s.it > 0 && (changed == 0 || s.it >= ELASTIC_PHASE_MAX_STEPS) {
@@ -800,7 +815,8 @@ impl<'a> Run<'a> {
         let (l, s, w) = (self.l, &mut self.state, &mut self.work);
         let comm = l.comm();
         s.nu = s.nu.max(NU_FACTOR * comm.max(max_abs(&step.lambda)));
-        if !self.settings.line_search || s.elastic_phase {
+        // with friction the full semismooth step (J is not the merit of the friction conditions)
+        if !self.settings.line_search || s.elastic_phase || l.data.rows.has_friction() {
             return 1.0;
         }
         let rows = l.data.rows;
@@ -966,7 +982,10 @@ impl<'a> Run<'a> {
         let comm = self.l.comm();
         put("return_mappings", comm.sum_count(c.return_mappings));
         put("elastic_phase_steps", c.elastic_phase_steps);
-        put("contact_rows_active", comm.sum_count(self.state.active.iter().filter(|a| **a).count()));
+        // the normal rows in A (a sticking pair's tangential rows are in A too)
+        let tangential = self.l.data.rows.friction.tangential_mask(self.state.active.len());
+        let normal_active = self.state.active.iter().zip(&tangential).filter(|(a, t)| **a && !**t).count();
+        put("contact_rows_active", comm.sum_count(normal_active));
         put("setup_reused", c.setup_reused as usize);
         put("stiffness_nonzeros", comm.sum_count(self.l.pattern().nnz()));
         if let Some(chol) = self.system.serial().and_then(|s| s.direct()) {

@@ -479,6 +479,20 @@ impl RowBasis {
         self.transformed.as_ref().map_or(p, |(q, _)| q)
     }
 
+    /// Adds a 2 × 2 block `b` in the units of rows `t`, `t + 1` (a friction pair's slips, theory
+    /// §8.3) to `values` on [`RowBasis::pattern`] of L's pattern `p`: `a_i b_ij a_j` at their
+    /// coordinates, on the lower triangle (a node's coordinates are coupled in L).
+    pub fn add_pair_block(&self, p: &SymmetricPattern, t: usize, b: [[f64; 2]; 2], values: &mut [f64]) {
+        let pattern = self.pattern(p);
+        let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+        for (i, j) in [(0, 0), (1, 1), (1, 0)] {
+            let (si, sj) = (self.dof[t + i], self.dof[t + j]);
+            let (row, col) = (si.max(sj), si.min(sj));
+            let at = ri[cp[col]..cp[col + 1]].binary_search(&row).expect("a node's coordinates are coupled in L");
+            values[cp[col] + at] += self.coef[t + i] * b[i][j] * self.coef[t + j];
+        }
+    }
+
     /// `out` = TᵀKT on [`RowBasis::pattern`] from K's values `k` on L's pattern.
     pub fn stiffness(&self, k: &[f64], out: &mut [f64]) {
         match &self.transformed {

@@ -228,7 +228,7 @@ impl Solver for Socp {
 }
 
 impl Socp {
-    /// With friction (theory §8.3) the polish is Newton's, which does not run friction laws: the
+    /// With friction (theory §8.3) the polish (Newton from the interior point) is not wired: the
     /// interior point's answer is the answer, run to `min(ipm_tol, tol ×`
     /// [`FRICTION_IPM_PER_TOL`]`)` without polish (the report says so).
     fn with_friction(&self, l: &Lagrangian<'_>, monitor: &mut dyn Monitor) -> Result<Solution, SolveError> {
@@ -236,7 +236,7 @@ impl Socp {
         let unpolished = Socp { polish: false, ipm_tol, ..self.clone() };
         let mut sol = unpolished.solve(l, monitor)?;
         sol.report.warnings.push(format!(
-            "friction: no polish (Newton does not run friction laws); the interior point ran to ipm_tol = {:e}",
+            "friction: no polish (not wired for friction); the interior point ran to ipm_tol = {:e}",
             unpolished.ipm_tol
         ));
         Ok(sol)

@@ -1,5 +1,5 @@
-//! Tresca friction on the rigid sphere (theory §8.3): the solvers that run the law (uzawa, socp)
-//! against each other and against the limits of the law — g = 0 is frictionless, a g above every
+//! Tresca friction on the rigid sphere (theory §8.3): the solvers that run the law (uzawa, socp,
+//! newton, penalty) against each other and against the limits of the law — g = 0 is frictionless, a g above every
 //! tangential force the solution needs no longer changes it, and a g that every contact node
 //! exceeds under a prescribed tangential motion makes every node slip with |λ_t| = g w — with the
 //! friction conditions recomputed here from the rows, not taken from the solvers' residuals.
@@ -9,7 +9,9 @@ mod common;
 use common::{SCALED, johnson_with};
 use saddle_contact::{Coulomb, RigidSphere, Tresca};
 use saddle_core::FrictionLaw;
-use saddle_core::{ConstraintRows, DiscreteProblem, Evolution, Silent, Solution, SolveError, Solver, Workspace, kkt};
+use saddle_core::{
+    ConstraintRows, DiscreteProblem, Evolution, Silent, Solution, SolveError, Solver, Start, Workspace, kkt,
+};
 use saddle_solvers::{Newton, Penalty, Socp, Uzawa};
 
 /// The default scene's body (elastic, 8 × 8 × 4 cells) indented by a sphere of radius 5 moved
@@ -51,6 +53,24 @@ fn uzawa() -> Uzawa {
 /// nodes between stick and slip; equilibrium 6e-15). So 1e-13, asked for 1e-7.
 fn socp() -> Socp {
     Socp { tol: 1e-7, ipm_tol: 1e-13, ..Socp::default() }
+}
+
+/// Newton's semismooth iteration from u = 0, λ = 0 (theory §4.2, §8.3): from a cold start its
+/// exact elastic start is the projection onto K_h with friction — uzawa's own — and would leave
+/// the iteration nothing to do on an elastic body; this start makes it work.
+fn newton_from_zero(p: &DiscreteProblem) -> Solution {
+    let l = p.lagrangian();
+    let zero =
+        Start { u: vec![0.0; l.n_dofs()], extras: vec![0.0; l.n_extras()], lambda: vec![0.0; l.data.rows.n_rows()] };
+    let newton = Newton { max_fallbacks: 0, ..Newton::default() };
+    let sol = newton.solve_warm(&l, &zero, &mut Silent).unwrap_or_else(|e| panic!("newton: {e}"));
+    assert!(
+        sol.report.converged && sol.report.iterations >= 1,
+        "newton: {:?} {:?}",
+        sol.report.kkt,
+        sol.report.iterations
+    );
+    sol
 }
 
 /// max|a − b| / max|b|.
@@ -107,7 +127,9 @@ fn tresca_with_zero_bound_is_frictionless() {
     let rows = with.lagrangian().data.rows.clone();
     assert!(rows.has_friction() && rows.n_rows() == 3 * free.lagrangian().data.rows.n_rows());
     let tangential = rows.friction.tangential_mask(rows.n_rows());
-    for (s, tol) in [(&uzawa() as &dyn Solver, 1e-10), (&socp(), 1e-7)] {
+    let penalty = Penalty::default();
+    for (s, tol) in [(&uzawa() as &dyn Solver, 1e-10), (&socp(), 1e-7), (&Newton::default(), 1e-10), (&penalty, 1e-10)]
+    {
         let sol = solve(s, &with);
         let normal: Vec<f64> = (0..rows.n_rows()).filter(|&i| !tangential[i]).map(|i| sol.lambda[i]).collect();
         let (du, dl) = (rel(&sol.u, &reference.u), rel(&normal, &reference.lambda));
@@ -115,44 +137,63 @@ fn tresca_with_zero_bound_is_frictionless() {
         // uzawa to 1e-11 reaches 1e-10; socp's interior point alone (no polish with friction) 1e-7
         assert!(du < tol && dl < tol, "{}: u {du:e}, λ_n {dl:e}", s.name());
     }
+    // Newton's own iterations (measured: u 1e-15, λ_n 1e-14)
+    let sol = newton_from_zero(&with);
+    let normal: Vec<f64> = (0..rows.n_rows()).filter(|&i| !tangential[i]).map(|i| sol.lambda[i]).collect();
+    let (du, dl) = (rel(&sol.u, &reference.u), rel(&normal, &reference.lambda));
+    println!("newton from zero: u {du:.2e}, λ_n {dl:.2e}");
+    assert!(du < 1e-10 && dl < 1e-10, "newton from zero: u {du:e}, λ_n {dl:e}");
 }
 
-/// `p` solved by uzawa, every one of its (more than 4) contact nodes slipping.
-fn solve_slipping_everywhere(p: &DiscreteProblem) -> Solution {
-    let sol = solve(&uzawa(), p);
+/// `p` solved by uzawa, newton (from zero) and penalty, each with every one of its (more than
+/// 4) contact nodes slipping.
+fn solve_slipping_everywhere(p: &DiscreteProblem) -> Vec<Solution> {
+    let sols = vec![solve(&uzawa(), p), newton_from_zero(p), solve(&Penalty::default(), p)];
+    for sol in &sols {
+        slipping_everywhere(p, sol);
+    }
+    sols
+}
+
+/// Every one of the (more than 4) contact nodes of `sol` slips.
+fn slipping_everywhere(p: &DiscreteProblem, sol: &Solution) {
     let reports = p.view().contact_reports(&sol.extras, &sol.lambda);
     let report = &reports[0].report;
     let (contact, slip) = (report.contact_nodes, report.get("slip_nodes").unwrap() as usize);
-    assert!(contact > 4 && slip == contact, "{contact} contact nodes, {slip} slip");
-    sol
+    assert!(contact > 4 && slip == contact, "{}: {contact} contact nodes, {slip} slip", sol.report.solver);
 }
 
 /// A prescribed tangential motion W with a bound g that every contact node's need exceeds: all
 /// slip, |λ_t| = g w at every contact node, so Σ|λ_t| = g × (the contact nodes' area) — to 1e-10
-/// with uzawa, whose projection puts λ_t on the rim exactly; and the friction conditions hold.
+/// with uzawa (whose projection puts λ_t on the rim exactly), newton (whose slipping pairs'
+/// Robin condition does at convergence) and penalty (its force P_D(−ks) is on the rim of a
+/// slipping pair); and the friction conditions hold.
 #[test]
 fn small_bound_under_prescribed_motion_slips_everywhere_at_g_times_area() {
     let g = 1e-4;
     let p = scene(Some(g), Some([0.01, 0.005]));
-    let sol = solve_slipping_everywhere(&p);
-    let l = p.lagrangian();
-    let rows = l.data.rows;
-    let contact_rows = saddle_core::normal_contact_set(rows, &sol.lambda);
-    let in_contact = |n: usize| contact_rows.contains(&n);
-    let (mut sum, mut area) = (0.0, 0.0);
-    for b in rows.friction.blocks.iter().filter(|b| in_contact(b.normal)) {
-        sum += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
-        area += b.weight;
+    for sol in solve_slipping_everywhere(&p) {
+        let l = p.lagrangian();
+        let rows = l.data.rows;
+        let contact_rows = saddle_core::normal_contact_set(rows, &sol.lambda);
+        let in_contact = |n: usize| contact_rows.contains(&n);
+        let (mut sum, mut area) = (0.0, 0.0);
+        for b in rows.friction.blocks.iter().filter(|b| in_contact(b.normal)) {
+            sum += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
+            area += b.weight;
+        }
+        let name = &sol.report.solver;
+        println!("{name}: Σ|λ_t| = {sum:.15e}, g × area = {:.15e}", g * area);
+        assert!((sum - g * area).abs() <= 1e-10 * g * area, "{name}: Σ|λ_t| = {sum:e}, g × area = {:e}", g * area);
+        let r = friction_conditions(&p, &sol, |w, _| g * w);
+        assert!(r < 1e-7, "{name}: friction conditions {r:e}");
     }
-    println!("Σ|λ_t| = {sum:.15e}, g × area = {:.15e}", g * area);
-    assert!((sum - g * area).abs() <= 1e-10 * g * area, "Σ|λ_t| = {sum:e}, g × area = {:e}", g * area);
-    let r = friction_conditions(&p, &sol, |w, _| g * w);
-    assert!(r < 1e-7, "friction conditions {r:e}");
 }
 
 /// Above every tangential force the solution needs (bonded contact, all contact nodes stick),
 /// the bound no longer matters: g = 10 and g = 1000 give the same answer to 1e-9, every contact
-/// node sticks.
+/// node sticks; newton's iteration (from zero) on g = 1000 is uzawa's g = 10 to 1e-10
+/// (measured: u 1e-15, λ 4e-15 — every pair active, the bonded problem solved exactly).
 #[test]
 fn a_bound_above_every_need_sticks_and_no_longer_matters() {
     let w = Some([0.002, 0.0]);
@@ -163,6 +204,10 @@ fn a_bound_above_every_need_sticks_and_no_longer_matters() {
     let dl = rel(&sa.lambda, &sb.lambda);
     println!("u {du:.2e}, λ {dl:.2e}");
     assert!(du < 1e-9 && dl < 1e-9, "u {du:e}, λ {dl:e}");
+    let sn = newton_from_zero(&b);
+    let (du, dl) = (rel(&sn.u, &sa.u), rel(&sn.lambda, &sa.lambda));
+    println!("newton: u {du:.2e}, λ {dl:.2e}");
+    assert!(du < 1e-10 && dl < 1e-10, "newton: u {du:e}, λ {dl:e}");
     let reports = a.view().contact_reports(&sa.extras, &sa.lambda);
     let report = &reports[0].report;
     assert_eq!(report.get("stick_nodes").unwrap() as usize, report.contact_nodes);
@@ -178,41 +223,31 @@ fn uzawa_and_socp_agree_on_partial_slip() {
     agree_on_partial_slip(&scene(Some(g), Some([0.001, 0.0])), |w, _| g * w);
 }
 
-/// uzawa and socp on the scene `p` of partial slip: some contact nodes stick, some slip, the
-/// two agree to 1e-7 in u and λ, and each meets the friction conditions of the bound
-/// `bound(w, λ_n)` recomputed here to 1e-6 and the library's KKT residual to its own tolerance
-/// (uzawa 1e-11, socp 1e-7: measured 2.8e-8 with Tresca, 1.8e-8 with Coulomb).
+/// uzawa, socp, newton (its iteration from zero) and penalty on the scene `p` of partial slip:
+/// some contact nodes stick, some slip, all agree with uzawa to 1e-7 in u and λ (measured:
+/// newton and penalty to 1e-12, socp 1.5e-8 and 8e-8), and each meets the friction conditions
+/// of the bound `bound(w, λ_n)` recomputed here to 1e-6 and the library's KKT residual to its
+/// own tolerance (uzawa 1e-11, socp 1e-7: measured 2.8e-8 with Tresca, 1.8e-8 with Coulomb;
+/// newton 1e-10, penalty 1e-8).
 fn agree_on_partial_slip(p: &DiscreteProblem, bound: impl Fn(f64, f64) -> f64 + Copy) {
     let (su, ss) = (solve(&uzawa(), p), solve(&socp(), p));
+    let (sn, sp) = (newton_from_zero(p), solve(&Penalty::default(), p));
     let reports = p.view().contact_reports(&su.extras, &su.lambda);
     let report = &reports[0].report;
     let (stick, slip) = (report.get("stick_nodes").unwrap(), report.get("slip_nodes").unwrap());
     println!("stick {stick}, slip {slip}, report {:?}, socp {:?}", report.quantities, ss.report.counters);
     assert!(stick > 0.0 && slip > 0.0, "partial slip wanted: {stick} stick, {slip} slip");
-    let (du, dl) = (rel(&ss.u, &su.u), rel(&ss.lambda, &su.lambda));
-    println!("socp against uzawa: u {du:.2e}, λ {dl:.2e}");
-    assert!(du < 1e-7 && dl < 1e-7, "u {du:e}, λ {dl:e}");
-    for sol in [&su, &ss] {
+    for other in [&ss, &sn, &sp] {
+        let (du, dl) = (rel(&other.u, &su.u), rel(&other.lambda, &su.lambda));
+        println!("{} against uzawa: u {du:.2e}, λ {dl:.2e}", other.report.solver);
+        assert!(du < 1e-7 && dl < 1e-7, "{}: u {du:e}, λ {dl:e}", other.report.solver);
+    }
+    for sol in [&su, &ss, &sn, &sp] {
         let r = friction_conditions(p, sol, bound);
         let l = p.lagrangian();
         let k = kkt(&l, &sol.iterate(), &mut Workspace::new(&l));
         println!("{}: friction conditions {r:.2e}, kkt {:?}", sol.report.solver, k);
         assert!(r < 1e-6 && k.max() < sol.report.tolerance, "{}: {r:e} {k:?}", sol.report.solver);
-    }
-}
-
-/// Newton and the penalty method do not run friction laws: a typed refusal naming the law.
-#[test]
-fn solvers_without_friction_refuse_it_by_name() {
-    let p = scene(Some(0.01), None);
-    for s in [&Newton::default() as &dyn Solver, &Penalty::default()] {
-        match s.solve(&p.lagrangian(), &mut saddle_core::Silent) {
-            Err(SolveError::Unsupported { solver, message }) => {
-                assert_eq!(solver, s.name());
-                assert!(message.contains("tresca"), "{message}");
-            }
-            other => panic!("{}: {:?}", s.name(), other.map(|s| s.report.kkt)),
-        }
     }
 }
 
@@ -229,23 +264,26 @@ fn coulomb_uzawa_and_socp_agree_on_partial_slip() {
 
 /// Full sliding under a prescribed tangential motion (theory §8.3): every contact node on the
 /// rim of its cone, so Σ|λ_t| = μ Σλ_n over the contact nodes to 1e-10 (uzawa's projection
-/// puts each λ_t on its rim exactly, at the radius of its own λ_n).
+/// puts each λ_t on its rim exactly, at the radius of its own λ_n), newton and penalty alike.
 #[test]
 fn coulomb_full_sliding_under_prescribed_motion() {
     let mu = 0.3;
     let p = scene_with(Some(Box::new(Coulomb { mu })), Some([0.02, 0.01]));
-    let sol = solve_slipping_everywhere(&p);
-    let l = p.lagrangian();
-    let rows = l.data.rows;
-    let (mut tangential, mut normal) = (0.0, 0.0);
-    for b in &rows.friction.blocks {
-        tangential += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
-        normal += sol.lambda[b.normal];
+    for sol in solve_slipping_everywhere(&p) {
+        let l = p.lagrangian();
+        let rows = l.data.rows;
+        let (mut tangential, mut normal) = (0.0, 0.0);
+        for b in &rows.friction.blocks {
+            tangential += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
+            normal += sol.lambda[b.normal];
+        }
+        let name = &sol.report.solver;
+        println!("{name}: Σ|λ_t| = {tangential:.15e}, μ Σλ_n = {:.15e}", mu * normal);
+        let defect = (tangential - mu * normal).abs();
+        assert!(defect <= 1e-10 * mu * normal, "{name}: {tangential:e} against {:e}", mu * normal);
+        let r = friction_conditions(&p, &sol, |_, ln| mu * ln.max(0.0));
+        assert!(r < 1e-7, "{name}: Coulomb conditions {r:e}");
     }
-    println!("Σ|λ_t| = {tangential:.15e}, μ Σλ_n = {:.15e}", mu * normal);
-    assert!((tangential - mu * normal).abs() <= 1e-10 * mu * normal, "{tangential:e} against {:e}", mu * normal);
-    let r = friction_conditions(&p, &sol, |_, ln| mu * ln.max(0.0));
-    assert!(r < 1e-7, "Coulomb conditions {r:e}");
 }
 
 /// A load path (theory §11.6) on the partial-slip Tresca scene: the sphere pressed and moved
@@ -263,7 +301,7 @@ fn a_load_path_slips_incrementally_and_dissipates() {
     let (mesh, dofs) = (p.element.mesh(), p.element.dofs());
     let mut evolution = Evolution::new(&p);
     let (mut previous, mut dissipated) = (None::<Vec<f64>>, 0.0);
-    let mut force_x = Vec::new();
+    let (mut force_x, mut uzawa_dissipated) = (Vec::new(), Vec::new());
     for factor in [0.5, 1.0, 0.5] {
         let step = evolution.step(factor, &uzawa(), &mut Silent).unwrap();
         assert!(step.converged(), "factor {factor}: {:?}", step.solution.report.kkt);
@@ -301,7 +339,19 @@ fn a_load_path_slips_incrementally_and_dissipates() {
         assert!(r < 1e-6, "factor {factor}: incremental conditions {r:e}");
         assert!(step_dissipation > 0.0, "factor {factor}: no slip");
         assert!((reported - dissipated).abs() <= 1e-8 * dissipated, "{reported:e} against {dissipated:e}");
+        uzawa_dissipated.push(reported);
         previous = Some(total);
+    }
+    // newton on the same path (warm-started steps: its semismooth iterations) dissipates the
+    // same energy to 1e-7 (measured: 1e-12, uzawa's tolerance 1e-11)
+    let mut evolution = Evolution::new(&p);
+    for (factor, expected) in [0.5, 1.0, 0.5].into_iter().zip(&uzawa_dissipated) {
+        let step = evolution.step(factor, &Newton::default(), &mut Silent).unwrap();
+        assert!(step.converged(), "newton, factor {factor}: {:?}", step.solution.report.kkt);
+        let sol = &step.solution;
+        let reported = step.problem.obstacles().dissipated(&sol.u, &sol.extras, &sol.lambda)[0];
+        println!("newton, factor {factor}: dissipated {reported:.12e} against uzawa's {expected:.12e}");
+        assert!((reported - expected).abs() <= 1e-7 * expected, "newton: {reported:e} against {expected:e}");
     }
     let (first, last) = (force_x[0], force_x[2]);
     assert!((last - first).abs() > 0.1 * first.abs(), "force_x at 0.5 loading {first:e}, unloading {last:e}");
@@ -321,11 +371,11 @@ fn uzawa_forced() -> Uzawa {
     Uzawa { extra_metric: 1.0, ..uzawa() }
 }
 
-/// Coulomb under force control (theory §8.3): pushed by F and pulled by Q = 0.5 μF, uzawa
-/// and socp agree (to 1e-7 in u and the extras `V`, `Ux`, `Uy`, 3e-7 in λ) and the sphere's
+/// Coulomb under force control (theory §8.3): pushed by F and pulled by Q = 0.5 μF, uzawa,
+/// socp, newton and penalty agree (to 1e-7 in u and the extras `V`, `Ux`, `Uy`, 3e-7 in λ) and the sphere's
 /// resultants balance F and Q; pulled by Q = 2 μF — more than friction and the tilt of the
 /// contact normals can balance (bound in the test) — both report that the problem has no
-/// solution (theory §4.6), never a number. (At Q = 1.2 μF the linearised rows still have a
+/// solution (theory §4.6), never a number — all four solvers. (At Q = 1.2 μF the linearised rows still have a
 /// solution: socp finds it at Ux = 0.30, the sphere climbing the tilted tangent planes of the
 /// reference configuration far beyond the linearisation's validity; theory §8.3.)
 #[test]
@@ -333,6 +383,16 @@ fn coulomb_force_control_partial_slip_and_sliding() {
     let (f, mu) = (0.5, 0.3);
     let p = pulled(f, 0.5 * mu * f, mu);
     let (su, ss) = (solve(&uzawa_forced(), &p), solve(&socp(), &p));
+    // newton (cold: its elastic start needs the extras' metric, so its own iterations) and
+    // penalty agree with uzawa to 1e-7 (measured: u 2e-12, λ 8e-12, extras 2e-12; penalty 5e-13,
+    // 1.4e-12, 5e-13)
+    for other in [solve(&Newton::default(), &p), solve(&Penalty::default(), &p)] {
+        let (du, dl, dv) = (rel(&other.u, &su.u), rel(&other.lambda, &su.lambda), rel(&other.extras, &su.extras));
+        println!("{} against uzawa: u {du:.2e}, λ {dl:.2e}, extras {dv:.2e}", other.report.solver);
+        assert!(du < 1e-7 && dl < 1e-7 && dv < 1e-7, "{}: u {du:e}, λ {dl:e}, extras {dv:e}", other.report.solver);
+        let r = friction_conditions(&p, &other, |_, ln| mu * ln.max(0.0));
+        assert!(r < 1e-6, "{}: Coulomb conditions {r:e}", other.report.solver);
+    }
     let (du, dl, dv) = (rel(&ss.u, &su.u), rel(&ss.lambda, &su.lambda), rel(&ss.extras, &su.extras));
     let reports = p.view().contact_reports(&su.extras, &su.lambda);
     let report = &reports[0].report;
@@ -353,7 +413,7 @@ fn coulomb_force_control_partial_slip_and_sliding() {
     let bound = (tilt + mu) / ((1.0 - tilt * tilt).sqrt() - mu * tilt);
     println!("largest tilt sin θ = {tilt:.4}: Q/F ≤ {bound:.4} < {}", 2.0 * mu);
     assert!(bound < 2.0 * mu);
-    for s in [&uzawa_forced() as &dyn Solver, &socp()] {
+    for s in [&uzawa_forced() as &dyn Solver, &socp(), &Newton::default(), &Penalty::default()] {
         match s.solve(&p.lagrangian(), &mut Silent) {
             Err(SolveError::BeyondCollapse { solver, evidence }) => println!("{solver}: {evidence}"),
             other => panic!("{}: {:?}", s.name(), other.map(|s| (s.report.converged, s.extras))),

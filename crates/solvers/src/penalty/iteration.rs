@@ -27,7 +27,6 @@ impl Penalty {
         start: Option<&Start>,
         monitor: &mut dyn Monitor,
     ) -> Result<Solution, SolveError> {
-        crate::friction::refuse_friction(l.data.rows, "penalty")?;
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
         let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
@@ -233,8 +232,8 @@ impl<'a> Run<'a> {
         s.u.copy_from_slice(&start.u);
         s.v.copy_from_slice(&start.extras);
         rows.gap(&s.u, &s.v, &mut s.gap);
-        for (a, g) in s.model.iter_mut().zip(&s.gap) {
-            *a = *g < 0.0;
+        for ((a, g), t) in s.model.iter_mut().zip(&s.gap).zip(&self.sys.friction.tangential) {
+            *a = *g < 0.0 && !t;
         }
         s.previous.copy_from_slice(&s.model);
         self.warm = true;
@@ -318,7 +317,9 @@ impl<'a> Run<'a> {
         let (l, s) = (self.l, &mut self.state);
         s.regularisation_share = self.sys.regularisation_share(l, &s.u, &s.v, &self.work.ws.eps);
         let threshold = COLLAPSE_SHARE.max(COLLAPSE_SHARE_PER_MU * self.settings.mu);
-        if !(self.plastic && s.regularisation_share >= threshold && l.forced()) {
+        // a plastic body forms a mechanism; friction lets an obstacle slide (theory §8.3)
+        let can_escape = self.plastic || l.data.rows.has_friction();
+        if !(can_escape && s.regularisation_share >= threshold && l.forced()) {
             return Ok(());
         }
         Err(SolveError::BeyondCollapse {
@@ -374,12 +375,13 @@ impl<'a> Run<'a> {
         // K' as the operators apply it (the distributed products; theory §12.4)
         let material = if elastic_tangent { Material::Uniform(&self.c_el_mu) } else { Material::PerPoint(&w.tangents) };
         if !elastic {
-            for (a, g) in s.model.iter_mut().zip(&s.gap) {
-                *a = *g < 0.0;
+            // the normal rows that penetrate; the friction pairs by their Hessians (not bonded)
+            for ((a, g), t) in s.model.iter_mut().zip(&s.gap).zip(&sys.friction.tangential) {
+                *a = *g < 0.0 && !t;
             }
         }
         let (sweeps, settled) = timer.time("factorisation and solves", || {
-            let at = Point { r: &w.r, gap: &s.gap, v: &s.v };
+            let at = Point { r: &w.r, gap: &s.gap, chi: &s.chi, v: &s.v };
             let mut d = Direction { du: &mut w.du, dv: &mut w.dv, g_next: &mut w.g_next };
             sys.model_step(l, material, &mut s.model, &at, &mut d, !elastic)
         })?;
@@ -494,7 +496,8 @@ impl<'a> Run<'a> {
         // a rank's counts summed over the ranks (theory §12; on one process the count itself)
         let comm = self.l.comm();
         put("active_set_changes", comm.sum_count(c.active_changes) as f64);
-        put("contact_rows_active", comm.sum_count(s.chi.iter().filter(|c| **c > 0.0).count()) as f64);
+        let normal_active = s.chi.iter().zip(&sys.friction.tangential).filter(|(c, t)| **c > 0.0 && !**t).count();
+        put("contact_rows_active", comm.sum_count(normal_active) as f64);
         put("return_mappings", comm.sum_count(c.return_mappings) as f64);
         put("inner_converged", inner_solved as u8 as f64);
         put("inner_gradient_relative", s.grad_rel);
@@ -516,7 +519,8 @@ impl<'a> Run<'a> {
         let comm = l.comm();
         let x_scale = comm.max(max_abs(&s.u).max(max_abs(&rows.offset))).max(max_abs(&s.v));
         let relative = |x: f64, scale: f64| if scale > 0.0 { x / scale } else { x };
-        let max_pen = comm.max(s.gap.iter().fold(0.0f64, |m, g| m.max(-g)));
+        let normal = s.gap.iter().zip(&sys.friction.tangential).filter(|(_, t)| !**t);
+        let max_pen = comm.max(normal.fold(0.0f64, |m, (g, _)| m.max(-g)));
         let load_def = l.data.load.iter().zip(&w.ht_chi).map(|(f, h)| (f + h).powi(2)).sum::<f64>().sqrt();
         rows.gap(&s.u, &s.v, &mut w.ws.gap);
         let drift = comm.max(s.gap.iter().zip(&w.ws.gap).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())));
@@ -530,6 +534,12 @@ impl<'a> Run<'a> {
         put("condition_estimate", sys.condition_estimate);
         put("penalty_stiffness_max", comm.max(sys.k.iter().copied().fold(0.0, f64::max)));
         put("gap_drift_relative", relative(drift, x_scale));
+        if rows.has_friction() {
+            // the tangential rows' regularisation error: a sticking pair slips |λ_t|/k (theory §4.3)
+            let stick_slip = sys.friction.max_stick_slip(&s.gap, &s.chi);
+            put("max_stick_slip", stick_slip);
+            put("max_stick_slip_relative", relative(stick_slip, x_scale));
+        }
         counters
     }
 }

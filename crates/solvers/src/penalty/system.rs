@@ -2,6 +2,7 @@
 //! contact model — an active-set loop of Newton steps on the fixed pattern of L, the extras
 //! coupled through a Schur complement free of cancellation ([`PenaltySystem`]).
 
+use super::friction::RegularisedFriction;
 use super::{MODEL_SWEEPS, non_finite};
 use crate::active_set::CG_TOL_MIN;
 use crate::distributed_system::DistributedSystem;
@@ -58,6 +59,11 @@ pub struct PenaltySystem {
     kcols: Vec<f64>,
     /// The model's next active set.
     next: Vec<bool>,
+    /// The friction pairs' regularised law (theory §8.3; empty without friction).
+    pub(super) friction: RegularisedFriction,
+    /// The generalised Hessian of each pair's φ_k at the iterate (zero for a pair in the
+    /// model's active set: the cold iteration's bonded pairs).
+    pair_hess: Vec<[[f64; 2]; 2]>,
     /// Symbolic analyses of L's pattern so far (one, in [`PenaltySystem::new`]).
     pub symbolic_analyses: usize,
     /// Numeric factorisations so far.
@@ -93,6 +99,8 @@ pub(super) struct Point<'a> {
     pub r: &'a [f64],
     /// The carried gaps g.
     pub gap: &'a [f64],
+    /// The pressures χ (the friction forces on the tangential rows).
+    pub chi: &'a [f64],
     /// V.
     pub v: &'a [f64],
 }
@@ -115,6 +123,9 @@ impl PenaltySystem {
         let c_el = l.data.elasticity.stiffness_matrix();
         let mut kprime = l.stiffness(Material::Uniform(&c_el));
         let mut symbolic_analyses = 0;
+        if l.is_distributed() {
+            crate::friction::refuse_friction(rows, "penalty (distributed, theory §12.4)")?;
+        }
         let (slaves, row_stiffness, linear) = if l.is_distributed() {
             let mut system = DistributedSystem::new(l, "penalty")?;
             let row_stiffness = system.row_stiffness(l, &kprime)?;
@@ -126,7 +137,13 @@ impl PenaltySystem {
             let chol = linear::analyse(pattern, "penalty Hessian", "penalty", &mut symbolic_analyses)?;
             (slaves, row_stiffness, Linear::Serial(chol))
         };
-        let k = contact_stiffness(row_stiffness, mu)?;
+        let mut k = contact_stiffness(row_stiffness, mu)?;
+        // a pair's Huber function needs one stiffness for both its rows: their mean
+        for b in &rows.friction.blocks {
+            let kb = 0.5 * (k[b.tangent] + k[b.tangent + 1]);
+            k[b.tangent] = kb;
+            k[b.tangent + 1] = kb;
+        }
         let k_v = extra_stiffness(l)?;
         let (n, ne) = (l.n_dofs(), l.n_extras());
         kprime.iter_mut().for_each(|x| *x = 0.0);
@@ -146,6 +163,8 @@ impl PenaltySystem {
             cols: vec![0.0; n * (1 + ne)],
             kcols: vec![0.0; n * (1 + ne)],
             next: vec![false; rows.n_rows()],
+            friction: RegularisedFriction::new(&rows.friction, rows.n_rows()),
+            pair_hess: vec![[[0.0; 2]; 2]; rows.friction.blocks.len()],
             symbolic_analyses,
             factorisations: 0,
             solves: 0,
@@ -162,19 +181,22 @@ impl PenaltySystem {
         }
     }
 
-    /// χ_i = k_i g_i⁻.
-    pub(super) fn pressures(&self, gap: &[f64], chi: &mut [f64]) {
+    /// χ_i = k_i g_i⁻ on the normal rows; on the tangential pairs the friction forces
+    /// P_D(−k s), the discs set from the normal χ (theory §8.3, [`RegularisedFriction`]).
+    pub(super) fn pressures(&mut self, gap: &[f64], chi: &mut [f64]) {
         for ((c, g), k) in chi.iter_mut().zip(gap).zip(&self.k) {
             *c = k * (-g).max(0.0);
         }
+        self.friction.forces(&self.k, gap, chi);
     }
 
     /// J_μ(u, V) with the gaps `gap` = g(u, V); `ws.eps` holds ε(u) afterwards.
     pub(super) fn energy(&self, l: &Lagrangian<'_>, u: &[f64], v: &[f64], gap: &[f64], ws: &mut Workspace) -> f64 {
         let j = energy(l, u, v, ws);
-        let pen: f64 = gap.iter().zip(&self.k).map(|(g, k)| k * (-g).max(0.0).powi(2)).sum();
+        let normal = |i: &usize| self.friction.tangential.get(*i) != Some(&true);
+        let pen: f64 = (0..gap.len()).filter(normal).map(|i| self.k[i] * (-gap[i]).max(0.0).powi(2)).sum();
         // a rank's rows summed over the ranks (theory §12; one process: themselves)
-        let pen = l.comm().sum(pen);
+        let pen = l.comm().sum(pen) + 2.0 * self.friction.energy(&self.k, gap);
         j + 0.5 * (self.mu * self.regularisation(l, v, &ws.eps) + pen)
     }
 
@@ -220,10 +242,15 @@ impl PenaltySystem {
             self.slaves.force_to_coordinates(at.r, &mut self.r_t);
         }
         for sweep in 1..=MODEL_SWEEPS {
+            self.pair_hessians(model, at.gap);
             self.step(l, material, model, at, d)?;
             let mut settled = true;
-            for ((next, g), a) in self.next.iter_mut().zip(d.g_next.iter()).zip(model.iter()) {
-                *next = *g < 0.0;
+            for (i, ((next, g), a)) in self.next.iter_mut().zip(d.g_next.iter()).zip(model.iter()).enumerate() {
+                // a tangential row stays (or is bonded below): its term is not piecewise quadratic
+                *next = if self.friction.tangential[i] { *a } else { *g < 0.0 };
+            }
+            self.bond_reversing_pairs(model, at.gap, d.g_next);
+            for (next, a) in self.next.iter().zip(model.iter()) {
                 settled &= *next == *a;
             }
             // settled on every rank (theory §12: one decision)
@@ -235,11 +262,34 @@ impl PenaltySystem {
             }
             model.copy_from_slice(&self.next);
         }
-        for (a, g) in model.iter_mut().zip(at.gap) {
-            *a = *g < 0.0;
+        for (i, (a, g)) in model.iter_mut().zip(at.gap).enumerate() {
+            *a = !self.friction.tangential[i] && *g < 0.0;
         }
+        self.pair_hessians(model, at.gap);
         self.step(l, material, model, at, d)?;
         Ok((MODEL_SWEEPS + 1, false))
+    }
+
+    /// Each friction pair's generalised Hessian at the iterate; zero for a pair the model bonds
+    /// (its term then the exact stick quadratic ½k|s + Δs|² of the active rows).
+    fn pair_hessians(&mut self, model: &[bool], gap: &[f64]) {
+        for (b, (t, _)) in self.friction.pairs().enumerate() {
+            self.pair_hess[b] = if model[t] { [[0.0; 2]; 2] } else { self.friction.hessian(b, &self.k, gap) };
+        }
+    }
+
+    /// The model's friction pairs (theory §4.3): a pair slipping at the iterate whose step
+    /// reverses its slip (ŝ·(s + Δs) ≤ 0, `g_next` = s + Δs) passed through the stick ball,
+    /// where its Taylor model (no curvature along ŝ) is wrong: the next sweep bonds it (in
+    /// `self.next`), with the exact stick quadratic.
+    fn bond_reversing_pairs(&mut self, model: &[bool], gap: &[f64], g_next: &[f64]) {
+        for (b, (t, _)) in self.friction.pairs().enumerate() {
+            let slipping = self.friction.is_slipping(b, &self.k, gap);
+            if !model[t] && slipping && gap[t] * g_next[t] + gap[t + 1] * g_next[t + 1] <= 0.0 {
+                self.next[t] = true;
+                self.next[t + 1] = true;
+            }
+        }
     }
 
     /// The Newton step for the quadratic model in which the rows `active` carry ½k_i g_i²
@@ -274,9 +324,13 @@ impl PenaltySystem {
         let (kprime, r): (&[f64], &[f64]) =
             if self.slaves.is_identity() { (&self.kprime, at.r) } else { (&self.kprime_t, &self.r_t) };
         self.cols.iter_mut().for_each(|x| *x = 0.0);
-        for i in (0..rows.n_rows()).filter(|&i| active[i]) {
+        // the active rows' z and P; a friction pair's P only (its Hessian enters without z)
+        let pairs = self.friction.pairs().filter(|&(t, _)| !active[t]).flat_map(|(t, _)| [t, t + 1]);
+        for i in (0..rows.n_rows()).filter(|&i| active[i]).chain(pairs) {
             let (s, a) = (self.slaves.dof[i], self.slaves.coef[i]);
-            self.cols[s] = -at.gap[i] / a;
+            if active[i] {
+                self.cols[s] = -at.gap[i] / a;
+            }
             for (kx, h) in rows.extra_row(i).iter().enumerate() {
                 self.cols[(1 + kx) * n + s] = h / a;
             }
@@ -291,6 +345,12 @@ impl PenaltySystem {
         }
         for (x, ri) in self.kcols[..n].iter_mut().zip(r) {
             *x += ri;
+        }
+        // the friction term's gradient −Gᵀχ_t belongs to the right-hand side
+        for (t, _) in self.friction.pairs().filter(|&(t, _)| !active[t]) {
+            for i in [t, t + 1] {
+                self.kcols[self.slaves.dof[i]] -= self.slaves.coef[i] * at.chi[i];
+            }
         }
     }
 
@@ -318,6 +378,10 @@ impl PenaltySystem {
         self.hess.copy_from_slice(if self.slaves.is_identity() { &self.kprime } else { &self.kprime_t });
         for i in (0..l.data.rows.n_rows()).filter(|&i| active[i]) {
             self.hess[cp[self.slaves.dof[i]]] += self.k[i] * self.slaves.coef[i].powi(2);
+        }
+        // the friction pairs' Hessians D_f (a_i a_j ∂²φ_k/∂s_i∂s_j on their coordinates)
+        for (b, (t, _)) in self.friction.pairs().enumerate() {
+            self.slaves.add_pair_block(l.pattern(), t, self.pair_hess[b], &mut self.hess);
         }
         let (dmin, dmax) = cp[..n].iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &q| {
             let x = self.hess[q];
@@ -360,6 +424,26 @@ impl PenaltySystem {
                 b[kx] += ka * h * y0[sd];
                 for ly in 0..ne {
                     s[(kx, ly)] += ka * h * y[ly * n + sd];
+                }
+            }
+        }
+        // the friction pairs: Pᵀ D_f Y, Pᵀ D_f y⁰ and their forces Hᵀχ_t
+        for (pb, (t, _)) in self.friction.pairs().enumerate() {
+            for p in 0..2 {
+                let h = rows.extra_row(t + p);
+                for q in 0..2 {
+                    let (sq, w) = (self.slaves.dof[t + q], self.pair_hess[pb][p][q] * self.slaves.coef[t + q]);
+                    for (kx, hk) in h.iter().enumerate().filter(|(_, h)| **h != 0.0) {
+                        b[kx] += hk * w * y0[sq];
+                        for ly in 0..ne {
+                            s[(kx, ly)] += hk * w * y[ly * n + sq];
+                        }
+                    }
+                }
+                if !active[t] {
+                    for (kx, hk) in h.iter().enumerate() {
+                        b[kx] += hk * at.chi[t + p];
+                    }
                 }
             }
         }
