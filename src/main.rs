@@ -1,5 +1,5 @@
 //! The `saddle` command line: `saddle run SCENE.toml [--out DIR] [--solver TYPE]` and
-//! `saddle report SCENE.toml --out DIR [--quick]` and `saddle bench SCENE.toml [--out DIR] [--sizes N,..]
+//! `saddle report SCENE.toml --out DIR [--quick] [--levels K,..]` and `saddle bench SCENE.toml [--out DIR] [--sizes N,..]
 //! [--solvers T,..]`.
 
 use clap::{Parser, Subcommand};
@@ -68,6 +68,10 @@ enum Command {
         /// Fewer settings and mesh levels (tests, CI).
         #[arg(long)]
         quick: bool,
+        /// On a mesh family (`mesh.base`): the levels k of the convergence study (cells
+        /// k·base), e.g. 2,3,4,5; the reference is the extrapolation of the finest three.
+        #[arg(long, value_delimiter = ',')]
+        levels: Option<Vec<usize>>,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -370,12 +374,13 @@ fn run_loaded(
     Ok(if outcome.summary.converged { ExitCode::SUCCESS } else { ExitCode::from(2) })
 }
 
-fn report(scene: PathBuf, out: PathBuf, quick: bool, quiet: bool) -> Result<ExitCode, report::ReportError> {
+fn report(scene: PathBuf, out: PathBuf, options: ReportOptions, quiet: bool) -> Result<ExitCode, report::ReportError> {
+    let quick = options.quick;
     if !quiet {
         eprintln!("{}: report into {}{}", scene.display(), out.display(), if quick { " (quick)" } else { "" });
     }
     let mut bar = RunsBar::new(quiet);
-    let result = report::generate(&scene, &out, &ReportOptions { quick }, &mut bar);
+    let result = report::generate(&scene, &out, &options, &mut bar);
     bar.bar.finish_and_clear();
     let r = result?;
     println!("  {} ({} dofs): {} runs in {:.0} s", r.title, r.dofs, r.runs.len(), r.total_s);
@@ -516,7 +521,9 @@ fn main() -> ExitCode {
         Command::Run { scene, out, solver, discretisation, cells, quiet } => {
             run(scene, out, (solver, discretisation, cells), quiet).map_err(|e| e.to_string())
         }
-        Command::Report { scene, out, quick, quiet } => report(scene, out, quick, quiet).map_err(|e| e.to_string()),
+        Command::Report { scene, out, quick, levels, quiet } => {
+            report(scene, out, ReportOptions { quick, levels }, quiet).map_err(|e| e.to_string())
+        }
         Command::Sweep { scene, out, factors, solver, discretisation, x, y } => {
             sweep(scene, out, factors, (solver, discretisation), (x, y))
         }

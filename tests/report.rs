@@ -244,6 +244,32 @@ fn the_extrapolations_uncertainty_covers_its_true_error() {
     assert!(extrapolate(&hs[..2], &v[..2]).is_none());
 }
 
+/// The reference of `saddle report examples/johnson_family.toml --levels 2,3,4,5` from its
+/// measured P2 levels (dual quadratic rows, Newton to 1e-10; docs/accuracy.md, "The default scene
+/// on nested levels"): U decreases monotonically; v* + C h^p reproduces the finest three; the
+/// previous triple's differences shrink by 1.106, less than the ln(3/2)/ln(4/3) = 1.409 that
+/// any p > 0 needs, so no order fits it and the uncertainty is the spread of the finest three,
+/// not the GCI; the levels whose error exceeds it (k = 2, 3) are plotted, the others not.
+#[test]
+fn the_default_scenes_p2_reference_carries_the_spread_of_its_finest_levels() {
+    use saddle::studies::report::convergence::error_above_uncertainty;
+    let ks = [2.0, 3.0, 4.0, 5.0];
+    let h = ks.map(|k: f64| 1.0 / k);
+    let u = [8.464492e-3, 8.445375e-3, 8.428094e-3, 8.422445e-3];
+    assert!(u.windows(2).all(|w| w[1] < w[0]));
+    let r = extrapolate(&h, &u).unwrap();
+    for i in 1..4 {
+        assert!((r.value + r.constant * h[i].powf(r.order) - u[i]).abs() < 1e-15, "{r:?}");
+    }
+    assert!((0.25..=4.0).contains(&r.order), "{r:?}");
+    assert!((u[0] - u[1]) / (u[1] - u[2]) < (1.5f64).ln() / (4.0f64 / 3.0).ln());
+    assert!(richardson([h[0], h[1], h[2]], [u[0], u[1], u[2]]).is_none());
+    assert_eq!(r.uncertainty, (u[1] - u[3]).abs());
+    assert!(r.uncertainty > GCI_SAFETY * (u[3] - r.value).abs());
+    let plotted: Vec<bool> = u.iter().map(|&v| error_above_uncertainty(v, &r).is_finite()).collect();
+    assert_eq!(plotted, [true, true, false, false]);
+}
+
 #[test]
 fn levels_of_a_mesh_family_are_multiples_of_its_base() {
     // the default scene as level 4 of the family of base 8×8×4: 8, 16, 24, 32, 48 cells
@@ -346,6 +372,44 @@ fn report_quick_writes_every_file() {
     }
 }
 
+/// `--levels` on a mesh family: the convergence study is on exactly the family's levels k·base
+/// asked for, the other element on the same nodes (P2 at the even ones, half the cells), and
+/// report.md names the command; on a scene that is not a family, or with a level 0, the report
+/// is refused naming `--levels` and why.
+#[test]
+fn report_on_a_mesh_family_takes_the_levels_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = example("homogeneous.toml");
+    set(&mut t, "mesh.base", toml::Value::try_from([1, 1, 1]).unwrap());
+    set(&mut t, "mesh.cells", toml::Value::try_from([2, 2, 2]).unwrap());
+    let family = dir.path().join("family.toml");
+    std::fs::write(&family, toml::to_string(&t).unwrap()).unwrap();
+    let report = |scene: &Path, levels: &str| {
+        let out = dir.path().join("rep");
+        let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+            .args(["report", scene.to_str().unwrap(), "--quick", "--quiet", "--levels", levels, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned(), out)
+    };
+    let (code, stderr, out) = report(&family, "4,1,3,2,3");
+    assert_eq!(code, Some(0), "{stderr}");
+    let elements = csv_rows(&std::fs::read_to_string(out.join("elements.csv")).unwrap());
+    let cells = |e: &str| elements.iter().filter(|r| r["element"] == e).map(|r| r["cells"].clone()).collect::<Vec<_>>();
+    assert_eq!(cells("p1"), ["1x1x1", "2x2x2", "3x3x3", "4x4x4"]);
+    assert_eq!(cells("p2"), ["1x1x1", "2x2x2"]);
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("--quick --levels 1,2,3,4`"), "{md}");
+    for (scene, levels, why) in
+        [(repo("examples/homogeneous.toml"), "1,2", "no `mesh.base`"), (family.clone(), "0,1", "1, 2, 3")]
+    {
+        let (code, stderr, _) = report(&scene, levels);
+        assert_eq!(code, Some(1), "{stderr}");
+        assert!(stderr.contains("--levels") && stderr.contains(why), "{stderr}");
+    }
+}
+
 #[test]
 fn report_of_a_missing_scene_fails_with_its_name() {
     let dir = tempfile::tempdir().unwrap();
@@ -367,7 +431,7 @@ fn report_quick_on_a_small_johnson_scene() {
     let scene = dir.path().join("small.toml");
     std::fs::write(&scene, toml::to_string(&small_johnson()).unwrap()).unwrap();
     let out = dir.path().join("rep");
-    let r = generate(&scene, &out, &ReportOptions { quick: true }, &mut Silent).unwrap();
+    let r = generate(&scene, &out, &ReportOptions { quick: true, ..Default::default() }, &mut Silent).unwrap();
     assert_eq!(r.dofs, small_johnson_problem().element.n_dofs());
     let reference = r.reference().unwrap();
     assert!(reference.converged && reference.kkt < 1e-13, "{reference:?}");

@@ -20,8 +20,15 @@ use saddle_core::DiscreteProblem;
 /// multiple of the base, so every level has the same grading and alignment.
 pub fn family_levels(family_base: [usize; 3], scene: [usize; 3], factors: &[f64]) -> Vec<[usize; 3]> {
     let k = (scene[0] / family_base[0].max(1)).max(1) as f64;
-    let mut ks: Vec<usize> =
+    let ks: Vec<usize> =
         factors.iter().filter(|f| f.is_finite() && **f > 0.0).map(|f| ((k * f).round() as usize).max(1)).collect();
+    family_cells(family_base, &ks)
+}
+
+/// The cells `k·family_base` of the levels `ks` of a mesh family (theory §7.3), ascending,
+/// repeats merged.
+pub fn family_cells(family_base: [usize; 3], ks: &[usize]) -> Vec<[usize; 3]> {
+    let mut ks = ks.to_vec();
     ks.sort_unstable();
     ks.dedup();
     ks.into_iter().map(|k| family_base.map(|n| k * n)).collect()

@@ -2,7 +2,7 @@
 //! refined meshes, written as CSV files, images and `report.md` (the files of the module docs of
 //! [`super`]).
 
-use super::convergence::{family_levels, refinement_levels};
+use super::convergence::{family_cells, family_levels, refinement_levels};
 use super::elements::{self, ElementComparison};
 #[cfg(feature = "report")]
 use super::figures;
@@ -27,12 +27,14 @@ pub fn generate(
     let l = source.problem(None)?;
     let rungs = ladder(options.quick);
     let base = source.box_cells();
+    let asked = asked_levels(&source, options)?;
     let levels: Result<Vec<[usize; 3]>, String> = base.clone().map(|base| {
         let factors: &[f64] = if options.quick { &QUICK_LEVELS } else { &LEVELS };
         // a mesh family's levels are multiples of its base (same grading and alignment)
-        let mut levels = match source.scene.mesh.family_base() {
-            Some(family) => family_levels(family, base, factors),
-            None => refinement_levels(base, factors),
+        let mut levels = match (source.scene.mesh.family_base(), &asked) {
+            (Some(family), Some(ks)) => family_cells(family, ks),
+            (Some(family), None) => family_levels(family, base, factors),
+            (None, _) => refinement_levels(base, factors),
         };
         if !levels.contains(&base) {
             levels.push(base);
@@ -95,6 +97,7 @@ pub fn generate(
         elements,
         contact_rows,
         quick: options.quick,
+        levels: asked,
         cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
         runs,
         scene_cells: base.ok(),
@@ -105,6 +108,28 @@ pub fn generate(
     };
     write_outputs(&mut report, out, t0)?;
     Ok(report)
+}
+
+/// The family levels of `--levels`, checked (at least one, each k ≥ 1, on a scene whose mesh is a
+/// family: `mesh.base`, theory §7.3), ascending without repeats.
+fn asked_levels(source: &SceneSource, options: &ReportOptions) -> Result<Option<Vec<usize>>, ReportError> {
+    let Some(ks) = &options.levels else { return Ok(None) };
+    let why = if ks.is_empty() || ks.contains(&0) {
+        Some("the levels k of a mesh family are 1, 2, 3, …")
+    } else if source.scene.mesh.family_base().is_none() {
+        Some("the scene's mesh is not a mesh family (no `mesh.base`)")
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(ReportError::Levels { levels: ks.clone(), why, scene: source.path.clone() }),
+        None => {
+            let mut ks = ks.clone();
+            ks.sort_unstable();
+            ks.dedup();
+            Ok(Some(ks))
+        }
+    }
 }
 
 /// Writes the CSV files, the images (feature `report`) and `report.md`; the total time is taken

@@ -34,6 +34,16 @@ pub enum ReportError {
         /// Why.
         source: std::io::Error,
     },
+    /// `--levels` that name no levels of a mesh family.
+    #[error("--levels {levels:?}: {why} ({scene})")]
+    Levels {
+        /// The levels asked for.
+        levels: Vec<usize>,
+        /// What is wrong with them.
+        why: &'static str,
+        /// The scene file.
+        scene: PathBuf,
+    },
     /// A plot could not be drawn.
     #[cfg(feature = "report")]
     #[error(transparent)]
@@ -54,10 +64,13 @@ pub trait Progress: Monitor {
 impl Progress for Silent {}
 
 /// Options of a report.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct ReportOptions {
     /// Fewer rungs and levels (tests, CI).
     pub quick: bool,
+    /// The levels k of the convergence study on a mesh family (`mesh.base`, theory §7.3), in
+    /// place of [`LEVELS`]: the family's levels whose extrapolation is the reference (`--levels`).
+    pub levels: Option<Vec<usize>>,
 }
 
 /// Refinement factors of the scene's cells: for the default scene (32×32×16) 4, 6, 8, 11, 16
@@ -131,6 +144,8 @@ pub struct Report {
     pub contact_rows: usize,
     /// Whether `quick` was set.
     pub quick: bool,
+    /// The family levels asked for (`--levels`).
+    pub levels: Option<Vec<usize>>,
     /// Cores available (`std::thread::available_parallelism`).
     pub cores: usize,
     /// The work–precision runs, the reference among them.

@@ -7,7 +7,8 @@
 //!   ladder of settings ([`runs::ladder`]), each run's wall time and its errors against a tightly
 //!   converged reference of the same discrete problem (Newton to 1e-13, [`runs::reference_solver`]);
 //! * `convergence.csv`, `convergence.png`, `convergence.svg` — the scene on a sequence of refined
-//!   box meshes ([`convergence`], [`measure::LEVELS`]), each solved by the reference solver; errors against
+//!   box meshes ([`convergence`], [`measure::LEVELS`], or a mesh family's levels named by
+//!   [`measure::ReportOptions::levels`]), each solved by the reference solver; errors against
 //!   the finest level through the transfer of P0 fields ([`transfer`]), observed rates next to
 //!   Theorem 2's guaranteed 1/2, a Richardson extrapolation of U. A scene whose mesh is not a
 //!   `box` gets no study: `convergence.csv` holds its header only and `report.md` says why;

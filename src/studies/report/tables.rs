@@ -193,7 +193,10 @@ pub fn convergence_table(study: &ConvergenceStudy, scene_cells: Option<[usize; 3
 pub fn markdown(report: &Report) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Accuracy and cost: {}\n", report.title);
-    let quick = if report.quick { " --quick" } else { "" };
+    let levels = report.levels.as_ref().map_or(String::new(), |ks| {
+        format!(" --levels {}", ks.iter().map(|k| k.to_string()).collect::<Vec<_>>().join(","))
+    });
+    let quick = format!("{}{levels}", if report.quick { " --quick" } else { "" });
     let _ = writeln!(
         s,
         "Scene `{}`: {} dofs, {} tetrahedra, {} candidate contact nodes. Machine: {} cores. \
