@@ -119,3 +119,101 @@ fn cattaneo_mindlin_stick_radius_and_displacement() {
         assert!((c / a / c_exact - 1.0).abs() < 0.10, "c/a {} against {c_exact}", c / a);
     }
 }
+
+/// The energy dissipated per cycle of Mindlin's loop: P held, Q from 0 to Q*, then to −Q* and
+/// back to Q* (Mindlin & Deresiewicz 1953; K. L. Johnson, *Contact Mechanics* (1985), §7.4):
+/// the loop's area under Masing's rule (each branch twice the virgin curve δ(Q) of eq. 7.42 at
+/// half the change of Q), `ΔW = 4Q*δ(Q*) − 8∫₀^{Q*} δ(Q) dQ`, which is
+/// `(9μ²P²(2 − ν)/(10Ga))·[1 − (1 − r)^{5/3} − (5r/6)(1 + (1 − r)^{2/3})]`, r = Q*/μP (Johnson's
+/// (9μ²P²/10a)((2 − ν₁)/G₁ + (2 − ν₂)/G₂)[…] with a rigid second body).
+fn mindlin_dissipation(ratio: f64, g: f64, a: f64) -> f64 {
+    let r = ratio;
+    9.0 * MU * MU * P * P * (2.0 - NU) / (10.0 * g * a)
+        * (1.0 - (1.0 - r).powf(5.0 / 3.0) - 5.0 * r / 6.0 * (1.0 + (1.0 - r).powf(2.0 / 3.0)))
+}
+
+/// The scene of Mindlin's loop: the box [−L, L]² × [0, L] with `cells` graded by `ratio` toward
+/// the contact, pulled by Q* = `q` (a path's factors of `Q` then move it).
+fn loop_scene(half: f64, cells: [usize; 3], ratio: f64, element: &str, q: f64) -> String {
+    format!(
+        r#"
+title = "Mindlin's loop"
+[discretisation]
+type = "{element}"
+[mesh]
+type = "box"
+min = [-{half}, -{half}, 0.0]
+max = [{half}, {half}, {half}]
+cells = [{}, {}, {}]
+grading = {{ toward = [0.0, 0.0, 0.0], ratio = {ratio} }}
+[material]
+E = {E}
+nu = {NU}
+[[dirichlet]]
+on = {{ any = [ {{ group = "xmin" }}, {{ group = "xmax" }}, {{ group = "ymin" }}, {{ group = "ymax" }}, {{ group = "zmax" }} ] }}
+[obstacle]
+type = "rigid_sphere"
+center = [0.0, 0.0, -{R}]
+R = {R}
+direction = [0.0, 0.0, 1.0]
+F = {P}
+Q = [{q}, 0.0]
+zone = {{ all = [ {{ group = "zmin" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.3 }} }} ] }}
+friction = {{ type = "coulomb", mu = {MU} }}
+"#,
+        cells[0], cells[1], cells[2]
+    )
+}
+
+/// One loop with `n` steps per quarter (Q's factors 0 → 1 → −1 → 1): (the energy dissipated
+/// over the cycle from Q* back to Q*, ∮ Q dUx over it by the trapezoidal rule, the Q–Ux points).
+fn mindlin_loop(scene: &str, n: usize) -> (f64, f64, Vec<(f64, f64)>) {
+    use saddle::core::{Evolution, LoadFactors, step_factors};
+    let scene = Scene::from_toml(scene, std::path::Path::new("mindlin_loop.toml")).unwrap();
+    let q_star = scene.obstacle.load()[1];
+    let (problem, _) = scene.into_problem().unwrap();
+    println!("{} dofs, {} rows", problem.lagrangian().n_dofs(), problem.lagrangian().n_rows());
+    let uzawa = Uzawa { tol: 1e-9, max_iter: 100_000, extra_metric: 1.0, ..Uzawa::default() };
+    let mut path = Evolution::new(&problem);
+    let mut points = Vec::new();
+    let mut dissipated = Vec::new();
+    let factors = step_factors(&[0.0, 1.0, 0.0, -1.0, 0.0, 1.0], n);
+    for f in factors {
+        let t = std::time::Instant::now();
+        let step =
+            path.step_at(&LoadFactors { all: 1.0, named: [("Q".to_string(), f)].into() }, &uzawa, &mut Silent).unwrap();
+        assert!(step.converged(), "Q factor {f}: {:?}", step.solution.report.kkt);
+        let sol = &step.solution;
+        let reports = step.problem.view().contact_reports(&sol.extras, &sol.lambda);
+        let ux = reports[0].report.get("Ux").unwrap();
+        let d = step.problem.obstacles().dissipated(&sol.u, &sol.extras, &sol.lambda)[0];
+        println!("Q = {:+.4e}: Ux = {ux:+.5e}, dissipated {d:.5e} ({:.1} s)", f * q_star, t.elapsed().as_secs_f64());
+        points.push((f * q_star, ux));
+        dissipated.push(d);
+    }
+    let cycle = n;
+    let area: f64 = points[cycle..].windows(2).map(|w| 0.5 * (w[0].0 + w[1].0) * (w[1].1 - w[0].1)).sum();
+    (dissipated[points.len() - 1] - dissipated[cycle], area, points)
+}
+
+#[test]
+#[ignore = "a study"]
+fn mindlin_loop_dissipates_the_closed_form_energy_per_cycle() {
+    let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.to_string());
+    let half: f64 = env("HALF", "6").parse().unwrap();
+    let c: usize = env("CELLS", "12").parse().unwrap();
+    let ratio: f64 = env("RATIO", "79.5").parse().unwrap();
+    let element = env("ELEMENT", "p2");
+    let n: usize = env("N", "4").parse().unwrap();
+    let (e_star, g) = (E / (1.0 - NU * NU), E / (2.0 * (1.0 + NU)));
+    let a = (3.0 * P * R / (4.0 * e_star)).cbrt();
+    for r in env("RATIOS", "0.5").split(',').map(|s| s.parse::<f64>().unwrap()) {
+        let (w, area, _) = mindlin_loop(&loop_scene(half, [c, c, c / 2], ratio, &element, r * MU * P), n);
+        let exact = mindlin_dissipation(r, g, a);
+        println!(
+            "Q*/μP = {r}: dissipated per cycle {w:.5e}, loop area {area:.5e}, closed form {exact:.5e} ({:+.2} %, {:+.2} %)",
+            100.0 * (w / exact - 1.0),
+            100.0 * (area / exact - 1.0)
+        );
+    }
+}
