@@ -12,7 +12,12 @@
 //! cells, ratio 79.5), clamped on its far faces; 159,048 P2 dofs, 1023 contact rows. One solve
 //! takes 5 min and 3.6 GB on one core: a study, not a CI test.
 //!
+//! Mindlin's loop (P held, Q: 0 → Q* → −Q* → Q*, a load path whose Q has factors of its own,
+//! theory §11.2, §11.6): the energy dissipated per cycle against Mindlin & Deresiewicz's closed
+//! form ([`mindlin_dissipation`]) on a coarser mesh.
+//!
 //!   cargo test --release --test mindlin -- --ignored --nocapture
+//!   cargo test --release --test mindlin -- --ignored --nocapture mindlin_loop
 
 use saddle::core::problem::displacements::contact_status;
 use saddle::core::problem::friction::ContactStatus;
@@ -29,31 +34,7 @@ const MU: f64 = 0.3;
 /// The scene at tangential force `q` (the whole sphere's: no symmetry plane, the contact is not
 /// symmetric under a tangential load).
 fn scene(q: f64) -> String {
-    format!(
-        r#"
-title = "Cattaneo–Mindlin partial slip"
-[mesh]
-type = "box"
-min = [-6.0, -6.0, 0.0]
-max = [6.0, 6.0, 6.0]
-cells = [24, 24, 12]
-grading = {{ toward = [0.0, 0.0, 0.0], ratio = 79.5 }}
-[material]
-E = {E}
-nu = {NU}
-[[dirichlet]]
-on = {{ any = [ {{ group = "xmin" }}, {{ group = "xmax" }}, {{ group = "ymin" }}, {{ group = "ymax" }}, {{ group = "zmax" }} ] }}
-[obstacle]
-type = "rigid_sphere"
-center = [0.0, 0.0, -{R}]
-R = {R}
-direction = [0.0, 0.0, 1.0]
-F = {P}
-Q = [{q}, 0.0]
-zone = {{ all = [ {{ group = "zmin" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.3 }} }} ] }}
-friction = {{ type = "coulomb", mu = {MU} }}
-"#
-    )
+    loop_scene(6.0, [24, 24, 12], 79.5, "p2", q)
 }
 
 /// The stick radius of the solution: the radius c that separates the contact nodes of the
@@ -132,12 +113,13 @@ fn mindlin_dissipation(ratio: f64, g: f64, a: f64) -> f64 {
         * (1.0 - (1.0 - r).powf(5.0 / 3.0) - 5.0 * r / 6.0 * (1.0 + (1.0 - r).powf(2.0 / 3.0)))
 }
 
-/// The scene of Mindlin's loop: the box [−L, L]² × [0, L] with `cells` graded by `ratio` toward
-/// the contact, pulled by Q* = `q` (a path's factors of `Q` then move it).
+/// The sphere pressed by P and pulled by `q` into the box [−half, half]² × [0, half] of `cells`
+/// graded by `ratio` toward the contact, with the finite element `element` (in Mindlin's loop a
+/// path's factors of `Q` then move the pull).
 fn loop_scene(half: f64, cells: [usize; 3], ratio: f64, element: &str, q: f64) -> String {
     format!(
         r#"
-title = "Mindlin's loop"
+title = "Cattaneo–Mindlin partial slip"
 [discretisation]
 type = "{element}"
 [mesh]
@@ -172,7 +154,8 @@ fn mindlin_loop(scene: &str, n: usize) -> (f64, f64, Vec<(f64, f64)>) {
     let scene = Scene::from_toml(scene, std::path::Path::new("mindlin_loop.toml")).unwrap();
     let q_star = scene.obstacle.load()[1];
     let (problem, _) = scene.into_problem().unwrap();
-    println!("{} dofs, {} rows", problem.lagrangian().n_dofs(), problem.lagrangian().n_rows());
+    let l = problem.lagrangian();
+    println!("{} dofs, {} rows, warnings {:?}", l.n_dofs(), l.n_rows(), l.data.rows.warnings);
     let uzawa = Uzawa { tol: 1e-9, max_iter: 100_000, extra_metric: 1.0, ..Uzawa::default() };
     let mut path = Evolution::new(&problem);
     let mut points = Vec::new();
@@ -196,24 +179,33 @@ fn mindlin_loop(scene: &str, n: usize) -> (f64, f64, Vec<(f64, f64)>) {
     (dissipated[points.len() - 1] - dissipated[cycle], area, points)
 }
 
+/// Mindlin's loop on a coarser mesh than the stick-radius study's: the box [−6, 6]² × [0, 6],
+/// 12 × 12 × 6 cells graded by 79.5 toward the contact, P2 with B̄ (19,044 dofs, 109 contact
+/// nodes), 4 steps per quarter of the loop (21 steps). Measured at 7b97bc2 (docs/load_paths.md):
+/// Q*/μP = 0.8: dissipated per cycle 5.7978e-5 against 5.9259e-5 (−2.2 %), within the issue's
+/// 5 %; Q*/μP = 0.5: 8.036e-6 against 9.416e-6 (−14.7 %), not within it — the micro-slip annulus
+/// (c/a = 0.79 to 1) lies between two rings of contact nodes on this mesh, and at small Q*/μP
+/// the energy is the annulus' (ΔW ∝ (Q*/μP)³): the study asserts 0.8 only. The loop is a loop:
+/// at Q = 0 the unloading branch's Ux lies above the reloading branch's.
 #[test]
-#[ignore = "a study"]
+#[ignore = "a study: 2 × 21 steps of 19k dofs, about 10 min on a quiet core"]
 fn mindlin_loop_dissipates_the_closed_form_energy_per_cycle() {
-    let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.to_string());
-    let half: f64 = env("HALF", "6").parse().unwrap();
-    let c: usize = env("CELLS", "12").parse().unwrap();
-    let ratio: f64 = env("RATIO", "79.5").parse().unwrap();
-    let element = env("ELEMENT", "p2");
-    let n: usize = env("N", "4").parse().unwrap();
     let (e_star, g) = (E / (1.0 - NU * NU), E / (2.0 * (1.0 + NU)));
     let a = (3.0 * P * R / (4.0 * e_star)).cbrt();
-    for r in env("RATIOS", "0.5").split(',').map(|s| s.parse::<f64>().unwrap()) {
-        let (w, area, _) = mindlin_loop(&loop_scene(half, [c, c, c / 2], ratio, &element, r * MU * P), n);
+    let n = 4;
+    for r in [0.5, 0.8] {
+        let (w, area, points) = mindlin_loop(&loop_scene(6.0, [12, 12, 6], 79.5, "p2", r * MU * P), n);
         let exact = mindlin_dissipation(r, g, a);
+        let gap = w / exact - 1.0;
         println!(
-            "Q*/μP = {r}: dissipated per cycle {w:.5e}, loop area {area:.5e}, closed form {exact:.5e} ({:+.2} %, {:+.2} %)",
-            100.0 * (w / exact - 1.0),
+            "Q*/μP = {r}: dissipated per cycle {w:.4e}, ∮Q dUx {area:.4e}, closed form {exact:.4e} ({:+.1} %, {:+.1} %)",
+            100.0 * gap,
             100.0 * (area / exact - 1.0)
         );
+        // Ux at Q = 0 on the way down (step 2n) and on the way up (step 4n)
+        assert!(points[2 * n].1 > points[4 * n].1, "no hysteresis: {points:?}");
+        if r == 0.8 {
+            assert!(gap.abs() < 0.05, "Q*/μP = {r}: {w:e} against {exact:e}");
+        }
     }
 }

@@ -216,14 +216,7 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
         if factors.is_uniform() {
             return self.rows_at_factor(factors.all, rows, mesh, dofs, path);
         }
-        let scaled = self.scaled_loads(factors).ok_or_else(|| {
-            ParameterError::new(
-                path,
-                format!("type = {:?}", self.name()),
-                "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_loads is None)",
-            )
-        })?;
-        scaled.discretise(mesh, dofs, path).map(Cow::Owned)
+        discretise_scaled(self.scaled_loads(factors), self.name(), mesh, dofs, path)
     }
 
     /// K_h of this obstacle with its load multiplied by `factor` (theory §11.2), from `rows`, its
@@ -241,15 +234,27 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
         path: &str,
     ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
         let _ = rows;
-        let scaled = self.scaled_load(factor).ok_or_else(|| {
-            ParameterError::new(
-                path,
-                format!("type = {:?}", self.name()),
-                "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_load is None)",
-            )
-        })?;
-        scaled.discretise(mesh, dofs, path).map(Cow::Owned)
+        discretise_scaled(self.scaled_load(factor), self.name(), mesh, dofs, path)
     }
+}
+
+/// The rows of an obstacle plugin `name` at a scaled load (`scaled`), or the error on `path`
+/// that it cannot scale its load.
+fn discretise_scaled(
+    scaled: Option<Box<dyn AdmissibleDisplacements>>,
+    name: &str,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    path: &str,
+) -> Result<Cow<'static, ConstraintRows>, SceneError> {
+    let scaled = scaled.ok_or_else(|| {
+        ParameterError::new(
+            path,
+            format!("type = {name:?}"),
+            "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_load is None)",
+        )
+    })?;
+    scaled.discretise(mesh, dofs, path).map(Cow::Owned)
 }
 
 dyn_clone::clone_trait_object!(AdmissibleDisplacements);

@@ -175,10 +175,15 @@ impl Obstacles {
     /// The names of the extra unknowns: each obstacle's `extra_names()`, prefixed `name.` when
     /// the obstacle has a name (`left.U`), plain otherwise.
     pub fn extra_names(&self) -> Vec<String> {
+        self.prefixed(|k| k.extra_names())
+    }
+
+    /// Each obstacle's `names`, prefixed `name.` when the obstacle has a name.
+    fn prefixed(&self, names: impl Fn(&dyn AdmissibleDisplacements) -> Vec<String>) -> Vec<String> {
         self.list
             .iter()
             .flat_map(|o| {
-                o.k.extra_names().into_iter().map(move |x| match &o.name {
+                names(o.k.as_ref()).into_iter().map(move |x| match &o.name {
                     Some(n) => format!("{n}.{x}"),
                     None => x,
                 })
@@ -218,15 +223,7 @@ impl Obstacles {
     /// The names of the loads a load path may give factors of their own: each obstacle's
     /// [`AdmissibleDisplacements::load_names`], prefixed `name.` as its extras are.
     pub fn load_names(&self) -> Vec<String> {
-        self.list
-            .iter()
-            .flat_map(|o| {
-                o.k.load_names().into_iter().map(move |x| match &o.name {
-                    Some(n) => format!("{n}.{x}"),
-                    None => x,
-                })
-            })
-            .collect()
+        self.prefixed(|k| k.load_names())
     }
 
     /// The load term's coefficients f, concatenated.
