@@ -12,7 +12,12 @@
 //! cells, ratio 79.5), clamped on its far faces; 159,048 P2 dofs, 1023 contact rows. One solve
 //! takes 5 min and 3.6 GB on one core: a study, not a CI test.
 //!
+//! Mindlin's loop (P held, Q: 0 → Q* → −Q* → Q*, a load path whose Q has factors of its own,
+//! theory §11.2, §11.6): the energy dissipated per cycle against Mindlin & Deresiewicz's closed
+//! form ([`mindlin_dissipation`]) on a coarser mesh.
+//!
 //!   cargo test --release --test mindlin -- --ignored --nocapture
+//!   cargo test --release --test mindlin -- --ignored --nocapture mindlin_loop
 
 use saddle::core::problem::displacements::contact_status;
 use saddle::core::problem::friction::ContactStatus;
@@ -29,31 +34,7 @@ const MU: f64 = 0.3;
 /// The scene at tangential force `q` (the whole sphere's: no symmetry plane, the contact is not
 /// symmetric under a tangential load).
 fn scene(q: f64) -> String {
-    format!(
-        r#"
-title = "Cattaneo–Mindlin partial slip"
-[mesh]
-type = "box"
-min = [-6.0, -6.0, 0.0]
-max = [6.0, 6.0, 6.0]
-cells = [24, 24, 12]
-grading = {{ toward = [0.0, 0.0, 0.0], ratio = 79.5 }}
-[material]
-E = {E}
-nu = {NU}
-[[dirichlet]]
-on = {{ any = [ {{ group = "xmin" }}, {{ group = "xmax" }}, {{ group = "ymin" }}, {{ group = "ymax" }}, {{ group = "zmax" }} ] }}
-[obstacle]
-type = "rigid_sphere"
-center = [0.0, 0.0, -{R}]
-R = {R}
-direction = [0.0, 0.0, 1.0]
-F = {P}
-Q = [{q}, 0.0]
-zone = {{ all = [ {{ group = "zmin" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.3 }} }} ] }}
-friction = {{ type = "coulomb", mu = {MU} }}
-"#
-    )
+    loop_scene(6.0, [24, 24, 12], 79.5, "p2", q)
 }
 
 /// The stick radius of the solution: the radius c that separates the contact nodes of the
@@ -117,5 +98,115 @@ fn cattaneo_mindlin_stick_radius_and_displacement() {
         );
         assert!((delta / delta_exact - 1.0).abs() < 0.03, "δ {delta:e} against {delta_exact:e}");
         assert!((c / a / c_exact - 1.0).abs() < 0.10, "c/a {} against {c_exact}", c / a);
+    }
+}
+
+/// The energy dissipated per cycle of Mindlin's loop: P held, Q from 0 to Q*, then to −Q* and
+/// back to Q* (Mindlin & Deresiewicz 1953; K. L. Johnson, *Contact Mechanics* (1985), §7.4):
+/// the loop's area under Masing's rule (each branch twice the virgin curve δ(Q) of eq. 7.42 at
+/// half the change of Q), `ΔW = 4Q*δ(Q*) − 8∫₀^{Q*} δ(Q) dQ`, which is
+/// `(9μ²P²(2 − ν)/(10Ga))·[1 − (1 − r)^{5/3} − (5r/6)(1 + (1 − r)^{2/3})]`, r = Q*/μP (Johnson's
+/// (9μ²P²/10a)((2 − ν₁)/G₁ + (2 − ν₂)/G₂)[…] with a rigid second body).
+fn mindlin_dissipation(ratio: f64, g: f64, a: f64) -> f64 {
+    let r = ratio;
+    9.0 * MU * MU * P * P * (2.0 - NU) / (10.0 * g * a)
+        * (1.0 - (1.0 - r).powf(5.0 / 3.0) - 5.0 * r / 6.0 * (1.0 + (1.0 - r).powf(2.0 / 3.0)))
+}
+
+/// The sphere pressed by P and pulled by `q` into the box [−half, half]² × [0, half] of `cells`
+/// graded by `ratio` toward the contact, with the finite element `element` (in Mindlin's loop a
+/// path's factors of `Q` then move the pull).
+fn loop_scene(half: f64, cells: [usize; 3], ratio: f64, element: &str, q: f64) -> String {
+    format!(
+        r#"
+title = "Cattaneo–Mindlin partial slip"
+[discretisation]
+type = "{element}"
+[mesh]
+type = "box"
+min = [-{half}, -{half}, 0.0]
+max = [{half}, {half}, {half}]
+cells = [{}, {}, {}]
+grading = {{ toward = [0.0, 0.0, 0.0], ratio = {ratio} }}
+[material]
+E = {E}
+nu = {NU}
+[[dirichlet]]
+on = {{ any = [ {{ group = "xmin" }}, {{ group = "xmax" }}, {{ group = "ymin" }}, {{ group = "ymax" }}, {{ group = "zmax" }} ] }}
+[obstacle]
+type = "rigid_sphere"
+center = [0.0, 0.0, -{R}]
+R = {R}
+direction = [0.0, 0.0, 1.0]
+F = {P}
+Q = [{q}, 0.0]
+zone = {{ all = [ {{ group = "zmin" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.3 }} }} ] }}
+friction = {{ type = "coulomb", mu = {MU} }}
+"#,
+        cells[0], cells[1], cells[2]
+    )
+}
+
+/// One loop with `n` steps per quarter (Q's factors 0 → 1 → −1 → 1): (the energy dissipated
+/// over the cycle from Q* back to Q*, ∮ Q dUx over it by the trapezoidal rule, the Q–Ux points).
+fn mindlin_loop(scene: &str, n: usize) -> (f64, f64, Vec<(f64, f64)>) {
+    use saddle::core::{Evolution, LoadFactors, step_factors};
+    let scene = Scene::from_toml(scene, std::path::Path::new("mindlin_loop.toml")).unwrap();
+    let q_star = scene.obstacle.load()[1];
+    let (problem, _) = scene.into_problem().unwrap();
+    let l = problem.lagrangian();
+    println!("{} dofs, {} rows, warnings {:?}", l.n_dofs(), l.n_rows(), l.data.rows.warnings);
+    let uzawa = Uzawa { tol: 1e-9, max_iter: 100_000, extra_metric: 1.0, ..Uzawa::default() };
+    let mut path = Evolution::new(&problem);
+    let mut points = Vec::new();
+    let mut dissipated = Vec::new();
+    let factors = step_factors(&[0.0, 1.0, 0.0, -1.0, 0.0, 1.0], n);
+    for f in factors {
+        let t = std::time::Instant::now();
+        let step =
+            path.step_at(&LoadFactors { all: 1.0, named: [("Q".to_string(), f)].into() }, &uzawa, &mut Silent).unwrap();
+        assert!(step.converged(), "Q factor {f}: {:?}", step.solution.report.kkt);
+        let sol = &step.solution;
+        let reports = step.problem.view().contact_reports(&sol.extras, &sol.lambda);
+        let ux = reports[0].report.get("Ux").unwrap();
+        let d = step.problem.obstacles().dissipated(&sol.u, &sol.extras, &sol.lambda)[0];
+        println!("Q = {:+.4e}: Ux = {ux:+.5e}, dissipated {d:.5e} ({:.1} s)", f * q_star, t.elapsed().as_secs_f64());
+        points.push((f * q_star, ux));
+        dissipated.push(d);
+    }
+    let cycle = n;
+    let area: f64 = points[cycle..].windows(2).map(|w| 0.5 * (w[0].0 + w[1].0) * (w[1].1 - w[0].1)).sum();
+    (dissipated[points.len() - 1] - dissipated[cycle], area, points)
+}
+
+/// Mindlin's loop on a coarser mesh than the stick-radius study's: the box [−6, 6]² × [0, 6],
+/// 12 × 12 × 6 cells graded by 79.5 toward the contact, P2 with B̄ (19,044 dofs, 109 contact
+/// nodes), 4 steps per quarter of the loop (21 steps). Measured at 7b97bc2 (docs/load_paths.md):
+/// Q*/μP = 0.8: dissipated per cycle 5.7978e-5 against 5.9259e-5 (−2.2 %), within the issue's
+/// 5 %; Q*/μP = 0.5: 8.036e-6 against 9.416e-6 (−14.7 %), not within it — the micro-slip annulus
+/// (c/a = 0.79 to 1) lies between two rings of contact nodes on this mesh, and at small Q*/μP
+/// the energy is the annulus' (ΔW ∝ (Q*/μP)³): the study asserts 0.8 only. With 8 steps per
+/// quarter: −15.2 % and −2.5 % (the steps do not limit it). The loop is a loop:
+/// at Q = 0 the unloading branch's Ux lies above the reloading branch's.
+#[test]
+#[ignore = "a study: 2 × 21 steps of 19k dofs, about 10 min on a quiet core"]
+fn mindlin_loop_dissipates_the_closed_form_energy_per_cycle() {
+    let (e_star, g) = (E / (1.0 - NU * NU), E / (2.0 * (1.0 + NU)));
+    let a = (3.0 * P * R / (4.0 * e_star)).cbrt();
+    let n = 4;
+    for r in [0.5, 0.8] {
+        let (w, area, points) = mindlin_loop(&loop_scene(6.0, [12, 12, 6], 79.5, "p2", r * MU * P), n);
+        let exact = mindlin_dissipation(r, g, a);
+        let gap = w / exact - 1.0;
+        println!(
+            "Q*/μP = {r}: dissipated per cycle {w:.4e}, ∮Q dUx {area:.4e}, closed form {exact:.4e} ({:+.1} %, {:+.1} %)",
+            100.0 * gap,
+            100.0 * (area / exact - 1.0)
+        );
+        // Ux at Q = 0 on the way down (step 2n) and on the way up (step 4n)
+        assert!(points[2 * n].1 > points[4 * n].1, "no hysteresis: {points:?}");
+        if r == 0.8 {
+            assert!(gap.abs() < 0.05, "Q*/μP = {r}: {w:e} against {exact:e}");
+        }
     }
 }

@@ -29,7 +29,9 @@ use crate::io::summary::{
     CutAttempt, PathSummary, ResidualState, StepSummary, Summary, check_quantity, reaction_names, reaction_quantities,
     reported_quantities,
 };
-use saddle_core::{Evolution, Increment, Monitor, PathError, SceneError, SolveError, StepSolution};
+use saddle_core::{
+    Evolution, Increment, LoadFactors, Monitor, PathError, SceneError, SolveError, StepCutting, StepSolution,
+};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
@@ -83,14 +85,23 @@ pub fn solve_and_write(
     let cutting = path.cutting();
     let mut cuts: Vec<CutAttempt> = Vec::new();
     let mut smallest_step: Option<f64> = None;
-    // the zero state is the state at factor 0
-    let mut solved = 0.0;
-    'planned: for &target in &factors {
-        let mut increment = Increment::new(solved, target);
-        while let Some(factor) = increment.next() {
+    // the zero state is the state at factor 0, of every load
+    let planned = path.step_loads();
+    let mut solved = LoadFactors { all: 0.0, named: planned[0].named.keys().map(|k| (k.clone(), 0.0)).collect() };
+    'planned: for target in &planned {
+        // the planned step in fractions of its increment: a cut halves every load's alike
+        let (start, span) = (solved.clone(), LoadFactors::span(&solved, target));
+        let mut increment = Increment::new(0.0, 1.0);
+        let cutting = StepCutting { min_step: cutting.min_step / span, ..cutting };
+        while let Some(fraction) = increment.next() {
+            let loads = match fraction {
+                1.0 => target.clone(),
+                _ => solved.moved(fraction - increment.from(), &start, target),
+            };
+            let factor = loads.all;
             let k = steps.len();
             let started = Instant::now();
-            let attempt = timer.time("solve", || evolution.step(factor, loaded.solver.as_ref(), monitor));
+            let attempt = timer.time("solve", || evolution.step_at(&loads, loaded.solver.as_ref(), monitor));
             // a step failed on one rank only ends every rank (a distributed solver's failures are
             // every rank's: the cuts below are taken alike everywhere)
             if let (Ok(_), Err(message)) =
@@ -100,15 +111,16 @@ pub fn solve_and_write(
                 return Err(RunError::Ranks(message));
             }
             if let Some(why) = cuttable_failure(&attempt) {
-                let from = increment.from();
+                let from = solved.all;
                 if increment.cut(&cutting) {
-                    let retry = increment.next().expect("a cut step has somewhere to go");
+                    let next = increment.next().expect("a cut step has somewhere to go");
+                    let retry = solved.moved(next - increment.from(), &start, target).all;
                     progress(&format!(
                         "step {k} (factor {factor}): failed: {why}; cut {}: retrying at factor {retry} (step {:e})",
                         increment.cuts(),
-                        increment.step()
+                        increment.step() * span
                     ));
-                    smallest_step = Some(increment.step());
+                    smallest_step = Some(increment.step() * span);
                     cuts.push(CutAttempt { step: k, factor, from, retry, reason: why });
                     continue;
                 }
@@ -121,7 +133,7 @@ pub fn solve_and_write(
                         PathError::Scene { source, .. } => source.to_string(),
                     };
                     if let PathError::Solve { source: SolveError::BeyondCollapse { .. }, .. } = &e {
-                        let _ = write!(why, "; the last load factor carried is {solved}");
+                        let _ = write!(why, "; the last load factor carried is {}", solved.all);
                     }
                     progress(&format!("step {k} (factor {factor}): failed: {why}"));
                     if last.is_none() {
@@ -129,7 +141,9 @@ pub fn solve_and_write(
                         out.abandon();
                         return Err(RunError::Path(e));
                     }
-                    steps.push(StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64()));
+                    let mut entry = StepSummary::failed(k, factor, why.clone(), started.elapsed().as_secs_f64());
+                    entry.loads = loads.named.clone();
+                    steps.push(entry);
                     if ranks.is_root() {
                         timer.time("write", || series.append(&mut out, &steps))?;
                     }
@@ -154,6 +168,7 @@ pub fn solve_and_write(
             }
             let mut entry = StepSummary::new(k, factor, &s, file, started.elapsed().as_secs_f64());
             entry.cuts = increment.cuts();
+            entry.loads = loads.named.clone();
             progress(&step_line(&entry, path));
             steps.push(entry);
             // the series and the table so far, so that an interrupted path leaves them readable
@@ -167,8 +182,8 @@ pub fn solve_and_write(
             if !converged {
                 break 'planned;
             }
-            increment.solved(factor);
-            solved = factor;
+            increment.solved(fraction);
+            solved = loads;
         }
         if failure.is_some() {
             break;
@@ -196,6 +211,7 @@ pub fn solve_and_write(
     });
     summary.load_path = Some(PathSummary {
         factors: path.factors.clone(),
+        loads: path.loads.clone(),
         substeps: path.substeps,
         step_factors: factors.clone(),
         steps_done: steps.len(),

@@ -58,13 +58,14 @@
 //! ```
 
 use super::scene_de::TypeFirst;
-use saddle_core::StepCutting;
 use saddle_core::error::ParameterError;
 use saddle_core::{
     AdmissibleStresses, Dirichlet, DiscreteProblem, Elasticity, FiniteElement, Load, MeshSource, Obstacles, P2,
     SceneError, Solver, TetMesh,
 };
+use saddle_core::{LoadFactors, StepCutting};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// What a scene assembles into: the discrete problem (the scene's finite element with the
@@ -179,6 +180,19 @@ impl Scene {
     /// (`load_path.factors[2]`, `--factors[0]`), the factor, and the obstacle's field with the
     /// scene's own value and the scaled one.
     pub fn check_load_factor(&self, factor: f64, field: &str) -> Result<(), SceneError> {
+        self.check_load_factors(&LoadFactors::uniform(factor), field)
+    }
+
+    /// The names of the loads a load path may give factors of their own (`[load_path.loads]`,
+    /// theory §11.2): the obstacles' ([`Obstacles::load_names`]).
+    pub fn load_names(&self) -> Vec<String> {
+        self.obstacle.load_names()
+    }
+
+    /// [`Scene::check_load_factor`] with named loads at factors of their own; the obstacle's
+    /// error then names the step's factors.
+    pub fn check_load_factors(&self, factors: &LoadFactors, field: &str) -> Result<(), SceneError> {
+        let factor = factors.all;
         if !factor.is_finite() {
             return Err(ParameterError::new(field, factor, "must be finite").into());
         }
@@ -192,14 +206,15 @@ impl Scene {
             let message = format!("at this load factor {} = {} {}", e.field, e.value, e.requirement);
             return Err(ParameterError::new(field, factor, message).into());
         }
-        if factor == 1.0 || self.obstacle.is_empty() {
+        if (factor == 1.0 && factors.is_uniform()) || self.obstacle.is_empty() {
             return Ok(());
         }
-        let scaled = self.obstacle.scaled_load(factor).map_err(|e| {
+        let scaled = self.obstacle.scaled_loads(factors).map_err(|e| {
             ParameterError::new(field, factor, format!("{} ({} = {}): {}", e.field, e.field, e.value, e.requirement))
         })?;
         scaled.validate("obstacle").map_err(|e| {
-            let own = scene_value(&self.obstacle, &e.field);
+            // with factors of their own the field's factor is not `factor`: its value alone
+            let own = scene_value(&self.obstacle, &e.field).filter(|_| factors.is_uniform());
             ParameterError::new(
                 field,
                 factor,
@@ -318,6 +333,8 @@ pub const MAX_STEPS: usize = 100_000;
 /// plot = ["imprint", "force"]           # optional: the load_path.png axes (the default)
 /// max_cuts = 5                          # optional: halvings of a failed step (theory §11.5)
 /// min_step = 1e-6                       # optional: the smallest increment tried
+/// [load_path.loads]                     # optional: loads with factors of their own
+/// Q = [0.0, 0.0, 1.0, -1.0, 1.0]        # e.g. a sphere's tangential force (Mindlin's loop)
 /// ```
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -341,6 +358,12 @@ pub struct LoadPath {
     /// No increment of the load factor below this is tried (theory §11.5).
     #[serde(default = "default_min_step")]
     pub min_step: f64,
+    /// `[load_path.loads]`: loads with factors of their own, one per entry of `factors`, by the
+    /// names their plugins give them (an obstacle's `F`, `Q`, …, `name.F` for a named one;
+    /// theory §11.2); every other load follows `factors`. Sub-steps and step cutting divide
+    /// every list alike.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub loads: BTreeMap<String, Vec<f64>>,
 }
 
 /// `[output]`: what a run writes besides the solution.
@@ -397,6 +420,52 @@ impl LoadPath {
         saddle_core::step_factors(&self.factors, self.substeps)
     }
 
+    /// Every load's factor at each step, sub-steps included: `factors` for all, and each list of
+    /// `loads` for its load (theory §11.2).
+    pub fn step_loads(&self) -> Vec<LoadFactors> {
+        let named: Vec<(&String, Vec<f64>)> =
+            self.loads.iter().map(|(k, list)| (k, saddle_core::step_factors(list, self.substeps))).collect();
+        (self.step_factors().into_iter().enumerate())
+            .map(|(i, all)| LoadFactors { all, named: named.iter().map(|(k, l)| ((*k).clone(), l[i])).collect() })
+            .collect()
+    }
+
+    /// The planned factors of the steps in `[load_path.loads]` (each list's entry `i` with
+    /// `factors[i]`): what [`Scene::check_load_factors`] checks.
+    fn planned_loads(&self, i: usize) -> LoadFactors {
+        LoadFactors { all: self.factors[i], named: self.loads.iter().map(|(k, l)| (k.clone(), l[i])).collect() }
+    }
+
+    /// `[load_path.loads]`: every name one the scene's loads have, every list as long as
+    /// `factors` and finite. Errors name `load_path.loads.NAME` (and the entry).
+    fn validate_loads(&self, scene: &Scene) -> Result<(), SceneError> {
+        let known = scene.load_names();
+        for (name, list) in &self.loads {
+            let field = format!("load_path.loads.{name}");
+            if !known.contains(name) {
+                let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+                return Err(ParameterError::new(
+                    field,
+                    format!("{name:?}"),
+                    format!("is not a load of the scene that may have factors of its own; known: {known}"),
+                )
+                .into());
+            }
+            if list.len() != self.factors.len() {
+                return Err(ParameterError::new(
+                    field,
+                    format!("{} entries", list.len()),
+                    format!("must have one factor per entry of load_path.factors ({})", self.factors.len()),
+                )
+                .into());
+            }
+            if let Some((i, x)) = list.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(ParameterError::new(format!("{field}[{i}]"), x, "must be finite").into());
+            }
+        }
+        Ok(())
+    }
+
     /// Checks the table: at least one factor, `substeps` ≥ 1 and at most [`MAX_STEPS`] steps;
     /// each factor is checked against the scene's obstacles by [`Scene::check_load_factor`] (a
     /// negative factor reverses the loads; a punch's force cannot, and the error names
@@ -424,8 +493,9 @@ impl LoadPath {
             )
             .into());
         }
-        for (i, &f) in self.factors.iter().enumerate() {
-            scene.check_load_factor(f, &format!("load_path.factors[{i}]"))?;
+        self.validate_loads(scene)?;
+        for i in 0..self.factors.len() {
+            scene.check_load_factors(&self.planned_loads(i), &format!("load_path.factors[{i}]"))?;
         }
         Ok(())
     }

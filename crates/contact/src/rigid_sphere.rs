@@ -41,8 +41,8 @@ use saddle_core::mesh::signed_volume;
 use saddle_core::problem::displacements::contact_status;
 use saddle_core::problem::friction::ContactStatus;
 use saddle_core::{
-    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionBlock, FrictionLaw, ParameterError, Region,
-    SceneError, TetMesh, normal_contact_set,
+    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionBlock, FrictionLaw, LoadFactors,
+    ParameterError, Region, SceneError, TetMesh, normal_contact_set,
 };
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -118,6 +118,17 @@ impl RigidSphere {
     /// The same sphere with the friction law `law` (theory §8.3).
     pub fn with_friction(self, law: Box<dyn FrictionLaw>) -> Self {
         Self { friction: Some(law), ..self }
+    }
+
+    /// The sphere with F, V, Q and W each multiplied by its factor (theory §11.2).
+    fn with_load_factors(&self, factors: &LoadFactors) -> Self {
+        Self {
+            F: self.F.map(|f| f * factors.of("F")),
+            V: self.V.map(|v| v * factors.of("V")),
+            Q: self.Q.map(|q| q.map(|x| x * factors.of("Q"))),
+            W: self.W.map(|w| w.map(|x| x * factors.of("W"))),
+            ..self.clone()
+        }
     }
 
     /// (e₁, e₂): the axes of the motion across d, orthonormal and ⊥ d. e₁ is the first of the
@@ -402,13 +413,36 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 impl AdmissibleDisplacements for RigidSphere {
     /// F × factor or V × factor, whichever is given.
     fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
-        Some(Box::new(Self {
-            F: self.F.map(|f| f * factor),
-            V: self.V.map(|v| v * factor),
-            Q: self.Q.map(|q| q.map(|x| x * factor)),
-            W: self.W.map(|w| w.map(|x| x * factor)),
-            ..self.clone()
-        }))
+        self.scaled_loads(&LoadFactors::uniform(factor))
+    }
+
+    /// Those of `F`, `V`, `Q`, `W` that are given: the normal load and the tangential one may
+    /// follow factors of their own (Mindlin's loop: F held, Q back and forth; theory §11.2).
+    fn load_names(&self) -> Vec<String> {
+        let given =
+            [("F", self.F.is_some()), ("V", self.V.is_some()), ("Q", self.Q.is_some()), ("W", self.W.is_some())];
+        given.into_iter().filter(|g| g.1).map(|g| g.0.to_string()).collect()
+    }
+
+    /// F, V, Q and W each multiplied by its own factor.
+    fn scaled_loads(&self, factors: &LoadFactors) -> Option<Box<dyn AdmissibleDisplacements>> {
+        Some(Box::new(self.with_load_factors(factors)))
+    }
+
+    /// The same rows under force control (only the load term changes); with V or W prescribed,
+    /// the rows about the moved sphere.
+    fn rows_at_factors<'r>(
+        &self,
+        factors: &LoadFactors,
+        rows: &'r ConstraintRows,
+        mesh: &TetMesh,
+        dofs: &DofMap,
+        path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        if self.V.is_none() && self.W.is_none() {
+            return Ok(Cow::Borrowed(rows));
+        }
+        self.with_load_factors(factors).discretise(mesh, dofs, path).map(Cow::Owned)
     }
 
     /// `center` finite, R finite and > 0, `direction` finite and nonzero (`{path}.direction`
@@ -566,11 +600,7 @@ impl AdmissibleDisplacements for RigidSphere {
         dofs: &DofMap,
         path: &str,
     ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
-        if self.V.is_none() && self.W.is_none() {
-            return Ok(Cow::Borrowed(rows));
-        }
-        let scaled = Self { V: self.V.map(|v| v * factor), W: self.W.map(|w| w.map(|x| x * factor)), ..self.clone() };
-        scaled.discretise(mesh, dofs, path).map(Cow::Owned)
+        self.rows_at_factors(&LoadFactors::uniform(factor), rows, mesh, dofs, path)
     }
 
     /// The exact gap |x_i + u_i − c − V d − W| − R on the normal rows; on the tangential rows

@@ -36,7 +36,7 @@ pub mod problem;
 
 pub use error::{MeshError, ParameterError, SceneError};
 pub use estimate::{ErrorEstimate, estimate};
-pub use evolution::{Evolution, Increment, LoadStep, PathError, StepCutting, StepSolution, step_factors};
+pub use evolution::{Evolution, Increment, LoadFactors, LoadStep, PathError, StepCutting, StepSolution, step_factors};
 pub use fem::loads::Load;
 pub use fem::p1p0::{P1, P1P0Element};
 pub use fem::p2::{P2, P2Element};

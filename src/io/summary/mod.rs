@@ -170,6 +170,9 @@ pub struct StepSummary {
     pub step: usize,
     /// The load factor.
     pub factor: f64,
+    /// The factors of the loads with factors of their own (`[load_path.loads]`, theory §11.2).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub loads: BTreeMap<String, f64>,
     /// True when the solver met its tolerance.
     pub converged: bool,
     /// Why it stopped, or `error` when the solver failed (see `error`).
@@ -220,6 +223,7 @@ impl StepSummary {
         Self {
             step,
             factor,
+            loads: BTreeMap::new(),
             converged: s.converged,
             stop_reason: serde_json::to_value(s.stop_reason)
                 .ok()
@@ -251,6 +255,7 @@ impl StepSummary {
         Self {
             step,
             factor,
+            loads: BTreeMap::new(),
             converged: false,
             stop_reason: "error".into(),
             error: Some(error),
@@ -292,6 +297,9 @@ impl StepSummary {
 pub struct PathSummary {
     /// The scene's factors.
     pub factors: Vec<f64>,
+    /// The scene's `[load_path.loads]`: the loads with factors of their own.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub loads: BTreeMap<String, Vec<f64>>,
     /// Sub-steps between factors.
     pub substeps: usize,
     /// The factor of every planned step.

@@ -3,6 +3,7 @@
 //! warm-started from its solution, and leaves its own state.
 
 use crate::error::SceneError;
+use crate::evolution::LoadFactors;
 use crate::evolution::reduced::Reduced;
 use crate::evolution::step::LoadStep;
 use crate::fem::DiscreteProblem;
@@ -131,9 +132,21 @@ impl<'a> Evolution<'a> {
         solver: &dyn Solver,
         monitor: &mut dyn Monitor,
     ) -> Result<StepSolution<'a>, PathError> {
+        self.step_at(&LoadFactors::uniform(factor), solver, monitor)
+    }
+
+    /// [`Evolution::step`] with named loads at factors of their own (theory §11.2; errors and
+    /// reports name `factors.all`).
+    pub fn step_at(
+        &mut self,
+        factors: &LoadFactors,
+        solver: &dyn Solver,
+        monitor: &mut dyn Monitor,
+    ) -> Result<StepSolution<'a>, PathError> {
+        let factor = factors.all;
         let index = self.steps;
         self.steps += 1;
-        let problem = LoadStep::new(self.base, factor, self.state.clone())
+        let problem = LoadStep::at(self.base, factors, self.state.clone())
             .map_err(|source| PathError::Scene { step: index, factor, source })?
             .with_slip_history(self.slip.clone());
         let l = problem.lagrangian();

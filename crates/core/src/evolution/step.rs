@@ -4,6 +4,7 @@
 //! problem's own element. It is L with other data: nothing forwards.
 
 use crate::error::SceneError;
+use crate::evolution::LoadFactors;
 use crate::fem::{DiscreteProblem, ProblemView};
 use crate::problem::fields::PlasticState;
 use crate::problem::kkt::locked_in_force;
@@ -32,11 +33,18 @@ impl<'a> LoadStep<'a> {
     /// scale its load or whose rows at the scaled load cannot be made. The state must have the
     /// base's points and hardening dimension.
     pub fn new(base: &'a DiscreteProblem, factor: f64, state: PlasticState) -> Result<Self, SceneError> {
+        Self::at(base, &LoadFactors::uniform(factor), state)
+    }
+
+    /// [`LoadStep::new`] with named loads at factors of their own (theory §11.2): the obstacles'
+    /// named loads ([`DiscreteObstacles::at_factors`]); every other load at `factors.all`.
+    pub fn at(base: &'a DiscreteProblem, factors: &LoadFactors, state: PlasticState) -> Result<Self, SceneError> {
+        let factor = factors.all;
         let l = base.lagrangian();
         assert_eq!(state.len(), l.n_points(), "the state has {} points, L {}", state.len(), l.n_points());
         assert_eq!(state.q.dim(), l.data.hardening_dim(), "the state's hardening dimension");
         let element = &*base.element;
-        let obstacles = base.obstacles.at_factor(factor, element.mesh(), element.dofs())?;
+        let obstacles = base.obstacles.at_factors(factors, element.mesh(), element.dofs())?;
         let nodal_load = base.nodal_load.iter().map(|f| factor * f).collect();
         // the local law of w reads the state shifted by the lifting (theory §14)
         let state = match &base.supports {

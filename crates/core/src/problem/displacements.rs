@@ -7,6 +7,7 @@
 //! metric (Uzawa), linearising it (it is its own linearisation), penalising its violation.
 
 use crate::error::{ParameterError, SceneError};
+use crate::evolution::LoadFactors;
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
 use crate::problem::friction::{ContactStatus, FrictionRows, SLIP_TOL};
@@ -199,6 +200,38 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
         None
     }
 
+    /// The names of this obstacle's loads that a load path may give factors of their own
+    /// ([`AdmissibleDisplacements::scaled_loads`], theory §11.2: a sphere's `F` and `Q`); none
+    /// (the default): the whole load follows the path's one factor.
+    fn load_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// The same obstacle with each load of [`AdmissibleDisplacements::load_names`] multiplied by
+    /// its factor `factors.of(name)` (theory §11.2); the default scales the whole load by
+    /// `factors.all` ([`AdmissibleDisplacements::scaled_load`]), right for a plugin without
+    /// load names.
+    fn scaled_loads(&self, factors: &LoadFactors) -> Option<Box<dyn AdmissibleDisplacements>> {
+        self.scaled_load(factors.all)
+    }
+
+    /// [`AdmissibleDisplacements::rows_at_factor`] for loads with factors of their own: with one
+    /// factor for all, that; else (the default) the obstacle of
+    /// [`AdmissibleDisplacements::scaled_loads`] discretised again, which is always right.
+    fn rows_at_factors<'r>(
+        &self,
+        factors: &LoadFactors,
+        rows: &'r ConstraintRows,
+        mesh: &TetMesh,
+        dofs: &DofMap,
+        path: &str,
+    ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
+        if factors.is_uniform() {
+            return self.rows_at_factor(factors.all, rows, mesh, dofs, path);
+        }
+        discretise_scaled(self.scaled_loads(factors), self.name(), mesh, dofs, path)
+    }
+
     /// K_h of this obstacle with its load multiplied by `factor` (theory §11.2), from `rows`, its
     /// rows at its own load: what a load step or a sweep point solves. The default discretises
     /// the scaled obstacle ([`AdmissibleDisplacements::scaled_load`]) again, which is always
@@ -214,15 +247,27 @@ pub trait AdmissibleDisplacements: Debug + Send + Sync + dyn_clone::DynClone {
         path: &str,
     ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
         let _ = rows;
-        let scaled = self.scaled_load(factor).ok_or_else(|| {
-            ParameterError::new(
-                path,
-                format!("type = {:?}", self.name()),
-                "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_load is None)",
-            )
-        })?;
-        scaled.discretise(mesh, dofs, path).map(Cow::Owned)
+        discretise_scaled(self.scaled_load(factor), self.name(), mesh, dofs, path)
     }
+}
+
+/// The rows of an obstacle plugin `name` at a scaled load (`scaled`), or the error on `path`
+/// that it cannot scale its load.
+fn discretise_scaled(
+    scaled: Option<Box<dyn AdmissibleDisplacements>>,
+    name: &str,
+    mesh: &TetMesh,
+    dofs: &DofMap,
+    path: &str,
+) -> Result<Cow<'static, ConstraintRows>, SceneError> {
+    let scaled = scaled.ok_or_else(|| {
+        ParameterError::new(
+            path,
+            format!("type = {name:?}"),
+            "this obstacle plugin cannot scale its load (AdmissibleDisplacements::scaled_load is None)",
+        )
+    })?;
+    scaled.discretise(mesh, dofs, path).map(Cow::Owned)
 }
 
 dyn_clone::clone_trait_object!(AdmissibleDisplacements);

@@ -25,6 +25,7 @@
 //! ([`DiscreteObstacles::reports`]).
 
 use crate::error::{ParameterError, SceneError};
+use crate::evolution::LoadFactors;
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
 use crate::problem::displacements::RowCombination;
@@ -174,10 +175,15 @@ impl Obstacles {
     /// The names of the extra unknowns: each obstacle's `extra_names()`, prefixed `name.` when
     /// the obstacle has a name (`left.U`), plain otherwise.
     pub fn extra_names(&self) -> Vec<String> {
+        self.prefixed(|k| k.extra_names())
+    }
+
+    /// Each obstacle's `names`, prefixed `name.` when the obstacle has a name.
+    fn prefixed(&self, names: impl Fn(&dyn AdmissibleDisplacements) -> Vec<String>) -> Vec<String> {
         self.list
             .iter()
             .flat_map(|o| {
-                o.k.extra_names().into_iter().map(move |x| match &o.name {
+                names(o.k.as_ref()).into_iter().map(move |x| match &o.name {
                     Some(n) => format!("{n}.{x}"),
                     None => x,
                 })
@@ -189,12 +195,19 @@ impl Obstacles {
     /// ([`AdmissibleDisplacements::scaled_load`]). An error names the obstacle (`obstacle`,
     /// `obstacle[i]`) whose plugin has no load to scale.
     pub fn scaled_load(&self, factor: f64) -> Result<Self, ParameterError> {
+        self.scaled_loads(&LoadFactors::uniform(factor))
+    }
+
+    /// Every obstacle with each of its loads multiplied by its factor
+    /// ([`AdmissibleDisplacements::scaled_loads`]; the loads named `name.F` or, unnamed, `F`,
+    /// theory §11.2). An error names the obstacle whose plugin has no load to scale.
+    pub fn scaled_loads(&self, factors: &LoadFactors) -> Result<Self, ParameterError> {
         let list = self
             .list
             .iter()
             .enumerate()
             .map(|(i, o)| {
-                let k = o.k.scaled_load(factor).ok_or_else(|| {
+                let k = o.k.scaled_loads(&factors.of_obstacle(o.name.as_deref())).ok_or_else(|| {
                     ParameterError::new(
                         self.path(OBSTACLE_PATH, i),
                         format!("type = {:?}", o.k.name()),
@@ -205,6 +218,12 @@ impl Obstacles {
             })
             .collect::<Result<_, ParameterError>>()?;
         Ok(Self { list, array: self.array })
+    }
+
+    /// The names of the loads a load path may give factors of their own: each obstacle's
+    /// [`AdmissibleDisplacements::load_names`], prefixed `name.` as its extras are.
+    pub fn load_names(&self) -> Vec<String> {
+        self.prefixed(|k| k.load_names())
     }
 
     /// The load term's coefficients f, concatenated.
@@ -450,18 +469,25 @@ impl DiscreteObstacles {
     /// where the plugin can). Factor 1 is these obstacles. Errors name the obstacle whose plugin
     /// cannot scale its load, or whose rows at the scaled load cannot be made.
     pub fn at_factor(&self, factor: f64, mesh: &TetMesh, dofs: &DofMap) -> Result<Self, SceneError> {
-        if factor == 1.0 {
+        self.at_factors(&LoadFactors::uniform(factor), mesh, dofs)
+    }
+
+    /// [`DiscreteObstacles::at_factor`] with named loads at factors of their own
+    /// ([`AdmissibleDisplacements::scaled_loads`], [`AdmissibleDisplacements::rows_at_factors`]).
+    pub fn at_factors(&self, factors: &LoadFactors, mesh: &TetMesh, dofs: &DofMap) -> Result<Self, SceneError> {
+        if factors.is_uniform() && factors.all == 1.0 {
             return Ok(self.clone());
         }
-        let scaled = self.obstacles.scaled_load(factor)?;
+        let scaled = self.obstacles.scaled_loads(factors)?;
         let rows = (self.obstacles.list.iter().zip(&self.parts).enumerate())
             .map(|(i, (o, part))| {
                 let path = self.obstacles.path(OBSTACLE_PATH, i);
+                let own = factors.of_obstacle(o.name.as_deref());
                 let Some(c) = &part.rows.combination else {
-                    return o.k.rows_at_factor(factor, &part.rows, mesh, dofs, &path).map(|r| r.into_owned());
+                    return o.k.rows_at_factors(&own, &part.rows, mesh, dofs, &path).map(|r| r.into_owned());
                 };
                 // the plugin scales its own (nodal) rows; they are recombined as before
-                let nodal = o.k.rows_at_factor(factor, &c.nodal, mesh, dofs, &path)?.into_owned();
+                let nodal = o.k.rows_at_factors(&own, &c.nodal, mesh, dofs, &path)?.into_owned();
                 RowCombination::recombine(nodal, c.t.clone())
                     .map_err(|message| SceneError::Region { field: path.clone(), message })
             })
