@@ -64,7 +64,12 @@
 //!
 //! A new matrix with the same near-nullspace (the next Newton tangent) is taken by
 //! [`SmoothedAggregation::refresh`], which keeps the aggregates and tentative prolongators
-//! and recomputes the smoothing, the Galerkin products and the coarse factorisation.
+//! and recomputes the smoothing, the Galerkin products and the coarse factorisation; from then
+//! on the cycle smooths with [`AmgParams::tangent_smoother_degree`] (4): the soft modes of a
+//! plastic or nearly incompressible tangent are not in the coarse space, and a higher-degree
+//! Chebyshev polynomial damps more of the low spectrum of D⁻¹A per cycle (Adams, Brezina, Hu,
+//! Tuminaro, "Parallel multigrid smoothing: polynomial versus Gauss–Seidel", J. Comput. Phys.
+//! 188, 2003; measured in docs/plastic_tangent.md).
 
 use super::cholesky::SparseCholesky;
 use super::csr::{Csr, LowerCsc};
