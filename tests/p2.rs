@@ -123,15 +123,13 @@ fn both_newton_backends_solve_p2_alike() {
 fn the_multigrid_that_follows_the_plastic_tangent_needs_fewer_cg_iterations_for_the_same_answer() {
     // the perfectly plastic strip (h = 0) with P2, past first yield: the tangent is nearly
     // incompressible in the plastic zone, where the elastic hierarchy no longer approximates it
-    let (l, _) = build(&strip("p2", 0.02));
+    let strip_t = strip("p2", 0.02);
     let solve = |linear, amg_refresh_cg| {
-        let newton = saddle::solvers::Newton { linear, amg_refresh_cg, max_iter: 200, ..Default::default() };
-        let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();
-        assert!(sol.report.converged, "{linear:?} {amg_refresh_cg}: {:?}", sol.report.stop_reason);
-        let c = &sol.report.counters;
-        let get = |k: &str| c.get(k).copied().unwrap_or(0.0);
-        let s = Summary::new(l.view(), &sol, None);
-        (s.force.unwrap(), get("pcg_iterations") / get("triangular_solve_pairs"), get("multigrid_refreshes"))
+        let (_, force, cg, refreshes) = newton_counts(
+            &strip_t,
+            saddle::solvers::Newton { linear, amg_refresh_cg, max_iter: 200, ..Default::default() },
+        );
+        (force, cg, refreshes)
     };
     let (f_direct, _, _) = solve(saddle::solvers::LinearSolver::Direct, 0);
     let (f_elastic, cg_elastic, r_elastic) = solve(saddle::solvers::LinearSolver::Amg, usize::MAX);
@@ -307,4 +305,63 @@ fn tresca_on_the_perfectly_plastic_p2_strip_converges_up_to_20x_with_a_larger_pe
     assert_forces_agree(&forces, 1e-8);
     let f20 = forces[1].2;
     assert!((f20 / prandtl_force() - 1.0).abs() < 0.1, "{f20} against {}", prandtl_force());
+}
+
+/// `newton` on the scene `t`: (U, force, CG iterations per linear solve, multigrid refreshes).
+fn newton_counts(t: &toml::Table, newton: saddle::solvers::Newton) -> (f64, f64, f64, f64) {
+    let (l, _) = build(t);
+    let sol = newton.solve(&l.lagrangian(), &mut Silent).unwrap();
+    assert!(sol.report.converged, "{:?}: {:?}", newton.linear, sol.report.stop_reason);
+    let get = |k: &str| sol.report.counters.get(k).copied().unwrap_or(0.0);
+    let s = Summary::new(l.view(), &sol, None);
+    let cg = get("pcg_iterations") / get("triangular_solve_pairs").max(1.0);
+    (sol.extras.first().copied().unwrap_or(f64::NAN), s.force.unwrap(), cg, get("multigrid_refreshes"))
+}
+
+/// [`newton_counts`] with `linear` and the refreshed hierarchy's smoother degree `tangent_degree`.
+fn newton_cg_per_solve(
+    t: &toml::Table,
+    linear: saddle::solvers::LinearSolver,
+    tangent_degree: usize,
+) -> (f64, f64, f64) {
+    let amg = saddle::core::linalg::AmgParams { tangent_smoother_degree: tangent_degree, ..Default::default() };
+    let (u, force, cg, _) =
+        newton_counts(t, saddle::solvers::Newton { linear, amg, max_iter: 200, ..Default::default() });
+    (u, force, cg)
+}
+
+#[test]
+fn the_refreshed_hierarchys_degree_4_smoother_gives_the_direct_answer_within_measured_cg_bounds() {
+    // issue 27: the perfectly plastic strip (h = 0) and the default scene at ν = 0.4999, P2;
+    // the soft, nearly isochoric modes are left to the smoother of the refreshed hierarchy
+    use saddle::solvers::LinearSolver::{Amg, Direct};
+    let strip_t = strip("p2", 0.02);
+    let mut nu_t = small_johnson();
+    set(&mut nu_t, "material.nu", toml::Value::Float(0.4999));
+    set(&mut nu_t, "mesh.cells", toml::Value::try_from([8, 8, 4]).unwrap());
+    let mut d = toml::Table::new();
+    d.insert("type".into(), toml::Value::String("p2".into()));
+    nu_t.insert("discretisation".into(), toml::Value::Table(d));
+    for (name, t, answer, bound) in
+        [("strip, h = 0", &strip_t, 1, (60.0, 53.0)), ("ν = 0.4999", &nu_t, 0, (83.0, 83.0))]
+    {
+        let pick = |r: (f64, f64, f64)| [r.0, r.1][answer];
+        let direct = pick(newton_cg_per_solve(t, Direct, 4));
+        let (u2, f2, cg2) = newton_cg_per_solve(t, Amg, 2);
+        let (u4, f4, cg4) = newton_cg_per_solve(t, Amg, saddle::core::linalg::amg::TANGENT_SMOOTHER_DEGREE);
+        println!(
+            "{name}: direct {direct:.12e}; degree 2 {:.12e} {cg2:.1} CG per solve; degree 4 {:.12e} {cg4:.1}",
+            pick((u2, f2, 0.0)),
+            pick((u4, f4, 0.0))
+        );
+        for v in [pick((u2, f2, 0.0)), pick((u4, f4, 0.0))] {
+            assert!((v - direct).abs() <= 1e-8 * direct.abs(), "{name}: {v} vs {direct}");
+        }
+        // measured (2026-11-25, `2394194`): strip 52.2 → 58.4 CG per solve (14k dofs: here the
+        // degree does not pay; at 22k–108k it does, docs/plastic_tangent.md); ν = 0.4999 on
+        // 8 × 8 × 4 cells 82.2 with either degree (no solve above `amg_refresh_cg` before the
+        // last, so no refresh). CG counts are the same run to run: the bounds are the
+        // measurements rounded up by less than one iteration per solve
+        assert!(cg4 <= bound.0 && cg2 <= bound.1, "{name}: {cg4} and {cg2} against {bound:?}");
+    }
 }

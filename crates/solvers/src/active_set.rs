@@ -162,7 +162,7 @@ impl LinearBackend {
             LinearBackend::Amg(it) => {
                 if let Some((_, budget)) = &it.reserve
                     && !it.switched
-                    && it.spent as f64 >= *budget
+                    && it.spent_cost >= *budget
                 {
                     it.switched = true;
                 }
@@ -201,6 +201,12 @@ pub struct IterativeSolve {
     /// CG iterations and solves since the set-up (kept across warm solves, unlike `iterations`).
     spent: usize,
     spent_solves: usize,
+    /// `spent` at the price of an iteration of the cycle as built (the one `auto`'s constants
+    /// were measured with): an iteration of a refreshed cycle with a higher smoother degree
+    /// counts by its products ([`iteration_cost`]).
+    spent_cost: f64,
+    /// [`SmoothedAggregation::products_per_cycle`] of the hierarchy as built.
+    built_products: f64,
     /// Solves that stopped at the budget before the tolerance.
     pub unconverged: usize,
     /// `auto`'s direct path in reserve, analysed, and the CG iterations after which it is taken
@@ -282,6 +288,14 @@ fn follow_the_tangent(
         built_on.clear();
         built_on.extend_from_slice(&m.val);
     }
+}
+
+/// The price of one CG iteration with `amg` in iterations of the cycle as built, whose
+/// [`SmoothedAggregation::products_per_cycle`] were `built` (theory §4.2): products with the
+/// fine matrix, CG's own one and the cycle's. A refreshed hierarchy smooths with
+/// `tangent_smoother_degree` and costs more per iteration.
+fn iteration_cost(amg: &SmoothedAggregation, built: f64) -> f64 {
+    (1.0 + amg.products_per_cycle()) / (1.0 + built)
 }
 
 /// A rebuild pays only when the tangent moved since the last one: by more than this fraction
@@ -553,6 +567,7 @@ impl ActiveSetSystem {
             message: format!("multigrid set-up: {e}"),
         })?;
         let n = l.n_dofs();
+        let built_products = amg.products_per_cycle();
         // the system matrix lives on the pattern of TᵀKT
         let a = if basis.is_identity() {
             k
@@ -581,6 +596,8 @@ impl ActiveSetSystem {
             last_iterations: 0,
             spent: 0,
             spent_solves: 0,
+            spent_cost: 0.0,
+            built_products,
             unconverged: 0,
             previous: Vec::new(),
         };
@@ -612,7 +629,7 @@ impl ActiveSetSystem {
     fn analyse_if_due(&mut self, l: &Lagrangian<'_>) -> Result<(), SolveError> {
         let LinearBackend::Amg(it) = &mut self.backend else { return Ok(()) };
         let slow = it.spent > it.refresh_above.saturating_mul(it.spent_solves);
-        if !(slow && it.analyse_after.is_some_and(|after| it.spent as f64 >= after)) {
+        if !(slow && it.analyse_after.is_some_and(|after| it.spent_cost >= after)) {
             return Ok(());
         }
         it.analyse_after = None;
@@ -782,6 +799,8 @@ impl ActiveSetSystem {
                     last_iterations,
                     spent,
                     spent_solves,
+                    spent_cost,
+                    built_products,
                     ..
                 } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
@@ -808,6 +827,7 @@ impl ActiveSetSystem {
                         })?;
                     *iterations += report.iterations;
                     *spent += report.iterations;
+                    *spent_cost += report.iterations as f64 * iteration_cost(amg, *built_products);
                     *spent_solves += 1;
                     *last_iterations = report.iterations;
                     *unconverged += !report.converged as usize;

@@ -64,7 +64,12 @@
 //!
 //! A new matrix with the same near-nullspace (the next Newton tangent) is taken by
 //! [`SmoothedAggregation::refresh`], which keeps the aggregates and tentative prolongators
-//! and recomputes the smoothing, the Galerkin products and the coarse factorisation.
+//! and recomputes the smoothing, the Galerkin products and the coarse factorisation; from then
+//! on the cycle smooths with [`AmgParams::tangent_smoother_degree`] (4): the soft modes of a
+//! plastic or nearly incompressible tangent are not in the coarse space, and a higher-degree
+//! Chebyshev polynomial damps more of the low spectrum of D⁻¹A per cycle (Adams, Brezina, Hu,
+//! Tuminaro, "Parallel multigrid smoothing: polynomial versus Gauss–Seidel", J. Comput. Phys.
+//! 188, 2003; measured in docs/plastic_tangent.md).
 
 use super::cholesky::SparseCholesky;
 use super::csr::{Csr, LowerCsc};
@@ -74,6 +79,9 @@ use super::pcg::Preconditioner;
 use crate::error::{ParameterError, check};
 use rayon::prelude::*;
 use std::sync::Mutex;
+
+/// Default [`AmgParams::tangent_smoother_degree`] (measured: docs/plastic_tangent.md, issue 27).
+pub const TANGENT_SMOOTHER_DEGREE: usize = 4;
 
 /// Rows per parallel task of the smoother.
 const CHUNK: usize = 4096;
@@ -138,6 +146,11 @@ pub struct AmgParams {
     pub strength_threshold: f64,
     /// Degree of the Chebyshev smoother (matrix–vector products per smoothing).
     pub smoother_degree: usize,
+    /// Degree of the Chebyshev smoother once the hierarchy has been rebuilt on a tangent
+    /// ([`SmoothedAggregation::refresh`]): the soft, nearly isochoric modes of a plastic or
+    /// nearly incompressible tangent, absent from the rigid-body coarse space, are left to the
+    /// smoother (theory §4.2).
+    pub tangent_smoother_degree: usize,
     /// λ_max / λ_min of the Chebyshev interval [ρ / range, ρ] (1.1 × the estimate of ρ).
     pub smoother_range: f64,
     /// Lanczos steps for ρ(D⁻¹A).
@@ -153,6 +166,7 @@ impl Default for AmgParams {
         Self {
             strength_threshold: 0.02,
             smoother_degree: 2,
+            tangent_smoother_degree: TANGENT_SMOOTHER_DEGREE,
             smoother_range: 30.0,
             eigen_steps: 12,
             coarse_size: 3000,
@@ -173,6 +187,7 @@ impl AmgParams {
         }
         for (field, v, min) in [
             ("smoother_degree", self.smoother_degree, 1),
+            ("tangent_smoother_degree", self.tangent_smoother_degree, 1),
             ("eigen_steps", self.eigen_steps, 2),
             ("coarse_size", self.coarse_size, 1),
             ("max_levels", self.max_levels, 1),
@@ -261,6 +276,9 @@ pub struct SmoothedAggregation {
     levels: Vec<Level>,
     coarse_a: Csr,
     params: AmgParams,
+    /// Degree of the cycle's Chebyshev smoother: `smoother_degree` as built,
+    /// `tangent_smoother_degree` once refreshed.
+    degree: usize,
     work: Mutex<Work>,
 }
 
@@ -302,13 +320,13 @@ impl SmoothedAggregation {
         }
         let coarse = factorise_coarse(&a, levels.len())?;
         let work = Mutex::new(Work { levels: levels.iter().map(LevelWork::new).collect(), coarse });
-        Ok(Self { levels, coarse_a: a, params: params.clone(), work })
+        Ok(Self { levels, coarse_a: a, params: params.clone(), degree: params.smoother_degree, work })
     }
 
     /// Takes new values of the matrix (e.g. the next Newton tangent; same size, same
     /// near-nullspace): keeps the aggregates and tentative prolongators, recomputes ρ(D⁻¹A),
-    /// the smoothed prolongators, the Galerkin products and the coarse factorisation.
-    /// On an error (a coarse matrix that is not positive definite, say) the hierarchy is left
+    /// the smoothed prolongators, the Galerkin products and the coarse factorisation, and
+    /// smooths with `tangent_smoother_degree` from then on. On an error (a coarse matrix that is not positive definite, say) the hierarchy is left
     /// as it was.
     pub fn refresh(&mut self, a: &Csr) -> Result<(), AmgError> {
         check_square(a, self.n())?;
@@ -320,7 +338,7 @@ impl SmoothedAggregation {
             a = a_c;
         }
         let coarse = factorise_coarse(&a, levels.len())?;
-        (self.levels, self.coarse_a) = (levels, a);
+        (self.levels, self.coarse_a, self.degree) = (levels, a, self.params.tangent_smoother_degree);
         let work = self.work.get_mut().unwrap_or_else(|e| e.into_inner());
         work.coarse = coarse;
         Ok(())
@@ -347,6 +365,14 @@ impl SmoothedAggregation {
         info.iter().map(|l| l.nnz as f64).sum::<f64>() / info[0].nnz as f64
     }
 
+    /// Matrix–vector products of one V-cycle, counted in products with the finest matrix:
+    /// 2 × the smoother's degree per level (smoothing from zero, the residual, smoothing
+    /// again), weighted by nnz(A_l) / nnz(A_0); the transfers and the coarse solve left out.
+    pub fn products_per_cycle(&self) -> f64 {
+        let nnz0 = self.level_info()[0].nnz as f64;
+        self.levels.iter().map(|l| 2.0 * self.degree as f64 * l.a.nnz() as f64 / nnz0).sum()
+    }
+
     /// One V-cycle on level `l` for A_l x = b from x = 0.
     fn vcycle(&self, l: usize, b: &[f64], x: &mut [f64], work: &mut [LevelWork], coarse: &mut SparseCholesky) {
         let Some(lv) = self.levels.get(l) else {
@@ -355,7 +381,7 @@ impl SmoothedAggregation {
             return;
         };
         let (w, rest) = work.split_first_mut().expect("one scratch per level");
-        let degree = self.params.smoother_degree;
+        let degree = self.degree;
         let range = self.params.smoother_range;
         chebyshev(lv, b, x, &mut w.d, true, degree, range);
         lv.a.residual(b, x, &mut w.t);
@@ -861,7 +887,8 @@ mod tests {
     #[test]
     fn a_refreshed_hierarchy_follows_its_matrix_and_a_failed_refresh_keeps_it() {
         let (a, nns) = grid_problem(10, 10, 6);
-        let params = AmgParams { coarse_size: 50, ..AmgParams::default() };
+        // the smoother's degree kept: the refresh's new degree is the next test's
+        let params = AmgParams { coarse_size: 50, tangent_smoother_degree: 2, ..AmgParams::default() };
         let mut amg = SmoothedAggregation::new(&a, &nns, &params).unwrap();
         assert!(amg.levels.len() >= 2, "{:?}", amg.level_info());
         let r: Vec<f64> = (0..a.nrows).map(pseudo_random).collect();
@@ -888,6 +915,37 @@ mod tests {
         let mut z3 = vec![0.0; a.nrows];
         amg.apply(&r, &mut z3);
         assert_eq!(z2, z3);
+    }
+
+    #[test]
+    fn a_refreshed_hierarchy_smooths_with_the_tangent_degree() {
+        // built with degree 2 and refreshed on the same matrix, the cycle is that of a hierarchy
+        // built with degree 4 (same aggregates, same levels), and not that of degree 2
+        let (a, nns) = grid_problem(10, 10, 6);
+        let params =
+            AmgParams { coarse_size: 50, smoother_degree: 2, tangent_smoother_degree: 4, ..AmgParams::default() };
+        let cycle = |amg: &SmoothedAggregation| {
+            let r: Vec<f64> = (0..a.nrows).map(pseudo_random).collect();
+            let mut z = vec![0.0; a.nrows];
+            amg.apply(&r, &mut z);
+            z
+        };
+        let mut amg = SmoothedAggregation::new(&a, &nns, &params).unwrap();
+        let z2 = cycle(&amg);
+        amg.refresh(&a).unwrap();
+        let z = cycle(&amg);
+        let four = SmoothedAggregation::new(&a, &nns, &AmgParams { smoother_degree: 4, ..params }).unwrap();
+        let z4 = cycle(&four);
+        let scale = z4.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let dist = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max) / scale;
+        // the same operations in the same order up to the parallel sums of Lanczos: round-off
+        assert!(dist(&z, &z4) <= 1e-12, "{}", dist(&z, &z4));
+        assert!(dist(&z2, &z4) > 1e-3, "{}", dist(&z2, &z4));
+        // the cycle's products: Σ_l 2·4·nnz_l/nnz_0, by the levels' sizes
+        let info = four.level_info();
+        let products: f64 = info[..info.len() - 1].iter().map(|l| 8.0 * l.nnz as f64 / info[0].nnz as f64).sum();
+        assert!((amg.products_per_cycle() - products).abs() <= 1e-12 * products);
+        assert!(products > 8.0, "{products}: one level at least, and a coarser one");
     }
 
     #[test]
