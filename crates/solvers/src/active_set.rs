@@ -405,9 +405,7 @@ pub(crate) fn active_set_with_friction(
     slips: &mut Vec<SlipPair>,
 ) {
     if cold {
-        let tangential = rows.friction.tangential_mask(rows.n_rows());
-        let normal_gaps: Vec<f64> =
-            gap.iter().zip(&tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect();
+        let normal_gaps = normal_gaps(gap, &rows.friction.tangential_mask(rows.n_rows()));
         active.copy_from_slice(&basis.closest_in_blocks(&normal_gaps));
         for b in &rows.friction.blocks {
             active[b.tangent] = active[b.normal];
@@ -418,6 +416,12 @@ pub(crate) fn active_set_with_friction(
         primal_dual_update(lambda, c, gap, active);
         friction_active_set(rows, lambda, gap, c, active, slips);
     }
+}
+
+/// The rows' values with the tangential rows' set to +∞: what "the closest row" reads, which is
+/// always a normal row.
+fn normal_gaps(gap: &[f64], tangential: &[bool]) -> Vec<f64> {
+    gap.iter().zip(tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect()
 }
 
 /// Every loaded extra needs a row that determines it (theory §4.2 step 2): a slipping pair's
@@ -437,8 +441,7 @@ pub(crate) fn touch_loaded_extras_with_friction(
         holding[sp.tangent] = true;
         holding[sp.tangent + 1] = true;
     }
-    let normal_gaps: Vec<f64> = gap.iter().zip(&tangential).map(|(g, t)| if *t { f64::INFINITY } else { *g }).collect();
-    touch_loaded_extras(l, &mut holding, &normal_gaps);
+    touch_loaded_extras(l, &mut holding, &normal_gaps(gap, &tangential));
     for (i, h) in holding.iter().enumerate().filter(|(i, _)| !tangential[*i]) {
         active[i] = *h;
     }
