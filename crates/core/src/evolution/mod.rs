@@ -12,19 +12,21 @@
 //!   (a force-controlled obstacle at zero force leaves its extras undetermined, theory §11.3);
 //! * [`path`] — [`Evolution`]: the steps of a load path one after another, the state carried;
 //! * [`cutting`] — [`Increment`]: a failed step halved and retried (theory §11.5);
-//! * [`factors`] — [`LoadFactors`]: a step's factor of every load, and of named loads their own.
+//! * [`secant`] — [`SecantPredictor`]: the start of a sweep's point from the points before
+//!   (theory §11.2);
+//! * [`LoadFactors`] (in the problem layer, `problem::load_factors`, which the obstacles read): a
+//!   step's factor of every load, and of named loads their own.
 //!
 //! [`PlasticState`]: crate::PlasticState
 
 pub mod cutting;
-pub mod factors;
 pub mod path;
 pub mod reduced;
 pub mod secant;
 pub mod step;
 
+pub use crate::problem::load_factors::LoadFactors;
 pub use cutting::{Increment, StepCutting};
-pub use factors::LoadFactors;
 pub use path::{Evolution, PathError, StepSolution, step_factors};
 pub use reduced::Reduced;
 pub use secant::SecantPredictor;

@@ -7,10 +7,10 @@
 //! metric (Uzawa), linearising it (it is its own linearisation), penalising its violation.
 
 use crate::error::{ParameterError, SceneError};
-use crate::evolution::LoadFactors;
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
 use crate::problem::friction::{ContactStatus, FrictionRows, SLIP_TOL};
+use crate::problem::load_factors::LoadFactors;
 use std::borrow::Cow;
 use std::fmt::Debug;
 

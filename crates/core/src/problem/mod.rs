@@ -27,6 +27,7 @@ pub mod friction;
 pub mod kkt;
 pub mod lagrangian;
 pub mod lifting;
+pub mod load_factors;
 pub mod obstacles;
 pub mod operators;
 pub mod pattern;

@@ -25,11 +25,11 @@
 //! ([`DiscreteObstacles::reports`]).
 
 use crate::error::{ParameterError, SceneError};
-use crate::evolution::LoadFactors;
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
 use crate::problem::displacements::RowCombination;
 use crate::problem::displacements::{AdmissibleDisplacements, ConstraintRows, ContactReport};
+use crate::problem::load_factors::LoadFactors;
 use crate::problem::slip::{SlipHistory, dissipation};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeSeq, Serializer};
