@@ -4,8 +4,9 @@
 
 use std::collections::BTreeMap;
 
-/// The factor of each load in a step: `named` loads (by their path names, `Q` or `sphere.Q`,
-/// `load[0]`) take their own, every other load `all` (theory §11.2).
+/// The factor of each load in a step: `named` loads (by the names their plugin gives, `Q` or
+/// `sphere.Q`; tractions and body forces cannot be named yet) take their own, every other load
+/// `all` (theory §11.2).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadFactors {
     /// The factor of every load not in `named`.
