@@ -27,7 +27,7 @@ use crate::linear::{self, InSolver, lower, near_null_space};
 use crate::newton_friction::{SlipPair, friction_active_set};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
-use saddle_core::linalg::{AmgParams, Csr, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
+use saddle_core::linalg::{AmgParams, Csr, LinalgError, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
 use saddle_core::{ConstraintRows, Lagrangian, Material, SolveError, SymmetricPattern};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
@@ -167,6 +167,20 @@ impl LinearBackend {
                     it.switched = true;
                 }
                 if it.switched { it.reserve.as_mut().map(|(c, _)| &mut **c) } else { None }
+            }
+        }
+    }
+
+    /// Drops `auto`'s reserve (its factor does not fit in memory) and stays with the
+    /// multigrid; false on the direct backend, which has no other way.
+    fn give_up_reserve(&mut self) -> bool {
+        match self {
+            LinearBackend::Direct(_) => false,
+            LinearBackend::Amg(it) => {
+                it.reserve = None;
+                it.switched = false;
+                it.analyse_after = None;
+                true
             }
         }
     }
@@ -738,9 +752,15 @@ impl ActiveSetSystem {
         for sp in &self.slips {
             basis.add_pair_block(l.pattern(), sp.tangent, sp.n, &mut self.work);
         }
-        if let Some(chol) = self.backend.cholesky() {
-            chol.factorise(&self.work).in_solver(&self.solver)?;
-            self.factorisations += 1;
+        let factorised = self.backend.cholesky().map(|chol| chol.factorise(&self.work));
+        match factorised {
+            None => {}
+            // `auto`'s reserve that the machine cannot hold: the multigrid goes on
+            Some(Err(LinalgError::OutOfMemory { .. })) if self.backend.give_up_reserve() => {}
+            Some(result) => {
+                result.in_solver(&self.solver)?;
+                self.factorisations += 1;
+            }
         }
         // prescribed values δ at the fixed coordinates: column 0 for the gaps, 1 + k for dV_k
         let nc = 1 + ne;

@@ -251,7 +251,7 @@ pub struct KnownLevel {
     pub cells: [usize; 3],
     /// The problem.
     pub problem: DiscreteProblem,
-    /// Its solution by [`runs::reference_solver`].
+    /// Its solution by [`runs::reference_solver`] (or [`runs::level_solver`]).
     pub solution: Solution,
     /// The solve's wall time, seconds.
     pub wall_s: f64,
@@ -266,7 +266,7 @@ struct Solved {
 
 /// The mesh convergence study of `source` on the box meshes `levels` (ascending; the last is
 /// the finest and the reference of the errors). Every level is solved by
-/// [`runs::reference_solver`], except a level given as `known`. Levels are processed from fine
+/// [`runs::level_solver`], except a level given as `known`. Levels are processed from fine
 /// to coarse, so that only the finest and the next finer level are kept in memory.
 pub fn convergence_study(
     source: &SceneSource,
@@ -275,7 +275,7 @@ pub fn convergence_study(
     progress: &mut dyn Progress,
     counter: &mut usize,
 ) -> Result<ConvergenceStudy, ReportError> {
-    let solver = reference_solver();
+    let solver = runs::level_solver();
     let mut known = known;
     let mut solve_level = |cells: [usize; 3], progress: &mut dyn Progress| -> Result<_, ReportError> {
         if let Some(k) = known.take_if(|k| k.cells == cells) {

@@ -31,6 +31,13 @@ pub fn reference_solver() -> Newton {
     }
 }
 
+/// A level of a mesh convergence study: the reference's Newton to 1e-13 on `auto`'s linear
+/// backend (theory §4.2), which takes the multigrid where a factor would not fit (the default
+/// scene's P2 level of 741k dofs needs a 36 GB factor).
+pub fn level_solver() -> Newton {
+    Newton { linear: saddle_solvers::LinearSolver::Auto, ..reference_solver() }
+}
+
 /// What a rung runs.
 #[derive(Debug)]
 pub enum RungKind {

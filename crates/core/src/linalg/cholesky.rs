@@ -36,7 +36,7 @@ impl std::fmt::Debug for SparseCholesky {
         f.debug_struct("SparseCholesky")
             .field("what", &self.what)
             .field("n", &self.n())
-            .field("nnz_l", &self.l_values.len())
+            .field("nnz_l", &self.nnz_l())
             .finish()
     }
 }
@@ -56,31 +56,59 @@ impl SparseCholesky {
         .map_err(|e| LinalgError::Backend { what: what.into(), message: format!("{e:?}") })?;
         // Two threads pay off only on large factors (measured: slower below ~20k unknowns).
         let par = if n > PARALLEL_MIN_ORDER { Par::rayon(0) } else { Par::Seq };
-        let l_values = vec![0.0; symbolic.len_val()];
-        let mut this = Self {
+        // the factor's storage is taken at the first factorisation, fallibly: an analysis
+        // only prices the factor (`auto` may never factorise, theory §4.2)
+        Ok(Self {
             what: what.into(),
             pattern,
             symbolic,
-            l_values,
+            l_values: Vec::new(),
             scratch: MemBuffer::new(StackReq::EMPTY),
             scratch_cols: 0,
             factorised: false,
             par,
-        };
-        this.reserve(1);
-        Ok(this)
+        })
+    }
+
+    /// The scratch of a factorisation and of solves with `cols` right-hand sides.
+    fn scratch_req(&self, cols: usize) -> StackReq {
+        StackReq::any_of(&[
+            self.symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
+            self.symbolic.solve_in_place_scratch::<f64>(cols, self.par),
+        ])
     }
 
     fn reserve(&mut self, cols: usize) {
         if cols <= self.scratch_cols {
             return;
         }
-        let req = StackReq::any_of(&[
-            self.symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
-            self.symbolic.solve_in_place_scratch::<f64>(cols, self.par),
-        ]);
-        self.scratch = MemBuffer::new(req);
+        self.scratch = MemBuffer::new(self.scratch_req(cols));
         self.scratch_cols = cols;
+    }
+
+    /// Takes the factor's storage and the factorisation's scratch, or reports their size
+    /// when the machine cannot give it (an error, not an abort).
+    fn allocate(&mut self) -> Result<(), LinalgError> {
+        let len = self.symbolic.len_val();
+        let (what, n) = (self.what.clone(), self.n());
+        let out_of_memory = |bytes: usize| LinalgError::OutOfMemory { what: what.clone(), n, bytes };
+        if self.l_values.len() != len {
+            let mut values = Vec::new();
+            values.try_reserve_exact(len).map_err(|_| out_of_memory(len * std::mem::size_of::<f64>()))?;
+            values.resize(len, 0.0);
+            self.l_values = values;
+        }
+        if self.scratch_cols == 0 {
+            let req = self.scratch_req(1);
+            self.scratch = MemBuffer::try_new(req).map_err(|_| out_of_memory(req.size_bytes()))?;
+            self.scratch_cols = 1;
+        }
+        Ok(())
+    }
+
+    /// Bytes of the factor's storage (L's entries), known from the analysis alone.
+    pub fn factor_bytes(&self) -> usize {
+        self.symbolic.len_val() * std::mem::size_of::<f64>()
     }
 
     /// Order of the matrix.
@@ -90,7 +118,7 @@ impl SparseCholesky {
 
     /// Number of stored entries of L.
     pub fn nnz_l(&self) -> usize {
-        self.l_values.len()
+        self.symbolic.len_val()
     }
 
     /// Multiply–adds of one numeric factorisation, from the symbolic structure: Σ_j c_j² over
@@ -121,6 +149,7 @@ impl SparseCholesky {
                 message: "matrix has NaN or infinite entries".into(),
             });
         }
+        self.allocate()?;
         let stack = MemStack::new(&mut self.scratch);
         let result = self.symbolic.factorize_numeric_llt::<f64>(
             &mut self.l_values,

@@ -9,6 +9,13 @@ pub enum LinalgError {
     /// Cholesky met a non-positive pivot: the matrix is singular or indefinite.
     #[error("the {what} matrix ({n} unknowns) is not positive definite (singular or indefinite)")]
     NotPositiveDefinite { what: String, n: usize },
+    /// The factor does not fit in the memory the machine gives (choose the multigrid).
+    #[error(
+        "the {what} matrix's Cholesky factor ({n} unknowns) needs {:.1} GB, which the machine cannot allocate: \
+         use the multigrid (linear = \"amg\") or a smaller mesh",
+        *bytes as f64 / 1e9
+    )]
+    OutOfMemory { what: String, n: usize, bytes: usize },
     /// faer reported an error (allocation, index overflow).
     #[error("sparse linear algebra failed for the {what} matrix: {message}")]
     Backend { what: String, message: String },
