@@ -193,4 +193,7 @@ impl Discretisation for DistributedElement {
     fn locks(&self) -> bool {
         self.element.locks()
     }
+    fn degree(&self) -> usize {
+        self.element.degree()
+    }
 }

@@ -271,6 +271,9 @@ pub struct ConvergenceStudy {
     pub stress_consecutive_rate_fit: Option<f64>,
     /// What h is (module docs): [`H_MEAN`].
     pub h_definition: &'static str,
+    /// The polynomial degree p of the element's displacements: orders of U in 0.25 ..= 2p + ½
+    /// are plausible ([`ConvergenceStudy::plausible_order`]).
+    pub degree: usize,
 }
 
 /// What h is (module docs).
@@ -317,6 +320,30 @@ impl ConvergenceStudy {
             fitted_rate(&hs[..below], &levels[..below].iter().map(|l| l.err_stress).collect::<Vec<_>>());
         let stress_consecutive_rate_fit =
             fitted_rate(&hs[..below], &levels[..below].iter().map(|l| l.diff_stress_next).collect::<Vec<_>>());
-        Self { levels, richardson, rates, stress_rate_fit, stress_consecutive_rate_fit, h_definition: H_MEAN }
+        Self {
+            levels,
+            richardson,
+            rates,
+            stress_rate_fit,
+            stress_consecutive_rate_fit,
+            h_definition: H_MEAN,
+            degree: 1,
+        }
+    }
+
+    /// The same study of an element of displacement degree `degree`.
+    pub fn of_degree(self, degree: usize) -> Self {
+        Self { degree, ..self }
+    }
+
+    /// The largest observed order of U taken as asymptotic: 2p + ½ (a functional such as U
+    /// converges at up to twice the energy norm's order p; theory §7.3).
+    pub fn plausible_order_max(&self) -> f64 {
+        2.0 * self.degree as f64 + 0.5
+    }
+
+    /// Whether an observed order of U is plausible for the element (0.25 ..= 2p + ½).
+    pub fn plausible_order(&self, order: f64) -> bool {
+        (0.25..=self.plausible_order_max()).contains(&order)
     }
 }

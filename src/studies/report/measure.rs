@@ -335,6 +335,7 @@ pub fn convergence_study(
         return Ok(ConvergenceStudy::from_levels(vec![]));
     };
     let (fl, finest_timed) = solve_level(finest_cells, progress)?;
+    let degree = fl.element.degree();
     let mut finest_result = level_result(&fl, finest_cells, &finest_timed);
     let fsol = finest_timed.result.map_err(ReportError::Reference)?;
     finest_result.err_u = 0.0;
@@ -369,5 +370,5 @@ pub fn convergence_study(
         results.push(res);
     }
     results.reverse();
-    Ok(ConvergenceStudy::from_levels(results))
+    Ok(ConvergenceStudy::from_levels(results).of_degree(degree))
 }

@@ -303,11 +303,16 @@ pub fn markdown(report: &Report) -> String {
             );
             match study.richardson {
                 Some(r) => {
-                    let caution = if (0.25..=2.5).contains(&r.order) {
-                        ""
+                    let caution = if study.plausible_order(r.order) {
+                        String::new()
                     } else {
-                        " The order is outside the range plausible for P1 elements (0.25 to 2.5): the three levels are \
-                         not in the asymptotic range, or U does not converge monotonically; treat U* with caution."
+                        format!(
+                            " The order is outside the range plausible for elements of degree {} (0.25 to {}): the \
+                             three levels are not in the asymptotic range, or U does not converge monotonically; treat \
+                             U* with caution.",
+                            study.degree,
+                            study.plausible_order_max()
+                        )
                     };
                     let _ = writeln!(
                         s,

@@ -98,6 +98,11 @@ pub trait Discretisation: ElementOperators {
     fn point_barycentrics(&self) -> Vec<[f64; 4]> {
         vec![[0.25; 4]; self.points_per_element()]
     }
+    /// The polynomial degree of the displacements (1 for P1, 2 for P2): what a convergence
+    /// study expects of its observed orders (theory §7.3).
+    fn degree(&self) -> usize {
+        1
+    }
     /// Whether the element locks where the response is nearly incompressible (theory §10):
     /// true for P1 tetrahedra, false for P2 with B̄. Reports warn about a locked answer by it.
     fn locks(&self) -> bool {

@@ -248,6 +248,9 @@ impl Discretisation for P2Element {
     }
 
     /// VTK_QUADRATIC_TETRA: vertices, then the edge nodes in VTK's order.
+    fn degree(&self) -> usize {
+        2
+    }
     fn vtk_cell(&self) -> VtkCell {
         VtkCell { type_id: 24, nodes: NODES }
     }
