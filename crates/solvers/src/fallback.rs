@@ -5,6 +5,7 @@
 use crate::penalty::Penalty;
 use saddle_core::problem::lagrangian::Lagrangian;
 use saddle_core::problem::solver::{Monitor, PhaseTimer, Solution, SolveError, Solver, Start};
+use std::collections::BTreeMap;
 
 /// A residual that falls below this fraction of the best one so far is progress (theory
 /// §4.2.1): a Newton iteration near the solution gains far more, a cycling active set none.
@@ -62,6 +63,30 @@ pub(crate) fn robust_steps(
         Some(s) => penalty.solve_warm(l, s, monitor),
         None => penalty.solve(l, monitor),
     })
+}
+
+/// The linear algebra of the fallbacks' penalty runs, carried into Newton's counters as
+/// `fallback_<name>` (the penalty's counters of the same names, summed over the fallbacks).
+#[derive(Default)]
+pub(crate) struct FallbackLinearAlgebra([usize; 2]);
+
+impl FallbackLinearAlgebra {
+    /// The penalty counters carried.
+    const CARRIED: [&'static str; 2] = ["factorisations", "entering_row_updates"];
+
+    /// Adds a fallback's penalty `counters`.
+    pub(crate) fn add(&mut self, counters: &BTreeMap<String, f64>) {
+        for (sum, name) in self.0.iter_mut().zip(Self::CARRIED) {
+            *sum += counters.get(name).copied().unwrap_or(0.0) as usize;
+        }
+    }
+
+    /// Puts them as `fallback_<name>`.
+    pub(crate) fn report(&self, mut put: impl FnMut(&str, usize)) {
+        for (sum, name) in self.0.iter().zip(Self::CARRIED) {
+            put(&format!("fallback_{name}"), *sum);
+        }
+    }
 }
 
 #[cfg(test)]

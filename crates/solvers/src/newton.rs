@@ -45,7 +45,7 @@ use crate::active_set::{
     direct_is_cheaper, primal_dual_update, touch_loaded_extras, touch_loaded_extras_with_friction,
 };
 use crate::distributed_system::DistributedSystem;
-use crate::fallback::{StallGuard, caused_by_the_active_set, robust_steps};
+use crate::fallback::{FallbackLinearAlgebra, StallGuard, caused_by_the_active_set, robust_steps};
 use crate::forcing::{ForcingRule, ForcingTerms};
 use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
@@ -425,6 +425,8 @@ struct Counts {
     fallbacks: usize,
     /// The penalty method's iterations in them.
     fallback_iterations: usize,
+    /// ... and their linear algebra.
+    fallback_linear: FallbackLinearAlgebra,
 }
 
 /// Scratch of the stages, allocated once per solve.
@@ -887,6 +889,7 @@ impl<'a> Run<'a> {
             Err(_) => return Ok(false),
         };
         self.count.fallback_iterations += robust.report.iterations;
+        self.count.fallback_linear.add(&robust.report.counters);
         let s = &mut self.state;
         s.u = robust.u;
         s.v = robust.extras;
@@ -977,6 +980,9 @@ impl<'a> Run<'a> {
         put("line_search_backtracks", c.backtracks);
         put("fallbacks", c.fallbacks);
         put("fallback_iterations", c.fallback_iterations);
+        c.fallback_linear.report(|k, x| {
+            put(k, x);
+        });
         put("active_set_changes", c.active_changes);
         // a rank's counts summed over the ranks (theory §12; on one process the count itself)
         let comm = self.l.comm();

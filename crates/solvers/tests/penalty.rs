@@ -231,6 +231,7 @@ fn invalid_parameters_name_the_field() {
         (Penalty { max_iter: 0, ..Penalty::default() }, "solver.max_iter"),
         (Penalty { gradient_tol: 0.0, ..Penalty::default() }, "solver.gradient_tol"),
         (Penalty { step_tol: 1.5, ..Penalty::default() }, "solver.step_tol"),
+        (Penalty { update_share: -0.1, ..Penalty::default() }, "solver.update_share"),
     ] {
         // validated once, where the parameters are read (a scene), not again by `solve`
         let e = p.validate("solver").expect_err("invalid parameters are an error");

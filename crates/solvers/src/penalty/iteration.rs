@@ -29,7 +29,7 @@ impl Penalty {
     ) -> Result<Solution, SolveError> {
         let mut timer = PhaseTimer::default();
         monitor.phase("set-up");
-        let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu))?;
+        let sys = timer.time("set-up", || PenaltySystem::new(l, self.mu, self.update_share))?;
         let mut run = Run::new(self, l, sys);
         if let Some(start) = start {
             run.warm_start(start);
@@ -484,6 +484,7 @@ impl<'a> Run<'a> {
         put("factorisations", sys.factorisations as f64);
         put("symbolic_analyses", sys.symbolic_analyses as f64);
         put("triangular_solve_pairs", sys.solves as f64);
+        put("entering_row_updates", sys.entering_row_updates() as f64);
         if let Some((iterations, unconverged)) = sys.krylov() {
             put("distributed_solves", sys.solves as f64);
             put("krylov_iterations", iterations as f64);

@@ -3,6 +3,7 @@
 //! coupled through a Schur complement free of cancellation ([`PenaltySystem`]).
 
 use super::friction::RegularisedFriction;
+use super::update::EnteringRows;
 use super::{MODEL_SWEEPS, non_finite};
 use crate::active_set::CG_TOL_MIN;
 use crate::distributed_system::DistributedSystem;
@@ -68,6 +69,12 @@ pub struct PenaltySystem {
     pub symbolic_analyses: usize,
     /// Numeric factorisations so far.
     pub factorisations: usize,
+    /// The rows entering A solved on the last factor (`update.rs`), and their largest number
+    /// for which that is cheaper than a factorisation.
+    entering: EnteringRows,
+    max_entering: usize,
+    /// Newton steps (values of K') so far: the update applies within one.
+    kprime_step: usize,
     /// Triangular solve pairs so far.
     pub solves: usize,
     /// max/min diagonal of the last factorised matrix.
@@ -118,7 +125,7 @@ pub(super) struct Direction<'a> {
 impl PenaltySystem {
     /// The penalty scales from the elastic stiffness diagonal, and the symbolic analysis of L's
     /// pattern (once).
-    pub fn new(l: &Lagrangian<'_>, mu: f64) -> Result<Self, SolveError> {
+    pub fn new(l: &Lagrangian<'_>, mu: f64, update_share: f64) -> Result<Self, SolveError> {
         let rows = l.data.rows;
         let c_el = l.data.elasticity.stiffness_matrix();
         let mut kprime = l.stiffness(Material::Uniform(&c_el));
@@ -148,6 +155,11 @@ impl PenaltySystem {
         let (n, ne) = (l.n_dofs(), l.n_extras());
         kprime.iter_mut().for_each(|x| *x = 0.0);
         let nnz = slaves.pattern(l.pattern()).nnz();
+        // a solve pair costs 2 nnz_l multiply–adds against the factorisation's factor_flops
+        let max_entering = match &linear {
+            Linear::Serial(chol) => (update_share * chol.factor_flops() / (2.0 * chol.nnz_l() as f64)) as usize,
+            Linear::Distributed(_) => 0,
+        };
         let transformed = !slaves.is_identity() && matches!(linear, Linear::Serial(_));
         Ok(Self {
             mu,
@@ -167,9 +179,17 @@ impl PenaltySystem {
             pair_hess: vec![[[0.0; 2]; 2]; rows.friction.blocks.len()],
             symbolic_analyses,
             factorisations: 0,
+            entering: EnteringRows::default(),
+            max_entering,
+            kprime_step: 0,
             solves: 0,
             condition_estimate: f64::NAN,
         })
+    }
+
+    /// Systems solved on the last factor with rows entering A (`update.rs`).
+    pub fn entering_row_updates(&self) -> usize {
+        self.entering.updates
     }
 
     /// The distributed solver's Krylov iterations and unconverged solves so far; `None` on one
@@ -233,6 +253,7 @@ impl PenaltySystem {
         d: &mut Direction<'_>,
         descent: bool,
     ) -> Result<(usize, bool), SolveError> {
+        self.kprime_step += 1;
         if !self.slaves.is_identity() {
             // K' (on one process) and r in the rows' coordinates, once for all the sweeps
             if !self.kprime_t.is_empty() {
@@ -388,8 +409,18 @@ impl PenaltySystem {
             (lo.min(x), hi.max(x))
         });
         self.condition_estimate = dmax / dmin;
+        let (slaves, k) = (&self.slaves, &self.k);
+        let dof_term = |i: usize| (slaves.dof[i], k[i] * slaves.coef[i].powi(2));
+        let entering = &mut self.entering;
+        if entering.applies(self.kprime_step, active, &self.pair_hess, self.max_entering, dof_term)
+            && entering.solve(chol, &mut self.kcols, nc)
+        {
+            self.solves += nc + entering.dofs();
+            return Ok(());
+        }
         chol.factorise(&self.hess).in_solver("penalty")?;
         self.factorisations += 1;
+        self.entering.factorised(self.kprime_step, active, &self.pair_hess);
         chol.solve_columns(&mut self.kcols, nc);
         self.solves += nc;
         Ok(())
