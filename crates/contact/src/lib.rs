@@ -120,6 +120,7 @@ pub mod gap;
 pub mod projection;
 pub mod punch;
 pub mod rigid_sphere;
+pub mod tangential;
 pub mod tilting_punch;
 pub mod zone;
 
