@@ -10,7 +10,7 @@ use common::friction::*;
 use common::{SCALED, johnson_with};
 use saddle_contact::{Coulomb, RigidSphere, Tresca};
 use saddle_core::FrictionLaw;
-use saddle_core::{DiscreteProblem, Evolution, Silent, Solution, SolveError, Solver, Workspace, kkt};
+use saddle_core::{DiscreteProblem, Evolution, Silent, SolveError, Solver};
 use saddle_solvers::{Newton, Penalty};
 
 /// The default scene's body (elastic, 8 × 8 × 4 cells) indented by a sphere of radius 5 moved
@@ -124,25 +124,7 @@ fn uzawa_and_socp_agree_on_partial_slip() {
 /// own tolerance (uzawa 1e-11, socp 1e-7: measured 2.8e-8 with Tresca, 1.8e-8 with Coulomb;
 /// newton 1e-10, penalty 1e-8).
 fn agree_on_partial_slip(p: &DiscreteProblem, bound: impl Fn(f64, f64) -> f64 + Copy) {
-    let (su, ss) = (solve(&uzawa(), p), solve(&socp(), p));
-    let (sn, sp) = (newton_from_zero(p), solve(&Penalty::default(), p));
-    let reports = p.view().contact_reports(&su.extras, &su.lambda);
-    let report = &reports[0].report;
-    let (stick, slip) = (report.get("stick_nodes").unwrap(), report.get("slip_nodes").unwrap());
-    println!("stick {stick}, slip {slip}, report {:?}, socp {:?}", report.quantities, ss.report.counters);
-    assert!(stick > 0.0 && slip > 0.0, "partial slip wanted: {stick} stick, {slip} slip");
-    for other in [&ss, &sn, &sp] {
-        let (du, dl) = (rel(&other.u, &su.u), rel(&other.lambda, &su.lambda));
-        println!("{} against uzawa: u {du:.2e}, λ {dl:.2e}", other.report.solver);
-        assert!(du < 1e-7 && dl < 1e-7, "{}: u {du:e}, λ {dl:e}", other.report.solver);
-    }
-    for sol in [&su, &ss, &sn, &sp] {
-        let r = friction_conditions(p, sol, bound);
-        let l = p.lagrangian();
-        let k = kkt(&l, &sol.iterate(), &mut Workspace::new(&l));
-        println!("{}: friction conditions {r:.2e}, kkt {:?}", sol.report.solver, k);
-        assert!(r < 1e-6 && k.max() < sol.report.tolerance, "{}: {r:e} {k:?}", sol.report.solver);
-    }
+    agree(p, bound, false, 1e-7);
 }
 
 /// Coulomb's law (μ = 0.3) on the partial-slip scene (15 contact nodes stick, 6 slip): uzawa

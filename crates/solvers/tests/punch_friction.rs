@@ -11,8 +11,8 @@ use common::friction::*;
 use common::{SCALED, johnson_with};
 use saddle_contact::{Coulomb, Flat, Paraboloid, RigidPunch, RigidPunchDisplacement, TiltingPunch, Tresca};
 use saddle_core::{
-    AdmissibleDisplacements, DiscreteProblem, FrictionLaw, Region, Silent, Solution, SolveError, Solver, Workspace,
-    kkt, normal_contact_set,
+    AdmissibleDisplacements, DiscreteProblem, FrictionLaw, Region, Silent, Solution, SolveError, Solver,
+    normal_contact_set,
 };
 use saddle_solvers::{Newton, Penalty};
 
@@ -43,44 +43,6 @@ fn pulled(law: Option<Box<dyn FrictionLaw>>, q: [f64; 2]) -> DiscreteProblem {
         let k = RigidPunch::new(0.5, zone, Box::new(Paraboloid::new(5.0))).unwrap();
         Box::new(RigidPunch { friction: law, Q: Some(q), ..k })
     })
-}
-
-/// max|a − b| / max|b|, 0 for no entry.
-fn rel_or_zero(a: &[f64], b: &[f64]) -> f64 {
-    if b.is_empty() { 0.0 } else { rel(a, b) }
-}
-
-/// uzawa, socp, newton and penalty on the scene `p` of partial slip: some contact nodes stick,
-/// some slip; all agree with uzawa to 1e-7 in u, λ and the extras, and each meets the friction
-/// conditions of the bound `bound(w, λ_n)` recomputed from the rows to 1e-6 and the library's
-/// KKT residual to its own tolerance. `forced`: extras under force control (uzawa with the
-/// extras' metric, newton cold; else newton's own iterations from zero). `socp_lambda`: socp's
-/// tolerance in λ, 1e-7 but where its interior point (no polish with friction, theory §8.3) was
-/// measured further. Returns uzawa's answer.
-fn agree(p: &DiscreteProblem, bound: impl Fn(f64, f64) -> f64 + Copy, forced: bool, socp_lambda: f64) -> Solution {
-    let su = if forced { solve(&uzawa_forced(), p) } else { solve(&uzawa(), p) };
-    let sn = if forced { solve(&Newton::default(), p) } else { newton_from_zero(p) };
-    let (ss, sp) = (solve(&socp(), p), solve(&Penalty::default(), p));
-    let reports = p.view().contact_reports(&su.extras, &su.lambda);
-    let report = &reports[0].report;
-    let (stick, slip) = (report.get("stick_nodes").unwrap(), report.get("slip_nodes").unwrap());
-    println!("stick {stick}, slip {slip}, report {:?}", report.quantities);
-    assert!(stick > 0.0 && slip > 0.0, "partial slip wanted: {stick} stick, {slip} slip");
-    for other in [&ss, &sn, &sp] {
-        let (du, dl) = (rel(&other.u, &su.u), rel(&other.lambda, &su.lambda));
-        let dv = rel_or_zero(&other.extras, &su.extras);
-        println!("{} against uzawa: u {du:.2e}, λ {dl:.2e}, extras {dv:.2e}", other.report.solver);
-        let tol_l = if other.report.solver == "socp" { socp_lambda } else { 1e-7 };
-        assert!(du < 1e-7 && dl < tol_l && dv < 1e-7, "{}: u {du:e}, λ {dl:e}, extras {dv:e}", other.report.solver);
-    }
-    for sol in [&su, &ss, &sn, &sp] {
-        let r = friction_conditions(p, sol, bound);
-        let l = p.lagrangian();
-        let k = kkt(&l, &sol.iterate(), &mut Workspace::new(&l));
-        println!("{}: friction conditions {r:.2e}, kkt {:?}", sol.report.solver, k);
-        assert!(r < 1e-6 && k.max() < sol.report.tolerance, "{}: {r:e} {k:?}", sol.report.solver);
-    }
-    su
 }
 
 /// Tresca (g = 0.1) under a prescribed motion across the axis W = (0.001, 0): partial slip,
