@@ -145,21 +145,7 @@ fn coulomb_uzawa_and_socp_agree_on_partial_slip() {
 fn coulomb_full_sliding_under_prescribed_motion() {
     let mu = 0.3;
     let p = scene_with(Some(Box::new(Coulomb { mu })), Some([0.02, 0.01]));
-    for sol in solve_slipping_everywhere(&p) {
-        let l = p.lagrangian();
-        let rows = l.data.rows;
-        let (mut tangential, mut normal) = (0.0, 0.0);
-        for b in &rows.friction.blocks {
-            tangential += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
-            normal += sol.lambda[b.normal];
-        }
-        let name = &sol.report.solver;
-        println!("{name}: Σ|λ_t| = {tangential:.15e}, μ Σλ_n = {:.15e}", mu * normal);
-        let defect = (tangential - mu * normal).abs();
-        assert!(defect <= 1e-10 * mu * normal, "{name}: {tangential:e} against {:e}", mu * normal);
-        let r = friction_conditions(&p, &sol, |_, ln| mu * ln.max(0.0));
-        assert!(r < 1e-7, "{name}: Coulomb conditions {r:e}");
-    }
+    assert_full_sliding(&p, mu);
 }
 
 /// A load path (theory §11.6) on the partial-slip Tresca scene: the sphere pressed and moved

@@ -151,3 +151,24 @@ pub fn agree(p: &DiscreteProblem, bound: impl Fn(f64, f64) -> f64 + Copy, forced
     }
     su
 }
+
+/// Full sliding under Coulomb's law of coefficient `mu` (theory §8.3): `p` solved by uzawa,
+/// newton and penalty, every contact node slipping on the rim of its cone, so
+/// Σ|λ_t| = μ Σλ_n to 1e-10, and the Coulomb conditions recomputed to 1e-7.
+pub fn assert_full_sliding(p: &DiscreteProblem, mu: f64) {
+    for sol in solve_slipping_everywhere(p) {
+        let l = p.lagrangian();
+        let rows = l.data.rows;
+        let (mut tangential, mut normal) = (0.0, 0.0);
+        for b in &rows.friction.blocks {
+            tangential += sol.lambda[b.tangent].hypot(sol.lambda[b.tangent + 1]);
+            normal += sol.lambda[b.normal];
+        }
+        let name = &sol.report.solver;
+        println!("{name}: Σ|λ_t| = {tangential:.15e}, μ Σλ_n = {:.15e}", mu * normal);
+        let defect = (tangential - mu * normal).abs();
+        assert!(defect <= 1e-10 * mu * normal, "{name}: {tangential:e} against {:e}", mu * normal);
+        let r = friction_conditions(p, &sol, |_, ln| mu * ln.max(0.0));
+        assert!(r < 1e-7, "{name}: Coulomb conditions {r:e}");
+    }
+}
