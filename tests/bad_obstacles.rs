@@ -1,7 +1,8 @@
 //! Bad obstacle input (issue 12): each a clear error naming the field and the value, and
 //! `saddle run` writes nothing — both or neither of a sphere's `F` and `V`, a zero `direction`,
 //! duplicate or missing names with several obstacles, a zone node inside the sphere at the
-//! reference configuration, and a tilting punch loaded outside its zone.
+//! reference configuration, a tilting punch loaded outside its zone, and bad friction input on
+//! every punch (theory §8.3).
 
 mod common;
 use common::*;
@@ -57,4 +58,27 @@ fn several_obstacles_need_unique_names() {
     assert_rejected(&dup, &["obstacle[1].name", "\"a\"", "unique"]);
     let missing = scene(&format!("{}{}", punch("name = \"a\"\n"), punch("")));
     assert_rejected(&missing, &["obstacle[1].name"]);
+}
+
+/// Bad friction input on each punch type, written as an array of tables (`obstacle[0]`): a
+/// negative or NaN μ, a negative g, Q without a law, Q and W together — each error naming the
+/// field path and the value.
+#[test]
+fn punches_with_bad_friction_input_are_refused_naming_field_and_value() {
+    let punch = |kind: &str, extra: &str| {
+        scene(&format!("[[obstacle]]\n{kind}\n{ZONE}\ngap = {{ type = \"paraboloid\", R = 5.0 }}\n{extra}\n"))
+    };
+    for kind in [
+        "type = \"rigid_punch\"\nF = 0.3",
+        "type = \"rigid_punch_displacement\"\nU = 0.01",
+        "type = \"tilting_punch\"\nF = 0.3",
+    ] {
+        let law = |l: &str| format!("friction = {{ type = {l} }}");
+        assert_rejected(&punch(kind, "Q = [0.1, 0.0]"), &["obstacle[0].Q", "[0.1, 0]", "obstacle[0].friction"]);
+        assert_rejected(&punch(kind, &law("\"coulomb\", mu = -0.3")), &["obstacle[0].friction.mu", "-0.3"]);
+        assert_rejected(&punch(kind, &law("\"coulomb\", mu = nan")), &["obstacle[0].friction.mu", "NaN"]);
+        assert_rejected(&punch(kind, &law("\"tresca\", g = -1.0")), &["obstacle[0].friction.g", "-1"]);
+        let both = format!("{}\nQ = [0.1, 0.0]\nW = [0.0, 0.2]", law("\"tresca\", g = 1.0"));
+        assert_rejected(&punch(kind, &both), &["obstacle[0].Q", "[0.1, 0]", "obstacle[0].W"]);
+    }
 }

@@ -106,3 +106,33 @@ fn bad_load_lists_are_rejected_naming_the_field() {
     assert_rejected(&with(None, "Q = [0.0, nan]"), &["load_path.loads.Q[1] = NaN", "finite"]);
     assert_rejected(&with(None, "F = [1.0, -1.0]"), &["load_path.factors[1]", "obstacle.F"]);
 }
+
+/// The punch of the default scene (paraboloid, R = 5) pressed by F = 0.5 and pulled by
+/// Q = [q, 0] (Coulomb, μ = 0.3) on the box of [`sphere`], solved by uzawa.
+fn punch(q: f64, path: &str) -> String {
+    let sphere = sphere(q, None, path);
+    let (head, rest) = sphere.split_once("[obstacle]\n").unwrap();
+    let (_, tail) = rest.split_once("[solver]").unwrap();
+    format!(
+        "{head}[obstacle]\ntype = \"rigid_punch\"\nF = 0.5\nQ = [{q}, 0.0]\ngap = {{ type = \"paraboloid\", R = 5.0 }}\n\
+         zone = {{ all = [ {{ group = \"zmin\" }}, {{ disc = {{ center = [0.0, 0.0], radius = 0.8 }} }} ] }}\n\
+         friction = {{ type = \"coulomb\", mu = 0.3 }}\n[solver]{tail}"
+    )
+}
+
+/// The punches name `F` and `Q` as loads of their own (theory §8.2, §11.2): pressing without
+/// pulling, the first step of "press, then pull" is the scene with Q edited to 0 by hand (the
+/// extras U, Ux, Uy to 1e-12 of their size), the second pulls along +x; a name no load has is
+/// refused listing the punch's.
+#[test]
+fn a_punch_pressed_then_pulled_by_its_own_factors() {
+    let q = 0.075;
+    let pressed = run(&punch(q, "[load_path]\nfactors = [1.0, 1.0]\n[load_path.loads]\nQ = [0.0, 1.0]\n"));
+    let by_hand = run(&punch(0.0, ""));
+    let extras = |s: &serde_json::Value| ["U", "Ux", "Uy"].map(|k| s["extras"][k].as_f64().unwrap());
+    close(extras(&pressed["steps"][0]), extras(&by_hand), "Q at factor 0");
+    assert_eq!(pressed["steps"][1]["loads"]["Q"].as_f64(), Some(1.0));
+    assert!(extras(&pressed["steps"][1])[1] > 0.0, "pulled along +x: {:?}", extras(&pressed["steps"][1]));
+    let bad = punch(q, "[load_path]\nfactors = [0.0, 1.0]\n[load_path.loads]\nP = [0.0, 1.0]\n");
+    assert_rejected(&bad, &["load_path.loads.P = \"P\"", "known: F, Q"]);
+}

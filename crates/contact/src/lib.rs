@@ -20,6 +20,10 @@
 //! * [`RigidSphere`] (`type = "rigid_sphere"`, a ball of centre c and radius R moving along a
 //!   direction d, pushed by F or moved by a prescribed V; rows along the sphere's normals, each
 //!   acting on up to three dofs, theory §8) in [`rigid_sphere`];
+//! * friction laws ([`Tresca`], [`Coulomb`]) in [`friction`], and in [`tangential`] what the
+//!   rigid obstacles with friction share (theory §8.3): the fields `friction`, `Q`, `W`, the
+//!   tangential rows and extras `Ux`, `Uy`, the stick/slip counts — the punches and the sphere
+//!   take them alike;
 //! * gap shapes φ, themselves plugins chosen by `type` ([`GapShape`]: [`Paraboloid`],
 //!   [`EllipticParaboloid`], [`Flat`]) in [`gap`];
 //! * contact-zone helpers for node-based obstacles ([`zone::candidate_nodes`],
@@ -120,6 +124,7 @@ pub mod gap;
 pub mod projection;
 pub mod punch;
 pub mod rigid_sphere;
+pub mod tangential;
 pub mod tilting_punch;
 pub mod zone;
 

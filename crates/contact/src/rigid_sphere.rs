@@ -34,15 +34,17 @@
 //! `Q = [Qx, Qy]`. The normal rows see that motion too: the sphere's centre is c + V d + W.
 //! Without `friction`, `Q` and `W` the rows are exactly the frictionless ones.
 
+use crate::tangential::{
+    Tangential, TangentialPair, add, dot, finish_friction, frame, friction_quantities, norm, push_tangential,
+    row_directions, sub, tangential_axes,
+};
 use crate::zone::node_areas_facing;
 use crate::zone::{Selection, candidate_nodes_with, rim_rows_facing, rim_warning};
 use saddle_core::error::{check, join};
 use saddle_core::mesh::signed_volume;
-use saddle_core::problem::displacements::contact_status;
-use saddle_core::problem::friction::ContactStatus;
 use saddle_core::{
-    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionBlock, FrictionLaw, LoadFactors,
-    ParameterError, Region, SceneError, TetMesh, normal_contact_set,
+    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionLaw, LoadFactors, ParameterError, Region,
+    SceneError, TetMesh, normal_contact_set,
 };
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -131,37 +133,25 @@ impl RigidSphere {
         }
     }
 
-    /// (e₁, e₂): the axes of the motion across d, orthonormal and ⊥ d. e₁ is the first of the
-    /// coordinate axes x₁, x₂ not within 25° of d, made orthogonal to d; e₂ = d × e₁. For
-    /// d = e₃: (e₁, e₂) = (x₁, x₂).
-    pub fn tangential_axes(&self) -> ([f64; 3], [f64; 3]) {
-        let d = self.d();
-        let a = if d[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
-        let e1 = unit(sub(a, scaled(d, dot(a, d))));
-        (e1, cross(d, e1))
+    /// The fields `friction`, `Q`, `W` (theory §8.3).
+    fn tangential(&self) -> Tangential<'_> {
+        Tangential::new(&self.friction, self.Q, self.W)
     }
 
-    /// (t₁, t₂): the tangent plane at a node of normal `n`, orthonormal, ⊥ n: t₁ the sphere's
-    /// e₁ (else e₂, if e₁ is within 25° of n) made orthogonal to n, t₂ = n × t₁.
+    /// (e₁, e₂): the axes of the motion across d ([`tangential_axes`]; for d = e₃: (x₁, x₂)).
+    pub fn tangential_axes(&self) -> ([f64; 3], [f64; 3]) {
+        tangential_axes(self.d())
+    }
+
+    /// (t₁, t₂): the tangent plane at a node of normal `n` ([`frame`]).
     pub fn frame(&self, n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-        let (e1, e2) = self.tangential_axes();
-        let a = if dot(e1, n).abs() < 0.9 { e1 } else { e2 };
-        let t1 = unit(sub(a, scaled(n, dot(a, n))));
-        (t1, cross(n, t1))
+        frame(self.tangential_axes(), n)
     }
 
     /// The sphere's motion across d: W e (prescribed), or the extras (Ux, Uy), or 0.
     fn across(&self, extras: &[f64]) -> [f64; 3] {
-        let w = match (self.W, self.Q) {
-            (Some(w), _) => w,
-            (None, Some(_)) => {
-                let k = usize::from(self.V.is_none());
-                [extras[k], extras[k + 1]]
-            }
-            (None, None) => return [0.0; 3],
-        };
-        let (e1, e2) = self.tangential_axes();
-        std::array::from_fn(|k| w[0] * e1[k] + w[1] * e2[k])
+        let k = usize::from(self.V.is_none()).min(extras.len());
+        self.tangential().across(self.tangential_axes(), &extras[k..])
     }
 
     /// The H entries of a row of direction `a` (n or t): −a·d for V unknown, −a·e₁, −a·e₂ for
@@ -171,10 +161,7 @@ impl RigidSphere {
         if self.V.is_none() {
             out.push(-dot(a, self.d()));
         }
-        if self.Q.is_some() {
-            let (e1, e2) = self.tangential_axes();
-            out.extend([-dot(a, e1), -dot(a, e2)]);
-        }
+        self.tangential().extra_entries(a, self.tangential_axes(), out);
     }
 
     /// The unit direction d, or `None` when `direction` is not finite or zero.
@@ -212,7 +199,7 @@ impl RigidSphere {
     fn linearisation_centre(&self) -> [f64; 3] {
         let d = self.d();
         let v = self.V.unwrap_or(0.0);
-        let w = if self.W.is_some() { self.across(&[]) } else { [0.0; 3] };
+        let w = self.tangential().prescribed(self.tangential_axes());
         std::array::from_fn(|k| self.center[k] + v * d[k] + w[k])
     }
 
@@ -221,86 +208,8 @@ impl RigidSphere {
     fn prescribed_motion(&self) -> [f64; 3] {
         let d = self.d();
         let v = self.V.unwrap_or(0.0);
-        let w = if self.W.is_some() { self.across(&[]) } else { [0.0; 3] };
+        let w = self.tangential().prescribed(self.tangential_axes());
         std::array::from_fn(|k| v * d[k] + w[k])
-    }
-
-    /// Checks `friction`, `Q` and `W` (theory §8.3): the law's own parameters under
-    /// `{path}.friction`; Q and W finite and bounded, not both, and neither without a friction law.
-    fn validate_friction(&self, path: &str) -> Result<(), ParameterError> {
-        if let Some(law) = &self.friction {
-            law.validate(&join(path, "friction"))?;
-        }
-        for (field, value) in [("Q", self.Q), ("W", self.W)] {
-            let Some(value) = value else { continue };
-            check::bounded_all(path, field, &value)?;
-            if self.friction.is_none() {
-                return Err(ParameterError::new(
-                    join(path, field),
-                    format!("[{}, {}]", value[0], value[1]),
-                    format!(
-                        "moves the sphere across its direction, which needs a friction law: give {} (e.g. {{ type = \
-                         \"tresca\", g = 0.1 }}) or remove {}",
-                        join(path, "friction"),
-                        join(path, field)
-                    ),
-                ));
-            }
-        }
-        if let (Some(q), Some(w)) = (self.Q, self.W) {
-            return Err(ParameterError::new(
-                join(path, "Q"),
-                format!("[{}, {}]", q[0], q[1]),
-                format!(
-                    "cannot be given together with {} = [{}, {}]: give exactly one of the tangential force and the \
-                     prescribed tangential motion",
-                    join(path, "W"),
-                    w[0],
-                    w[1]
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    /// Appends node `n`'s two tangential rows after its normal row `normal` (direction `nrm`)
-    /// and their block of weight `weight`: `t_k·(u_n − V d − W)` on the node's free dofs.
-    /// A node whose tangent plane has no free dof (both rows vanish in u) gets none.
-    #[allow(clippy::too_many_arguments)]
-    fn push_tangential(
-        &self,
-        rows: &mut ConstraintRows,
-        dofs: &DofMap,
-        n: usize,
-        nrm: [f64; 3],
-        normal: usize,
-        weight: f64,
-        h: &mut Vec<f64>,
-    ) -> bool {
-        let (t1, t2) = self.frame(nrm);
-        let motion = self.prescribed_motion();
-        let on_free = |t: [f64; 3]| {
-            let mut e = [(0, 0.0); 3];
-            let mut k = 0;
-            for (c, &tc) in t.iter().enumerate() {
-                if let (Some(j), true) = (dofs.free(n, c), tc != 0.0) {
-                    e[k] = (j, tc);
-                    k += 1;
-                }
-            }
-            (e, k)
-        };
-        let ((e1, k1), (e2, k2)) = (on_free(t1), on_free(t2));
-        if k1 == 0 || k2 == 0 {
-            return false;
-        }
-        let tangent = rows.n_rows();
-        for (t, e, k) in [(t1, e1, k1), (t2, e2, k2)] {
-            self.extra_entries(t, h);
-            rows.push(&e[..k], h, -dot(t, motion), n);
-        }
-        rows.friction.blocks.push(FrictionBlock { law: 0, normal, tangent, weight });
-        true
     }
 
     /// (n_i, |x_i − c̃|) for mesh node `n`: the row's normal and distance from c̃.
@@ -379,34 +288,6 @@ impl RigidSphere {
             ),
         )))
     }
-}
-
-fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|k| a[k] + b[k])
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|k| a[k] - b[k])
-}
-
-fn scaled(a: [f64; 3], s: f64) -> [f64; 3] {
-    a.map(|x| x * s)
-}
-
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    scaled(a, 1.0 / norm(a))
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 #[typetag::serde(name = "rigid_sphere")]
@@ -491,7 +372,7 @@ impl AdmissibleDisplacements for RigidSphere {
                 ));
             }
         }
-        self.validate_friction(path)?;
+        self.tangential().validate(path, "the sphere")?;
         self.zone.validate(&join(path, "zone"))
     }
 
@@ -561,30 +442,17 @@ impl AdmissibleDisplacements for RigidSphere {
             self.extra_entries(normal, &mut h);
             let row = rows.n_rows();
             rows.push(&entries[..k], &h, dist - self.R, n);
-            if self.friction.is_some() && !self.push_tangential(&mut rows, dofs, n, normal, row, weights[a], &mut h) {
-                without_plane += 1;
+            if self.friction.is_some() {
+                let pair = TangentialPair { node: n, frame: self.frame(normal), normal: row, weight: weights[a] };
+                let entries = |t: [f64; 3], h: &mut Vec<f64>| self.extra_entries(t, h);
+                if !push_tangential(&mut rows, dofs, pair, self.prescribed_motion(), entries, &mut h) {
+                    without_plane += 1;
+                }
             }
         }
         rows.warnings = zone.warnings;
         if let Some(law) = &self.friction {
-            if rows.friction.is_empty() {
-                return Err(SceneError::Parameter(ParameterError::new(
-                    join(path, "friction"),
-                    format!("type = {:?}", law.name()),
-                    format!(
-                        "no node of {} can slip: at every one the tangent plane's components are fixed by the \
-                         Dirichlet conditions, so the rows have no tangent plane for the friction law (theory §8.3)",
-                        join(path, "zone")
-                    ),
-                )));
-            }
-            rows.friction.laws.push(law.clone());
-            if without_plane > 0 {
-                rows.warnings.push(format!(
-                    "{}: {without_plane} zone node(s) have fixed tangential components and carry no friction rows",
-                    join(path, "friction")
-                ));
-            }
+            finish_friction(&mut rows, law.as_ref(), without_plane, path)?;
         }
         Ok(rows)
     }
@@ -659,19 +527,8 @@ impl AdmissibleDisplacements for RigidSphere {
         });
         let mut quantities = vec![("V".into(), self.v(extras)), ("force".into(), force)];
         if self.friction.is_some() {
-            let (e1, e2) = self.tangential_axes();
-            let w = self.across(extras);
-            let status = contact_status(rows, lambda);
-            let count = |s: ContactStatus| status.iter().filter(|x| x.1 == s).count();
-            let (stick, slip) = (count(ContactStatus::Stick), count(ContactStatus::Slip));
-            quantities.extend([
-                ("Ux".into(), dot(w, e1)),
-                ("Uy".into(), dot(w, e2)),
-                ("force_x".into(), resultant(e1)),
-                ("force_y".into(), resultant(e2)),
-                ("stick_nodes".into(), stick as f64),
-                ("slip_nodes".into(), slip as f64),
-            ]);
+            let across = self.across(extras);
+            quantities.extend(friction_quantities(rows, lambda, &directions, self.tangential_axes(), across));
         }
         ContactReport {
             quantities,
@@ -686,11 +543,6 @@ impl RigidSphere {
     /// The direction of every row: n_i for a normal row, t₁, t₂ of n_i for its tangential rows.
     fn row_directions(&self, mesh: &TetMesh, rows: &ConstraintRows) -> Vec<[f64; 3]> {
         let centre = self.linearisation_centre();
-        let mut a: Vec<[f64; 3]> = rows.node.iter().map(|&n| self.normal(mesh, n, centre).0).collect();
-        for b in &rows.friction.blocks {
-            let (t1, t2) = self.frame(a[b.normal]);
-            (a[b.tangent], a[b.tangent + 1]) = (t1, t2);
-        }
-        a
+        row_directions(rows, self.tangential_axes(), |n| self.normal(mesh, n, centre).0)
     }
 }

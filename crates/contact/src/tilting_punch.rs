@@ -14,13 +14,22 @@
 //! the resultant of the contact forces passes through a, which must therefore lie in the convex
 //! hull of the contact nodes — otherwise the punch tips over and there is no solution, which
 //! [`TiltingPunch`]'s `discretise` reports as an error on `{path}.at`.
+//!
+//! **Friction** (theory §8.3) as for the rigid punch ([`crate::punch`]): with a `friction` law
+//! each node's row is followed by its tangential rows `(u₁, u₂)(x_i) − W`, W prescribed or the
+//! extras `Ux`, `Uy` (after U and the slopes) loaded by `Q`. The tilt moves the face's points
+//! along e₃ only (to first order, about a pivot on the face), so the tangential rows have no
+//! entry on U and the slopes, and the normal rows none on Ux, Uy. A tangential force at the face
+//! has no moment about the pivot's horizontal axes: force and moment balance are unchanged.
 
 use crate::gap::{GapShape, validate_gap};
+use crate::punch::PunchFriction;
+use crate::tangential::Tangential;
 use crate::zone::{candidate_nodes, rim_rows, rim_warning};
 use saddle_core::error::{check, join};
 use saddle_core::{
-    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, ParameterError, Region, SceneError, TetMesh,
-    contact_set,
+    AdmissibleDisplacements, ConstraintRows, ContactReport, DofMap, FrictionLaw, LoadFactors, ParameterError, Region,
+    SceneError, TetMesh, normal_contact_set,
 };
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -55,15 +64,40 @@ pub struct TiltingPunch {
     pub zone: Region,
     /// The gap function φ; its centre is the pivot c.
     pub gap: Box<dyn GapShape>,
+    /// The friction law on the contact (theory §8.3); absent: frictionless.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<Box<dyn FrictionLaw>>,
+    /// The tangential force Q = [Qx, Qy] (extras `Ux`, `Uy`), as for `rigid_punch`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub Q: Option<[f64; 2]>,
+    /// The prescribed motion W = [Wx, Wy] across the axis, as for `rigid_punch`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub W: Option<[f64; 2]>,
 }
 
 impl TiltingPunch {
     /// A punch pushed by `force` at its pivot (the centre of `gap`) against the nodes of `zone`,
     /// validated (errors name `obstacle.F`, `obstacle.zone`, `obstacle.gap`).
     pub fn new(force: f64, zone: Region, gap: Box<dyn GapShape>) -> Result<Self, ParameterError> {
-        let k = Self { F: force, at: None, zone, gap };
+        let k = Self { F: force, at: None, zone, gap, friction: None, Q: None, W: None };
         k.validate("obstacle")?;
         Ok(k)
+    }
+
+    /// The same punch with the friction law `law` (theory §8.3).
+    pub fn with_friction(self, law: Box<dyn FrictionLaw>) -> Self {
+        Self { friction: Some(law), ..self }
+    }
+
+    /// The tangential rows and extras (after U and the slopes).
+    fn friction(&self) -> PunchFriction<'_> {
+        PunchFriction::new(Tangential::new(&self.friction, self.Q, self.W), 3)
+    }
+
+    /// The punch with F, Q and W each multiplied by its factor (theory §11.2).
+    fn with_load_factors(&self, factors: &LoadFactors) -> Self {
+        let (q, w) = Tangential::new(&self.friction, self.Q, self.W).scaled(factors);
+        Self { F: self.F * factors.of("F"), Q: q, W: w, ..self.clone() }
     }
 
     /// The same punch with the force acting at `a` = (a₁, a₂), validated (`obstacle.at`).
@@ -185,9 +219,20 @@ fn hull_extent(p: &[[f64; 2]]) -> f64 {
 
 #[typetag::serde(name = "tilting_punch")]
 impl AdmissibleDisplacements for TiltingPunch {
-    /// F × factor, at the same point.
+    /// F × factor, at the same point (and Q or W × factor).
     fn scaled_load(&self, factor: f64) -> Option<Box<dyn AdmissibleDisplacements>> {
-        Some(Box::new(Self { F: self.F * factor, ..self.clone() }))
+        self.scaled_loads(&LoadFactors::uniform(factor))
+    }
+
+    /// With `Q` or `W`: `F` and that one, each with factors of its own (theory §11.2); else
+    /// none (the whole load follows the path's factor).
+    fn load_names(&self) -> Vec<String> {
+        self.friction().load_names("F")
+    }
+
+    /// F, Q and W each multiplied by its own factor.
+    fn scaled_loads(&self, factors: &LoadFactors) -> Option<Box<dyn AdmissibleDisplacements>> {
+        Some(Box::new(self.with_load_factors(factors)))
     }
 
     /// F finite and ≥ 0 (`{path}.F`) and at most [`check::MAX_MAGNITUDE`] (a force enters the
@@ -200,19 +245,25 @@ impl AdmissibleDisplacements for TiltingPunch {
             check::bounded_all(path, "at", a)?;
         }
         self.zone.validate(&join(path, "zone"))?;
-        validate_gap(self.gap.as_ref(), path)
+        validate_gap(self.gap.as_ref(), path)?;
+        self.friction().tangential.validate(path, "the punch")
     }
 
-    /// The punch's rise U at the pivot and its slopes.
+    /// The punch's rise U at the pivot and its slopes; then `Ux`, `Uy` under Q.
     fn extra_names(&self) -> Vec<String> {
-        vec!["U".into(), "slope_x1".into(), "slope_x2".into()]
+        let mut names = vec!["U".to_string(), "slope_x1".into(), "slope_x2".into()];
+        names.extend(self.friction().tangential.extra_names());
+        names
     }
 
-    /// F·w(a) = F U + F (a₁ − c₁) slope_x1 + F (a₂ − c₂) slope_x2 (theory §8).
+    /// F·w(a) = F U + F (a₁ − c₁) slope_x1 + F (a₂ − c₂) slope_x2 (theory §8); then
+    /// Qx Ux + Qy Uy under Q.
     fn load(&self) -> Vec<f64> {
         let [a1, a2] = self.point_of_action();
         let [c1, c2] = self.pivot();
-        vec![self.F, self.F * (a1 - c1), self.F * (a2 - c2)]
+        let mut f = vec![self.F, self.F * (a1 - c1), self.F * (a2 - c2)];
+        f.extend(self.friction().tangential.load());
+        f
     }
 
     /// g_i = u₃(x_i) + φ(x_i) − w(x_i) ≥ 0: G = e₃ at the node, H_i = (−1, −(x_i1 − c₁),
@@ -221,28 +272,40 @@ impl AdmissibleDisplacements for TiltingPunch {
     fn discretise(&self, mesh: &TetMesh, dofs: &DofMap, path: &str) -> Result<ConstraintRows, SceneError> {
         let zone = candidate_nodes(&self.zone, mesh, dofs, path)?;
         self.check_hull(mesh, &zone.nodes, path)?;
-        let mut rows = ConstraintRows::new(3);
-        for &n in &zone.nodes {
+        let f = self.friction();
+        let mut rows = ConstraintRows::new(3 + f.n_across());
+        let weights = f.weights(mesh, &zone.nodes);
+        let (mut h, mut without_plane) = (Vec::with_capacity(5), 0);
+        for (a, &n) in zone.nodes.iter().enumerate() {
             let d = dofs.free(n, 2).expect("candidate nodes have a free u₃");
             let x = mesh.nodes[n];
             let [r1, r2] = self.arm(mesh, n);
-            rows.push(&[(d, 1.0)], &[-1.0, -r1, -r2], self.gap.phi(x[0], x[1]), n);
+            let row = rows.n_rows();
+            rows.push(&[(d, 1.0)], &f.normal_entries(&[-1.0, -r1, -r2]), self.gap.phi(x[0], x[1]), n);
+            if f.is_on() && !f.push(&mut rows, dofs, n, row, weights[a], &mut h) {
+                without_plane += 1;
+            }
         }
         rows.warnings = zone.warnings;
+        f.finish(&mut rows, without_plane, path)?;
         Ok(rows)
     }
 
     /// g_i = u₃(x_i) + φ(x_i) − w(x_i) from the node coordinates and the extras.
-    /// The rows do not depend on F: the same rows.
+    /// The rows do not depend on F nor Q: the same rows; with W prescribed the tangential rows'
+    /// offsets do: discretised again.
     fn rows_at_factor<'r>(
         &self,
-        _factor: f64,
+        factor: f64,
         rows: &'r ConstraintRows,
-        _mesh: &TetMesh,
-        _dofs: &DofMap,
-        _path: &str,
+        mesh: &TetMesh,
+        dofs: &DofMap,
+        path: &str,
     ) -> Result<Cow<'r, ConstraintRows>, SceneError> {
-        Ok(Cow::Borrowed(rows))
+        if self.W.is_none() {
+            return Ok(Cow::Borrowed(rows));
+        }
+        self.with_load_factors(&LoadFactors::uniform(factor)).discretise(mesh, dofs, path).map(Cow::Owned)
     }
 
     fn gap(&self, mesh: &TetMesh, dofs: &DofMap, rows: &ConstraintRows, u: &[f64], extras: &[f64], out: &mut [f64]) {
@@ -253,6 +316,7 @@ impl AdmissibleDisplacements for TiltingPunch {
             let u3 = dofs.free(n, 2).map_or(0.0, |d| u[d]);
             *g = u3 + self.gap.phi(x[0], x[1]) - (big_u + s1 * r1 + s2 * r2);
         }
+        self.friction().slips(dofs, rows, u, &extras[3..], out);
     }
 
     /// `U`, `slope_x1`, `slope_x2` (the extras), `force` = Σλ_i (= F at a solution),
@@ -260,9 +324,10 @@ impl AdmissibleDisplacements for TiltingPunch {
     /// set, its radius about the pivot, and the rim warning of the rigid punch.
     fn report(&self, mesh: &TetMesh, rows: &ConstraintRows, extras: &[f64], lambda: &[f64]) -> ContactReport {
         debug_assert_eq!(lambda.len(), rows.n_rows());
-        let contact = contact_set(lambda);
+        let contact = normal_contact_set(rows, lambda);
+        let normal = self.friction().normal_mask(rows);
         let (mut force, mut m1, mut m2) = (0.0, 0.0, 0.0);
-        for (&l, &n) in lambda.iter().zip(&rows.node) {
+        for ((&l, &n), _) in lambda.iter().zip(&rows.node).zip(&normal).filter(|x| *x.1) {
             let [r1, r2] = self.arm(mesh, n);
             force += l;
             m1 += l * r1;
@@ -278,19 +343,16 @@ impl AdmissibleDisplacements for TiltingPunch {
         let rim = rim_rows(mesh, rows, &contact);
         let warnings =
             if self.gap.has_edge() { None } else { rim_warning("obstacle", mesh, rows, &rim) }.into_iter().collect();
-        ContactReport {
-            quantities: vec![
-                ("U".into(), extras[0]),
-                ("slope_x1".into(), extras[1]),
-                ("slope_x2".into(), extras[2]),
-                ("force".into(), force),
-                ("moment_x1".into(), m1),
-                ("moment_x2".into(), m2),
-            ],
-            contact_nodes: contact.len(),
-            contact_radius,
-            warnings,
-        }
+        let mut quantities = vec![
+            ("U".into(), extras[0]),
+            ("slope_x1".into(), extras[1]),
+            ("slope_x2".into(), extras[2]),
+            ("force".into(), force),
+            ("moment_x1".into(), m1),
+            ("moment_x2".into(), m2),
+        ];
+        quantities.extend(self.friction().quantities(rows, lambda, &extras[3..]));
+        ContactReport { quantities, contact_nodes: contact.len(), contact_radius, warnings }
     }
 }
 

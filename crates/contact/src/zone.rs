@@ -203,12 +203,18 @@ fn norm(v: [f64; 3]) -> f64 {
 /// recombined weights (theory §10.1: 2|F|/15 at a dual quadratic facet's vertices, |F|/5 at
 /// its edge nodes).
 pub fn row_areas(mesh: &TetMesh, rows: &ConstraintRows) -> Vec<f64> {
-    let area = node_areas_facing(mesh, &rows.node, |normal, _| normal[2] < -FACING_TOL * norm(normal));
+    let area = node_areas_below(mesh, &rows.node);
     // recombined rows (P2's dual quadratic rows, theory §10.1): ∫Ñ_j = Σ_k T_kj ∫N_k
     match &rows.combination {
         None => area,
         Some(c) => c.weights_from_nodal(&area),
     }
+}
+
+/// The share of the contact face of each node of `nodes` for an obstacle below the body:
+/// [`node_areas_facing`] with "facing" = n₃ < 0 (the punches' weights of theory §8.3).
+pub fn node_areas_below(mesh: &TetMesh, nodes: &[usize]) -> Vec<f64> {
+    node_areas_facing(mesh, nodes, |normal, _| normal[2] < -FACING_TOL * norm(normal))
 }
 
 /// The share of the contact face of each node of `nodes`, ∫_Γ N_i over the boundary facets

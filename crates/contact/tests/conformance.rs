@@ -179,7 +179,14 @@ fn the_individual_checks_run_alone() {
     let e = check_all(&broken(Flaw::WrongU), &m, &d, 4, f64::NAN).unwrap_err();
     assert_eq!(e.check, "setup");
     let bad = Broken {
-        punch: RigidPunch { F: -1.0, zone: disc(0.5), gap: Box::new(Paraboloid::new(5.0)) },
+        punch: RigidPunch {
+            F: -1.0,
+            zone: disc(0.5),
+            gap: Box::new(Paraboloid::new(5.0)),
+            friction: None,
+            Q: None,
+            W: None,
+        },
         flaw: Flaw::WrongU,
     };
     assert_eq!(check_all(&bad, &m, &d, 4, 0.01).unwrap_err().check, "validate");

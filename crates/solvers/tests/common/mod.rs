@@ -3,6 +3,8 @@
 //! mappings it runs, for tests that must not trust a solver's own bookkeeping.
 #![allow(dead_code)]
 
+pub mod friction;
+
 use saddle_contact::{Flat, Paraboloid, RigidPunch};
 use saddle_core::P1P0Element;
 use saddle_core::error::ParameterError;
