@@ -8,9 +8,11 @@
 //! comparison is off by +24 % (Q/μP = 0.3) and +16 % (0.7) in δ — the coupling, stated in
 //! theory §8.3.
 //!
-//! The body: the box [−6, 6]² × [0, 6] (28 contact radii) graded toward the contact (24 × 24 × 12
-//! cells, ratio 79.5), clamped on its far faces; 159,048 P2 dofs, 1023 contact rows. One solve
-//! takes 5 min and 3.6 GB on one core: a study, not a CI test.
+//! The body: the box [−6, 6]² × [0, 6] (28 contact radii) graded toward the contact with a
+//! uniform core (26 × 26 × 12 cells, ratio 100, core 0.21: cells 0.031 wide across the contact
+//! radius a = 0.205, theory §7.3), clamped on its far faces; 187,272 P2 dofs, 965 contact nodes.
+//! One solve took 18 to 28 min on a machine loaded 6 to 8 times over its 2 cores (the plain
+//! grading's 159k dofs took 5 min quiet): a study, not a CI test.
 //!
 //! Mindlin's loop (P held, Q: 0 → Q* → −Q* → Q*, a load path whose Q has factors of its own,
 //! theory §11.2, §11.6): the energy dissipated per cycle against Mindlin & Deresiewicz's closed
@@ -34,13 +36,16 @@ const MU: f64 = 0.3;
 /// The scene at tangential force `q` (the whole sphere's: no symmetry plane, the contact is not
 /// symmetric under a tangential load).
 fn scene(q: f64) -> String {
-    loop_scene(6.0, [24, 24, 12], 79.5, "p2", q)
+    loop_scene(6.0, [26, 26, 12], (100.0, Some(0.21)), "p2", q)
 }
 
 /// The stick radius of the solution: the radius c that separates the contact nodes of the
 /// plane z = 0 into stick (r ≤ c) and slip (r > c) with the fewest misclassified, and their
 /// number. (The discrete stick zone is not exactly a disc: the nodes near c are close to the rim.)
-fn stick_radius(nodes: &[([f64; 3], ContactStatus)]) -> (f64, usize) {
+/// Every c from the smallest node radius with the fewest misclassified up to the next node
+/// radius beyond the largest such one does as well: c is that range's middle, the range is
+/// returned too (c taken at a node radius would lean toward the stick nodes by up to a gap).
+fn stick_radius(nodes: &[([f64; 3], ContactStatus)]) -> (f64, usize, [f64; 2]) {
     let radius = |x: [f64; 3]| x[0].hypot(x[1]);
     let wrong = |c: f64| {
         nodes
@@ -52,30 +57,102 @@ fn stick_radius(nodes: &[([f64; 3], ContactStatus)]) -> (f64, usize) {
             })
             .count()
     };
-    nodes
-        .iter()
-        .filter(|(_, s)| *s != ContactStatus::Separated)
-        .map(|(x, _)| (radius(*x), wrong(radius(*x))))
-        .min_by_key(|c| c.1)
-        .unwrap()
+    let mut radii: Vec<f64> =
+        nodes.iter().filter(|(_, s)| *s != ContactStatus::Separated).map(|(x, _)| radius(*x)).collect();
+    radii.sort_by(f64::total_cmp);
+    radii.dedup();
+    let counts: Vec<usize> = radii.iter().map(|&r| wrong(r)).collect();
+    let fewest = *counts.iter().min().unwrap();
+    let first = counts.iter().position(|&n| n == fewest).unwrap();
+    let last = counts.iter().rposition(|&n| n == fewest).unwrap();
+    let range = [radii[first], radii.get(last + 1).copied().unwrap_or(radii[last])];
+    (0.5 * (range[0] + range[1]), fewest, range)
 }
 
-/// δ within 3 % of Johnson's at Q/μP = 0.5 and 0.8, c/a within 10 %. Measured (the same scene
-/// and solver run by `saddle run`): Q/μP = 0.5: δ = 1.3365e-3 against 1.3742e-3 (−2.7 %),
-/// c/a = 0.805 against 0.794 (+1.4 %, 19 of 201 contact nodes on the wrong side of the circle);
-/// 0.8: δ = 2.3802e-3 against 2.4436e-3 (−2.6 %), c/a = 0.534 against 0.585 (−8.6 %, 6 of 198).
-/// The stick radius is resolved by the nodes only: at 0.8 the largest stick node and the
-/// smallest slipping one lie at r = 0.125 and 0.088 (c/a between 0.43 and 0.61), a node spacing
-/// of 15 % of a there, hence 10 % on c/a and not 3 %.
+/// The tangential displacement of the half-space on the axis at depth `d` under Mindlin's
+/// traction (Johnson §7.2: q = (3μP/2πa³)[√(a² − r²) − √(c² − r²)], the second term for r < c)
+/// along x: Cerruti's point-force kernel (Johnson eq. 3.86a) averaged over the angle,
+/// (1/4πG)[1/ρ + r²/2ρ³ + (1 − 2ν)(1/(ρ + d) − r²/(2ρ(ρ + d)²))], ρ² = r² + d², integrated
+/// over the disc (Simpson in r = s·sin θ, smooth).
+fn half_space_axis_tangential(a: f64, c: f64, d: f64, g: f64) -> f64 {
+    let kernel = |r: f64| {
+        let rho = r.hypot(d);
+        // r·K, finite at r = 0: its limit at d = 0 is 2 − ν
+        if rho == 0.0 {
+            return 2.0 - NU;
+        }
+        let ros = r / rho;
+        ros + 0.5 * ros * ros * ros + (1.0 - 2.0 * NU) * (r / (rho + d) - 0.5 * r * ros * r / ((rho + d) * (rho + d)))
+    };
+    // ∫₀ˢ √(s² − r²)·r K(r) dr with r = s sin θ
+    let disc = |s: f64| {
+        let n = 4000;
+        let h = std::f64::consts::FRAC_PI_2 / n as f64;
+        (0..=n)
+            .map(|k| {
+                let t = k as f64 * h;
+                let w = if k == 0 || k == n {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * s * t.cos() * kernel(s * t.sin()) * s * t.cos()
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    };
+    3.0 * MU * P / (2.0 * std::f64::consts::PI * a.powi(3)) / (2.0 * g) * (disc(a) - disc(c))
+}
+
 #[test]
-#[ignore = "a study: 2 × 5 min, 3.6 GB"]
+fn the_half_space_kernel_gives_johnsons_displacement_at_the_surface() {
+    // at depth 0 the axis point lies in the stick zone: its displacement is Johnson's δ (eq. 7.42)
+    let (g, a) = (E / (2.0 * (1.0 + NU)), 0.2);
+    for ratio in [0.3_f64, 0.5, 0.8] {
+        let c = a * (1.0 - ratio).cbrt();
+        let delta = 3.0 * MU * P * (2.0 - NU) / (16.0 * g * a) * (1.0 - (1.0 - ratio).powf(2.0 / 3.0));
+        let u = half_space_axis_tangential(a, c, 0.0, g);
+        assert!((u / delta - 1.0).abs() < 1e-9, "{u} against {delta}");
+        // far away it is Cerruti's point force Q on the axis: Q(3 − 2ν)/(8πG d)
+        let d = 100.0 * a;
+        let point = ratio * MU * P * (3.0 - 2.0 * NU) / (8.0 * std::f64::consts::PI * g * d);
+        assert!((half_space_axis_tangential(a, c, d, g) / point - 1.0).abs() < 1e-3);
+    }
+}
+
+/// Stick radius and δ within 3 % of Johnson's at Q/μP = 0.5 and 0.8 (issue 29), on the box
+/// graded toward the contact with a uniform core (theory §7.3) of 7 cells across the contact
+/// radius. δ is the approach of distant points: the clamped box is stiffer than the half-space,
+/// so (as for Hertz's δ, tests/hertz.rs) δ = Ux − u_x(0, 0, d) + u_x^{half-space}(0, 0, d) at
+/// the axis node nearest depth 3a, which cancels the box's smooth field up to O(d/L); the raw
+/// Ux is printed too.
+///
+/// Measured before the core (24 × 24 × 12 cells graded 79.5, 159,048 dofs, raw Ux): Q/μP = 0.5:
+/// δ −2.7 %, c/a = 0.805 (+1.4 %); 0.8: δ −2.6 %, c/a = 0.534 (−8.6 %): the stick zone held
+/// few distinct node radii (the largest stick node at r = 0.125, the smallest slipping at 0.088).
+/// Measured with the core (187,272 dofs, axis node at depth 0.554):
+/// Q/μP = 0.8: δ = 2.4330e-3 against 2.4436e-3 (−0.43 %; raw Ux −2.47 %), c/a = 0.5773 against
+/// 0.5848 (−1.28 %; 8 of 965 nodes misclassified; the circles with as few lie between c/a =
+/// 0.5570 and 0.5976, −4.8 % to +2.2 %);
+/// Q/μP = 0.5: δ = 1.3698e-3 against 1.3742e-3 (−0.32 %; raw Ux −2.30 %), c/a = 0.7839 against
+/// 0.7937 (−1.24 %; 13 of 965 misclassified; the range c/a = 0.7689 to 0.7988, −3.1 % to +0.6 %).
+/// The bounds, 3 % on δ and c/a, leave margins of 2.6 % (δ; 0.5 % for the raw Ux) and 1.7 % (c/a).
+/// The circle's lower end, a node radius (this study's estimate before the core), would have
+/// given −3.1 % at 0.5: it leans toward the stick nodes by half the range, hence the middle.
+#[test]
+#[ignore = "a study: 2 solves of 187k dofs, 16 to 28 min each on a loaded machine"]
 fn cattaneo_mindlin_stick_radius_and_displacement() {
     let (e_star, g) = (E / (1.0 - NU * NU), E / (2.0 * (1.0 + NU)));
     let a = (3.0 * P * R / (4.0 * e_star)).cbrt();
-    for ratio in [0.5, 0.8] {
+    let mut failed = Vec::new();
+    for ratio in [0.8, 0.5] {
         let scene = Scene::from_toml(&scene(ratio * MU * P), std::path::Path::new("mindlin.toml")).unwrap();
         let (problem, _) = scene.into_problem().unwrap();
         let uzawa = Uzawa { tol: 1e-9, max_iter: 100_000, extra_metric: 1.0, ..Uzawa::default() };
+        let t = std::time::Instant::now();
         let sol = uzawa.solve(&problem.lagrangian(), &mut Silent).unwrap();
         assert!(sol.report.converged, "{:?}", sol.report.kkt);
         let l = problem.lagrangian();
@@ -83,22 +160,39 @@ fn cattaneo_mindlin_stick_radius_and_displacement() {
         let mesh = problem.element.mesh();
         let nodes: Vec<([f64; 3], ContactStatus)> =
             contact_status(rows, &sol.lambda).into_iter().map(|(n, s)| (mesh.nodes[n], s)).collect();
-        let (c, wrong) = stick_radius(&nodes);
+        let (c, wrong, range) = stick_radius(&nodes);
         let reports = problem.view().contact_reports(&sol.extras, &sol.lambda);
-        let delta = reports[0].report.get("Ux").unwrap();
-        let delta_exact = 3.0 * MU * P * (2.0 - NU) / (16.0 * g * a) * (1.0 - (1.0 - ratio).powf(2.0 / 3.0));
+        let ux = reports[0].report.get("Ux").unwrap();
         let c_exact = (1.0 - ratio).cbrt();
+        let axis = (0..mesh.n_nodes())
+            .filter(|&k| mesh.nodes[k][0] == 0.0 && mesh.nodes[k][1] == 0.0)
+            .min_by(|&i, &j| (mesh.nodes[i][2] - 3.0 * a).abs().total_cmp(&(mesh.nodes[j][2] - 3.0 * a).abs()))
+            .unwrap();
+        let depth = mesh.nodes[axis][2];
+        let u_axis = problem.element.nodal_vectors(&sol.u)[axis][0];
+        let delta = ux - u_axis + half_space_axis_tangential(a, c_exact * a, depth, g);
+        let delta_exact = 3.0 * MU * P * (2.0 - NU) / (16.0 * g * a) * (1.0 - (1.0 - ratio).powf(2.0 / 3.0));
         println!(
-            "Q/μP = {ratio}: δ = {delta:.4e} against {delta_exact:.4e} ({:+.1} %), c/a = {:.3} against {c_exact:.3} \
-             ({:+.1} %, {wrong} misclassified of {})",
+            "Q/μP = {ratio} ({} dofs, {:.0} s): δ = {delta:.4e} against {delta_exact:.4e} ({:+.2} %; raw Ux {ux:.4e}, \
+             {:+.2} %; axis node at depth {depth:.4}), c/a = {:.4} against {c_exact:.4} ({:+.2} %, {wrong} misclassified of {}, c/a from {:.4} to {:.4})",
+            l.n_dofs(),
+            t.elapsed().as_secs_f64(),
             100.0 * (delta / delta_exact - 1.0),
+            100.0 * (ux / delta_exact - 1.0),
             c / a,
             100.0 * (c / a / c_exact - 1.0),
-            nodes.len()
+            nodes.len(),
+            range[0] / a,
+            range[1] / a
         );
-        assert!((delta / delta_exact - 1.0).abs() < 0.03, "δ {delta:e} against {delta_exact:e}");
-        assert!((c / a / c_exact - 1.0).abs() < 0.10, "c/a {} against {c_exact}", c / a);
+        if (delta / delta_exact - 1.0).abs() >= 0.03 {
+            failed.push(format!("Q/μP = {ratio}: δ {delta:e} against {delta_exact:e}"));
+        }
+        if (c / a / c_exact - 1.0).abs() >= 0.03 {
+            failed.push(format!("Q/μP = {ratio}: c/a {} against {c_exact}", c / a));
+        }
     }
+    assert!(failed.is_empty(), "{failed:?}");
 }
 
 /// The energy dissipated per cycle of Mindlin's loop: P held, Q from 0 to Q*, then to −Q* and
@@ -114,9 +208,11 @@ fn mindlin_dissipation(ratio: f64, g: f64, a: f64) -> f64 {
 }
 
 /// The sphere pressed by P and pulled by `q` into the box [−half, half]² × [0, half] of `cells`
-/// graded by `ratio` toward the contact, with the finite element `element` (in Mindlin's loop a
-/// path's factors of `Q` then move the pull).
-fn loop_scene(half: f64, cells: [usize; 3], ratio: f64, element: &str, q: f64) -> String {
+/// graded toward the contact by `grading` (its ratio, and its uniform core if any), with the
+/// finite element `element` (in Mindlin's loop a path's factors of `Q` then move the pull).
+fn loop_scene(half: f64, cells: [usize; 3], grading: (f64, Option<f64>), element: &str, q: f64) -> String {
+    let (ratio, core) = grading;
+    let core = core.map_or(String::new(), |c| format!(", core = {c}"));
     format!(
         r#"
 title = "Cattaneo–Mindlin partial slip"
@@ -127,7 +223,7 @@ type = "box"
 min = [-{half}, -{half}, 0.0]
 max = [{half}, {half}, {half}]
 cells = [{}, {}, {}]
-grading = {{ toward = [0.0, 0.0, 0.0], ratio = {ratio} }}
+grading = {{ toward = [0.0, 0.0, 0.0], ratio = {ratio}{core} }}
 [material]
 E = {E}
 nu = {NU}
@@ -195,7 +291,7 @@ fn mindlin_loop_dissipates_the_closed_form_energy_per_cycle() {
     let a = (3.0 * P * R / (4.0 * e_star)).cbrt();
     let n = 4;
     for r in [0.5, 0.8] {
-        let (w, area, points) = mindlin_loop(&loop_scene(6.0, [12, 12, 6], 79.5, "p2", r * MU * P), n);
+        let (w, area, points) = mindlin_loop(&loop_scene(6.0, [12, 12, 6], (79.5, None), "p2", r * MU * P), n);
         let exact = mindlin_dissipation(r, g, a);
         let gap = w / exact - 1.0;
         println!(

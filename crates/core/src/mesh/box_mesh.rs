@@ -61,7 +61,8 @@ pub enum Subdivision {
 }
 
 /// Geometric grading: along each axis the cells grow geometrically away from the coordinate of
-/// `toward`, the largest being `ratio` times the smallest.
+/// `toward`, the largest being `ratio` times the smallest; with `core`, the cells within `core`
+/// of `toward` are uniform and the growth starts beyond them (theory §7.3).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Grading {
@@ -69,6 +70,11 @@ pub struct Grading {
     pub toward: [f64; 3],
     /// Largest over smallest cell size along each side of `toward` (≥ 1).
     pub ratio: f64,
+    /// Half-width of a uniform core around `toward` (theory §7.3): along each side, the fewest
+    /// equal cells of size h that reach `core`, then cells h·q, h·q², …, h·q^m = ratio·h to the
+    /// box's end. Absent: the plain geometric grading (which is the core of one cell).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub core: Option<f64>,
 }
 
 impl BoxMesh {
@@ -95,7 +101,16 @@ impl BoxMesh {
 
     /// The same box graded toward `toward` with size ratio `ratio`.
     pub fn graded(mut self, toward: [f64; 3], ratio: f64) -> Self {
-        self.grading = Some(Grading { toward, ratio });
+        self.grading = Some(Grading { toward, ratio, core: None });
+        self
+    }
+
+    /// The same box with a uniform core of half-width `core` in its grading (theory §7.3); a
+    /// box without grading is returned unchanged.
+    pub fn cored(mut self, core: f64) -> Self {
+        if let Some(g) = &mut self.grading {
+            g.core = Some(core);
+        }
         self
     }
 
@@ -126,7 +141,7 @@ impl BoxMesh {
         let (a, b, n) = (self.min[k], self.max[k], self.cells[k]);
         let mut xs = match &self.grading {
             None => (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect(),
-            Some(g) => graded_axis(a, b, n, g.toward[k].clamp(a, b), g.ratio),
+            Some(g) => graded_axis(a, b, n, g.toward[k].clamp(a, b), g.ratio, g.core.unwrap_or(0.0)),
         };
         // the nearest interior node moves onto each aligned coordinate; it stays between its
         // neighbours because it was the nearest one
@@ -139,6 +154,34 @@ impl BoxMesh {
             }
         }
         xs
+    }
+
+    /// The grading's `core` (at `path`): finite, ≥ 0, and on every side of `toward` of the grid
+    /// the grading is applied to (the base grid of a family) leaving at least one graded cell.
+    fn validate_core(&self, path: &str, g: &Grading, core: f64) -> Result<(), ParameterError> {
+        check::finite(path, "core", core)?;
+        if core < 0.0 {
+            return Err(ParameterError::new(join(path, "core"), core, "must be ≥ 0"));
+        }
+        let cells = self.base.unwrap_or(self.cells);
+        for (k, &n) in cells.iter().enumerate() {
+            let (a, b) = (self.min[k], self.max[k]);
+            let c = g.toward[k].clamp(a, b);
+            for (len, m) in [c - a, b - c].into_iter().zip(side_cells(a, b, n, c)) {
+                if m > 0 && core > 0.0 && core_cells(len, m, g.ratio, core) >= m {
+                    return Err(ParameterError::new(
+                        join(path, "core"),
+                        core,
+                        format!(
+                            "leaves no graded cell along axis {k} (a side of length {len} with {m} cells{}): \
+                             use a smaller core or more cells",
+                            if self.base.is_some() { " in the family's base" } else { "" }
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Builds the mesh (infallible for validated parameters).
@@ -204,8 +247,9 @@ impl BoxMesh {
     }
 }
 
-/// Nodes on [a, b] with `n` cells, growing geometrically away from `c` with max/min size `ratio`.
-fn graded_axis(a: f64, b: f64, n: usize, c: f64, ratio: f64) -> Vec<f64> {
+/// The number of cells on each side of `c` in [a, b] with `n` cells: proportional to the sides'
+/// lengths, at least one on a side of positive length.
+fn side_cells(a: f64, b: f64, n: usize, c: f64) -> [usize; 2] {
     let (l1, l2) = (c - a, b - c);
     let mut n1 = ((n as f64) * l1 / (l1 + l2)).round() as usize;
     if l1 > 0.0 && n1 == 0 {
@@ -214,13 +258,39 @@ fn graded_axis(a: f64, b: f64, n: usize, c: f64, ratio: f64) -> Vec<f64> {
     if l2 > 0.0 && n1 == n {
         n1 = n - 1;
     }
+    [n1, n - n1]
+}
+
+/// The relative cell sizes of a side of `m` cells whose first `core` cells are uniform: 1 (core
+/// times), then q, q², …, q^{m−core} = `ratio` (theory §7.3).
+fn side_sizes(m: usize, core: usize, ratio: f64) -> impl Iterator<Item = f64> {
+    let q = if m > core { ratio.powf(1.0 / (m - core) as f64) } else { 1.0 };
+    (0..m).map(move |k| if k < core { 1.0 } else { q.powi((k + 1 - core) as i32) })
+}
+
+/// The fewest uniform cells at the start of a side of length `len` and `m` cells that reach
+/// `core` (capped at `len`): `m` when only the whole side does (theory §7.3).
+fn core_cells(len: f64, m: usize, ratio: f64, core: f64) -> usize {
+    (1..m)
+        .find(|&c| {
+            let total: f64 = side_sizes(m, c, ratio).sum();
+            c as f64 * len / total >= core.min(len)
+        })
+        .unwrap_or(m)
+}
+
+/// Nodes on [a, b] with `n` cells, growing geometrically away from `c` with max/min size `ratio`
+/// beyond a uniform core of half-width `core` (0: the core of one cell, the plain grading).
+fn graded_axis(a: f64, b: f64, n: usize, c: f64, ratio: f64, core: f64) -> Vec<f64> {
+    let [n1, n2] = side_cells(a, b, n, c);
     let side = |len: f64, m: usize| -> Vec<f64> {
-        // offsets from c of the m nodes after c, cells growing by q each
+        // offsets from c of the m nodes after c
         if m == 0 {
             return vec![];
         }
-        let q = if m > 1 { ratio.powf(1.0 / (m as f64 - 1.0)) } else { 1.0 };
-        let sizes: Vec<f64> = (0..m).map(|k| q.powi(k as i32)).collect();
+        // an invalid core (refused by validation) keeps one graded cell
+        let uniform = core_cells(len, m, ratio, core).min(m - 1).max(1);
+        let sizes: Vec<f64> = side_sizes(m, uniform, ratio).collect();
         let total: f64 = sizes.iter().sum();
         let mut acc = 0.0;
         sizes
@@ -232,9 +302,9 @@ fn graded_axis(a: f64, b: f64, n: usize, c: f64, ratio: f64) -> Vec<f64> {
             })
             .collect()
     };
-    let mut xs: Vec<f64> = side(l1, n1).into_iter().rev().map(|d| c - d).collect();
+    let mut xs: Vec<f64> = side(c - a, n1).into_iter().rev().map(|d| c - d).collect();
     xs.push(c);
-    xs.extend(side(l2, n - n1).into_iter().map(|d| c + d));
+    xs.extend(side(b - c, n2).into_iter().map(|d| c + d));
     xs[0] = a;
     *xs.last_mut().unwrap() = b;
     xs
@@ -303,6 +373,9 @@ impl MeshSource for BoxMesh {
             check::finite(&p, "ratio", g.ratio)?;
             if !(1.0..=1e6).contains(&g.ratio) {
                 return Err(ParameterError::new(join(&p, "ratio"), g.ratio, "must lie in [1, 1e6]"));
+            }
+            if let Some(core) = g.core {
+                self.validate_core(&p, g, core)?;
             }
         }
         for (k, coords) in self.align.iter().enumerate() {
@@ -471,5 +544,95 @@ mod tests {
             r.sort_unstable();
             assert!(a != r, "Kuhn's mesh is not symmetric (the reason for the mirrored one)");
         }
+    }
+
+    #[test]
+    fn a_core_is_uniform_then_grows_geometrically_to_the_ratio() {
+        // one side [0, 6] of 10 cells, ratio 20, core 0.5, computed from the definition: with c
+        // core cells of size h = 6/(c + Σ_{k=1}^{10−c} q^k), q = 20^{1/(10−c)}, the fewest c
+        // with c·h ≥ 0.5
+        let (len, m, ratio, core) = (6.0_f64, 10usize, 20.0_f64, 0.5);
+        let h = |c: usize| {
+            let q = ratio.powf(1.0 / (m - c) as f64);
+            len / (c as f64 + (1..=m - c).map(|k| q.powi(k as i32)).sum::<f64>())
+        };
+        let c = (1..m).find(|&c| c as f64 * h(c) >= core).unwrap();
+        assert!(c >= 2 && (c - 1) as f64 * h(c - 1) < core, "the case has a core of several cells");
+        let b = BoxMesh::new([0.0, -6.0, 0.0], [6.0, 6.0, 6.0], [10, 20, 10]).graded([0.0; 3], ratio).cored(core);
+        b.validate("mesh").unwrap();
+        for axis in [0, 2] {
+            let x = b.axis_nodes(axis);
+            let q = ratio.powf(1.0 / (m - c) as f64);
+            let mut expected = 0.0;
+            for (i, &xi) in x.iter().enumerate().take(m) {
+                assert!((xi - expected).abs() < 1e-13, "node {i}: {xi} against {expected}");
+                expected += if i < c { h(c) } else { h(c) * q.powi((i + 1 - c) as i32) };
+            }
+            assert!((x[m] - len).abs() < 1e-15 && (expected - len).abs() < 1e-12);
+            assert!(x[c] >= core, "the core reaches {core}: {:?}", &x[..=c]);
+            let size = |i: usize| x[i + 1] - x[i];
+            assert!(((size(m - 1) / size(0)) - ratio).abs() < 1e-9);
+        }
+        // a side on either side of the point: the same on both (the y axis is [−6, 6], 20 cells)
+        let y = b.axis_nodes(1);
+        let x = b.axis_nodes(0);
+        assert!((0..=10).all(|i| (y[10 + i] - x[i]).abs() < 1e-13 && (y[10 - i] + x[i]).abs() < 1e-13));
+    }
+
+    #[test]
+    fn without_a_core_the_grading_is_unchanged() {
+        // the plain grading is the core of one cell: a core smaller than the first cell gives
+        // the same grid bit for bit, the grading of `grading_refines_toward_the_point`
+        let plain = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [20, 20, 10]).graded([0.0; 3], 4.0);
+        let first = plain.axis_nodes(0)[11];
+        for core in [0.0, 0.5 * first] {
+            let cored = plain.clone().cored(core);
+            assert!((0..3).all(|k| cored.axis_nodes(k) == plain.axis_nodes(k)), "core {core}");
+        }
+        // and the sizes of the plain grading are q^k, q = 4^{1/9}, from its definition
+        let x = plain.axis_nodes(0);
+        let q = 4.0_f64.powf(1.0 / 9.0);
+        let h = 1.0 / (0..10).map(|k| q.powi(k)).sum::<f64>();
+        assert!((0..10).all(|k| ((x[11 + k] - x[10 + k]) - h * q.powi(k as i32)).abs() < 1e-15));
+    }
+
+    #[test]
+    fn a_cored_family_is_nested_and_keeps_its_core_uniform() {
+        let base = BoxMesh::new([0.0; 3], [6.0; 3], [5, 5, 5]).graded([0.0; 3], 30.0).cored(0.3).aligned(2, &[1.5]);
+        base.validate("mesh").unwrap();
+        let coarse = base.axis_nodes(0);
+        let core = (1..5).find(|&i| coarse[i] >= 0.3).unwrap();
+        assert!(core >= 2, "{coarse:?}");
+        let level = |k| base.clone().family([5, 5, 5], k);
+        for k in [2, 4] {
+            let b = level(k);
+            b.validate("mesh").unwrap();
+            let x = b.axis_nodes(0);
+            // the core's k·core cells are equal
+            let h = coarse[1] / k as f64;
+            assert!(x[..=k * core].windows(2).all(|w| ((w[1] - w[0]) - h).abs() < 1e-14), "{x:?}");
+            assert!(b.axis_nodes(2).contains(&1.5), "the alignment holds on every level");
+        }
+        // levels 2 and 4 are nested on every axis
+        assert!((0..3).all(|a| level(2).axis_nodes(a).iter().all(|c| level(4).axis_nodes(a).contains(c))));
+    }
+
+    #[test]
+    fn a_bad_core_is_refused_naming_the_field() {
+        let b = BoxMesh::new([-1.0, -1.0, 0.0], [1.0, 1.0, 1.0], [8, 8, 4]).graded([0.0; 3], 4.0);
+        for core in [-0.1, f64::NAN, f64::INFINITY] {
+            let e = b.clone().cored(core).validate("mesh").unwrap_err();
+            assert_eq!(e.field, "mesh.grading.core", "{core}");
+        }
+        // the core reaching the box's end along z (4 cells on [0, 1]), or filling all cells
+        let e = b.clone().cored(1.0).validate("mesh").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("mesh.grading.core", "1"));
+        assert!(e.requirement.contains("axis 0"), "{}", e.requirement);
+        assert!(b.clone().cored(0.9).validate("mesh").is_err());
+        // a family is checked on its base grid: 2 cells per side at level 1
+        let f = BoxMesh::new([-1.0; 3], [1.0; 3], [2, 2, 2]).graded([0.0; 3], 4.0).cored(0.5).family([2, 2, 2], 4);
+        let e = f.validate("mesh").unwrap_err();
+        assert!(e.requirement.contains("base"), "{}", e.requirement);
+        b.cored(0.3).validate("mesh").unwrap();
     }
 }
