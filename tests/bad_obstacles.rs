@@ -82,3 +82,22 @@ fn punches_with_bad_friction_input_are_refused_naming_field_and_value() {
         assert_rejected(&punch(kind, &both), &["obstacle[0].Q", "[0.1, 0]", "obstacle[0].W"]);
     }
 }
+
+/// A friction law on an obstacle whose rows have no tangent plane: the contact face's
+/// tangential components are held by a roller support (`components = ["x", "y"]` on `zmin`), so
+/// no node can slip; the error names the law's field, its type and the zone, on a punch and on
+/// the sphere (theory §8.3). Newton solves (the scene's uzawa would first ask for
+/// `extra_metric > 0`, an error of its own).
+#[test]
+fn friction_where_no_node_can_slip_is_refused_naming_the_law() {
+    let rollers = "[[dirichlet]]\non = { group = \"zmin\" }\ncomponents = [\"x\", \"y\"]\n";
+    let newton = |text: String| text.replacen("type = \"uzawa\"", "type = \"newton\"", 1);
+    let punch = newton(scene(&format!(
+        "{rollers}\n[obstacle]\ntype = \"rigid_punch\"\nF = 0.3\n{ZONE}\ngap = {{ type = \"paraboloid\", R = 5.0 }}\n\
+         friction = {{ type = \"coulomb\", mu = 0.3 }}\n"
+    )));
+    assert_rejected(&punch, &["obstacle.friction", "coulomb", "obstacle.zone", "can slip"]);
+    let sphere = newton(sphere("direction = [0.0, 0.0, 1.0]\nF = 0.3\nfriction = { type = \"tresca\", g = 0.1 }"))
+        .replace("[obstacle]", &format!("{rollers}\n[obstacle]"));
+    assert_rejected(&sphere, &["obstacle.friction", "tresca", "obstacle.zone", "can slip"]);
+}

@@ -149,8 +149,8 @@ pub struct TangentialPair {
 
 /// Appends the two tangential rows of `pair` after its normal row and their block:
 /// `t_k·(u_n − motion)` on the node's free dofs, H entries from `entries(t_k, h)`, the offset
-/// `−t_k·motion` (`motion` the prescribed motion of the body's points). A node whose tangent
-/// plane has no free dof (a row vanishes in u) gets none: returns false.
+/// `−t_k·motion` (`motion` the prescribed motion of the body's points). A node with a fixed
+/// component gets none (its three rows would not be independent): returns false.
 pub fn push_tangential(
     rows: &mut ConstraintRows,
     dofs: &DofMap,
@@ -171,10 +171,13 @@ pub fn push_tangential(
         }
         (e, k)
     };
-    let ((e1, k1), (e2, k2)) = (on_free(t1), on_free(t2));
-    if k1 == 0 || k2 == 0 {
+    // the node's three rows (normal, t₁, t₂) are independent only on three free components: with
+    // one fixed they are not (a curved obstacle over a roller-supported face gives rows on u₃
+    // alone), so such a node gets no tangential rows
+    if (0..3).any(|c| dofs.free(n, c).is_none()) {
         return false;
     }
+    let ((e1, k1), (e2, k2)) = (on_free(t1), on_free(t2));
     let tangent = rows.n_rows();
     for (t, e, k) in [(t1, e1, k1), (t2, e2, k2)] {
         entries(t, h);
@@ -198,7 +201,7 @@ pub fn finish_friction(
             join(path, "friction"),
             format!("type = {:?}", law.name()),
             format!(
-                "no node of {} can slip: at every one the tangent plane's components are fixed by the Dirichlet \
+                "no node of {} can slip: at every one a displacement component is fixed by the Dirichlet \
                  conditions, so the rows have no tangent plane for the friction law (theory §8.3)",
                 join(path, "zone")
             ),
@@ -207,7 +210,7 @@ pub fn finish_friction(
     rows.friction.laws.push(dyn_clone::clone_box(law));
     if without_plane > 0 {
         rows.warnings.push(format!(
-            "{}: {without_plane} zone node(s) have fixed tangential components and carry no friction rows",
+            "{}: {without_plane} zone node(s) have a fixed displacement component and carry no friction rows",
             join(path, "friction")
         ));
     }
