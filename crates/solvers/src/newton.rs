@@ -11,7 +11,8 @@
 //!    through the body and drive everything plastic.) Should that projection be unavailable
 //!    (dependent rows, or the AMG backend), the elastic problem is solved by full active-set
 //!    steps with the elastic tangent from every candidate row active until the active set
-//!    settles (the *elastic phase*);
+//!    settles, a step changing at most `elastic_phase_settled` of its rows (the *elastic
+//!    phase*, its solves to `cg_forcing`);
 //!    A warm start from the previous load step (`Solver::solve_warm`, theory §11.2) takes the
 //!    linear backend's set-up that step kept ([`SetupCache`]) when the problem's pattern,
 //!    elastic stiffness and rows are the same, and starts from the step's (u, V, λ);
@@ -102,6 +103,18 @@ pub struct Newton {
     /// `cg_forcing`; fewer CG iterations on some scenes, more on others:
     /// `docs/plastic_tangent.md`).
     pub forcing: ForcingRule,
+    /// While the KKT residual falls by less than this factor per step (r_k > `slow_contraction`
+    /// · r_{k−1}: the active or plastic set still changing, Newton's fast phase not begun), each
+    /// CG solve stops at `cg_forcing` whatever the rule: the outer residual is then limited by
+    /// the sets, not by the linear solve (theory §4.2, forcing terms). Once r falls faster, the
+    /// rule's term applies, so the last steps' tolerances are the rule's. 0: the rule throughout.
+    pub slow_contraction: f64,
+    /// In the fast phase, a step whose quadratic model of the next residual, r_k (r_k /
+    /// r_{k−1})², lies above `last_step_margin` · `tol` is not the last: its CG solve stops at
+    /// Eisenstat–Walker's γ (r_k / r_{k−1})² where that is looser than the rule's term (theory
+    /// §4.2, forcing terms); a step that may be the last keeps the rule's term, so the answer's
+    /// last digits are the rule's. 0: the rule in every fast step.
+    pub last_step_margin: f64,
     /// CG iterations per solve before giving up on the forcing term (the last iterate is used
     /// and counted in `pcg_unconverged`). On the default scene a solve takes about ten (README:
     /// 263 for 12 Newton steps of two solves each): 2000 is a safety net, not a working limit.
@@ -110,6 +123,11 @@ pub struct Newton {
     /// `strength_threshold`, `smoother_degree`, `smoother_range`, `eigen_steps`, `coarse_size`,
     /// `max_levels`; defaults those of [`AmgParams`]).
     pub amg: AmgParams,
+    /// The elastic phase ends once a step changes at most this fraction of the active rows
+    /// (theory §4.2, elastic start; 0: only once A no longer changes): the plastic steps that
+    /// follow move A as well, and the elastic phase's last steps, which change a few rows at the
+    /// contact's edge, cost a full solve each.
+    pub elastic_phase_settled: f64,
     /// The multigrid follows the tangent (theory §4.2): when a CG solve took more than this
     /// many iterations, the next one's hierarchy is rebuilt on the current tangent, its
     /// aggregates kept (0: every step; a large number: never, the elastic hierarchy throughout).
@@ -218,9 +236,12 @@ impl Default for Newton {
             auto_amg_dofs: AUTO_AMG_DOFS,
             cg_forcing: 1e-2,
             forcing: ForcingRule::default(),
+            slow_contraction: SLOW_CONTRACTION,
+            last_step_margin: LAST_STEP_MARGIN,
             cg_max_iter: 2000,
             amg: AmgParams::default(),
             amg_refresh_cg: AMG_REFRESH_CG,
+            elastic_phase_settled: ELASTIC_PHASE_SETTLED,
             stall_window: 8,
             max_fallbacks: 2,
             fallback_max_iter: 400,
@@ -230,6 +251,10 @@ impl Default for Newton {
 }
 
 pub use crate::armijo::{ARMIJO, SLOPE_ROUND_OFF};
+pub use crate::forcing::{LAST_STEP_MARGIN, SLOW_CONTRACTION};
+
+/// The default of `elastic_phase_settled`.
+pub const ELASTIC_PHASE_SETTLED: f64 = 0.05;
 
 /// The default of `amg_refresh_cg`: above the 20–30 iterations the elastic hierarchy takes on
 /// elastic tangents, so that only tangents it no longer approximates trigger a rebuild.
@@ -268,6 +293,9 @@ impl Solver for Newton {
         check::open_interval(path, "tol", self.tol, 0.0, 1.0)?;
         check::at_least_one(path, "max_iter", self.max_iter)?;
         check::open_interval(path, "cg_forcing", self.cg_forcing, 0.0, 1.0)?;
+        check::non_negative(path, "slow_contraction", self.slow_contraction)?;
+        check::non_negative(path, "last_step_margin", self.last_step_margin)?;
+        check::non_negative(path, "elastic_phase_settled", self.elastic_phase_settled)?;
         check::at_least_one(path, "cg_max_iter", self.cg_max_iter)?;
         check::at_least_one(path, "fallback_max_iter", self.fallback_max_iter)?;
         // AmgParams names its fields `amg.<field>`: under this table's path
@@ -376,6 +404,13 @@ impl Newton {
         }
     }
 
+    /// The forcing terms of a solve (theory §4.2).
+    fn forcing_terms(&self) -> ForcingTerms {
+        ForcingTerms::new(self.forcing, self.cg_forcing, self.tol)
+            .slow_below(self.slow_contraction)
+            .relaxed_before_the_last(self.last_step_margin)
+    }
+
     /// The CG tolerance of the step from an iterate with KKT residual `r` (theory §4.2, linear
     /// backends): the forcing term of `forcing`, or a margin below `tol` for a linear problem.
     fn cg_tol(&self, forcing: &mut ForcingTerms, r: f64, linear_problem: bool) -> f64 {
@@ -436,9 +471,10 @@ struct Scratch {
     tangents: Vec<SymOp>,
     /// The tangent stiffness on L's pattern.
     k: Vec<f64>,
-    /// `k` holds the elastic stiffness (assembled in the elastic phase, unchanged since): the
-    /// elastic phase's steps then reuse it.
-    k_is_elastic: bool,
+    /// The elements whose tangent in `k` is not the elastic C (empty: `k` not assembled yet):
+    /// the next assembly recomputes only the columns these and the newly plastic elements touch
+    /// ([`saddle_core::ElementOperators::reassemble`]); the elastic phase's steps reuse `k`.
+    k_off: Vec<bool>,
     /// ∇J(u) (the elastic one in the elastic phase).
     grad: Vec<f64>,
     /// g(u, V).
@@ -452,12 +488,9 @@ struct Scratch {
 }
 
 impl Scratch {
-    /// `k` := the elastic stiffness, assembled unless `k` holds it already.
+    /// `k` := the elastic stiffness (the columns that plastic elements touched re-assembled).
     fn assemble_elastic(&mut self, l: &Lagrangian<'_>, c: &SymOp) {
-        if !self.k_is_elastic {
-            l.assemble(Material::Uniform(c), &mut self.k);
-            self.k_is_elastic = true;
-        }
+        l.reassemble(Material::Uniform(c), c, &mut self.k_off, &mut self.k);
     }
 }
 
@@ -585,7 +618,7 @@ impl<'a> Run<'a> {
             count,
             work,
             history: History::new(name, settings.tol),
-            forcing: ForcingTerms::new(settings.forcing, settings.cg_forcing, settings.tol),
+            forcing: settings.forcing_terms(),
         })
     }
 
@@ -619,7 +652,7 @@ impl<'a> Run<'a> {
             count,
             work,
             history: History::new(name, settings.tol),
-            forcing: ForcingTerms::new(settings.forcing, settings.cg_forcing, settings.tol),
+            forcing: settings.forcing_terms(),
         })
     }
 
@@ -645,7 +678,7 @@ impl<'a> Run<'a> {
             ws: Workspace::new(l),
             tangents: vec![SymOp::zeros(); np],
             k: vec![0.0; l.pattern().nnz()],
-            k_is_elastic: false,
+            k_off: Vec::new(),
             grad: vec![0.0; n],
             gap: vec![0.0; nr],
             u_trial: vec![0.0; n],
@@ -747,7 +780,9 @@ impl<'a> Run<'a> {
         }
         let changed = l.comm().sum_count(changed);
         // the elastic phase ends once its active set has settled: the last step solved it
-        if s.elastic_phase && s.it > 0 && (changed == 0 || s.it >= ELASTIC_PHASE_MAX_STEPS) {
+        let settled =
+            changed as f64 <= self.settings.elastic_phase_settled * l.comm().sum_count(active_rows(&s.active)) as f64;
+        if s.elastic_phase && s.it > 0 && (settled || s.it >= ELASTIC_PHASE_MAX_STEPS) {
             s.elastic_phase = false;
             self.count.elastic_phase_steps = s.it;
         }
@@ -769,8 +804,7 @@ impl<'a> Run<'a> {
                 }
             });
         } else {
-            timer.time("assembly", || l.assemble(Material::PerPoint(&w.tangents), &mut w.k));
-            w.k_is_elastic = false;
+            timer.time("assembly", || l.reassemble(Material::PerPoint(&w.tangents), c, &mut w.k_off, &mut w.k));
             w.grad.copy_from_slice(&w.ws.force);
         }
     }
@@ -783,6 +817,8 @@ impl<'a> Run<'a> {
         let linear_problem = l.data.plasticity().is_none() && l.comm().sum_count(l.data.rows.n_rows()) == 0;
         let cg_tol = self.settings.cg_tol(&mut self.forcing, r, linear_problem);
         let (s, w) = (&self.state, &self.work);
+        // the elastic phase's r is the plastic problem's: its solves stop at η_max
+        let cg_tol = if s.elastic_phase && !linear_problem { self.settings.cg_forcing } else { cg_tol };
         let step = match &mut self.system {
             Systems::Serial(system) => {
                 let phase = if system.iterative().is_some_and(|it| !it.switched) {
@@ -1053,4 +1089,9 @@ fn elastic_contact_start(
     let (mut u, mut extras, mut lambda) = (vec![0.0; n], vec![0.0; ne], vec![0.0; nr]);
     let solves = projection.setup_solves + projection.project(rows, chol, &z, &mut extras, &mut u, &mut lambda)?;
     Ok((Start { u, extras, lambda }, solves))
+}
+
+/// The rows in the active set `active`.
+fn active_rows(active: &[bool]) -> usize {
+    active.iter().filter(|a| **a).count()
 }

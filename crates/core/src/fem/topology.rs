@@ -4,8 +4,9 @@
 
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::DofMap;
-use crate::problem::operators::RigidBodyModes;
+use crate::problem::operators::{Material, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
+use crate::problem::tensor::SymOp;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -98,6 +99,23 @@ pub fn assemble_columns(
     }
 }
 
+/// Whether `a` and `b` are the same matrix bit for bit.
+fn same_bits(a: &SymOp, b: &SymOp) -> bool {
+    a.iter().zip(b.iter()).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// The elements with `points` stress points each (numbered element by element) at some point
+/// of which `material` is not `reference` bit for bit.
+fn elements_off(material: &Material<'_>, reference: &SymOp, n_elements: usize, points: usize) -> Vec<bool> {
+    match material {
+        Material::Uniform(c) => vec![!same_bits(c, reference); n_elements],
+        Material::PerPoint(_) => (0..n_elements)
+            .into_par_iter()
+            .map(|e| (0..points).any(|q| !same_bits(material.at(points * e + q), reference)))
+            .collect(),
+    }
+}
+
 /// The node → element adjacency (pointers, entries) and the stiffness pattern of a mesh's
 /// elements.
 pub type Topology = (Vec<usize>, Vec<(u32, u8)>, SymmetricPattern);
@@ -150,6 +168,42 @@ impl NodalParts {
     #[inline]
     pub fn nodal(&self, u: &[f64], n: usize) -> [f64; 3] {
         self.dofs.displacement(u, n)
+    }
+
+    /// [`crate::problem::operators::ElementOperators::reassemble`] for an element with `points`
+    /// stress points per element whose `column(j, values of column j)` gathers column j from the
+    /// elements around its node: the columns of nodes with no element off `reference` now or
+    /// before are kept, the others assembled (by [`assemble_columns`] with `leaf`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn reassemble(
+        &self,
+        material: &Material<'_>,
+        reference: &SymOp,
+        points: usize,
+        was_off: &mut Vec<bool>,
+        values: &mut [f64],
+        leaf: usize,
+        column: &(impl Fn(usize, &mut [f64]) + Sync),
+    ) {
+        let n_elements = self.mesh.n_elements();
+        let off = elements_off(material, reference, n_elements, points);
+        let n = self.dofs.n_free;
+        if was_off.len() != n_elements {
+            assemble_columns(&self.pattern, 0, n, values, leaf, column);
+        } else {
+            let touched = |b: usize| {
+                self.adj[self.adj_ptr[b]..self.adj_ptr[b + 1]]
+                    .iter()
+                    .any(|&(e, _)| off[e as usize] || was_off[e as usize])
+            };
+            let changed = |j: usize, col: &mut [f64]| {
+                if touched(self.dof_node[j] as usize) {
+                    column(j, col);
+                }
+            };
+            assemble_columns(&self.pattern, 0, n, values, leaf, &changed);
+        }
+        *was_off = off;
     }
 
     /// The rigid-body motions at the nodes of the free dofs, along their directions.

@@ -105,6 +105,18 @@ pub trait ElementOperators: Debug + Send + Sync {
     /// values = Σ_T w_T B_Tᵀ C_T B_T on [`ElementOperators::pattern`].
     fn assemble(&self, material: Material<'_>, values: &mut [f64]);
 
+    /// [`ElementOperators::assemble`] into `values` that hold the assembly of an earlier
+    /// material equal to `reference` at every point of the elements not in `was_off` (empty:
+    /// nothing known, everything assembled); `was_off` becomes the elements where `material`
+    /// differs from `reference`. An element may keep the values that no element in either set
+    /// touches (theory §4.2: a plastic tangent differs from the elastic one in the plastic zone
+    /// only); the result is the full assembly's, bit for bit. The default assembles everything.
+    fn reassemble(&self, material: Material<'_>, reference: &SymOp, was_off: &mut Vec<bool>, values: &mut [f64]) {
+        let _ = reference;
+        was_off.clear();
+        self.assemble(material, values);
+    }
+
     /// The rigid-body motions on the free dofs (the near-nullspace of the elastic stiffness,
     /// what a multigrid preconditioner must reproduce); `None` when the element has no nodal
     /// dofs.
