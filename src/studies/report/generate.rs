@@ -7,8 +7,7 @@ use super::elements::{self, ElementComparison};
 #[cfg(feature = "report")]
 use super::figures;
 use super::measure::{
-    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study,
-    work_precision,
+    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study, work_precision,
 };
 use super::runs::{RungKind, ladder};
 use super::tables;
