@@ -485,7 +485,7 @@ fn report_quick_on_a_small_johnson_scene() {
 fn theorem_2_the_stress_error_decreases_at_least_like_root_h() {
     let src = SceneSource::read(&repo("examples/johnson.toml")).unwrap();
     let levels: Vec<[usize; 3]> = [3, 4, 6, 8, 11].iter().map(|&k| [2 * k, 2 * k, k]).collect();
-    let study = convergence_study(&src, &levels, None, &mut Silent, &mut 0).unwrap();
+    let study = convergence_study(&src, &levels, &mut Silent, &mut 0).unwrap();
     assert!(study.levels.iter().all(|l| l.converged && l.kkt < 1e-12), "{:?}", study.levels);
     let errs: Vec<f64> = study.levels[..4].iter().map(|l| l.err_stress).collect();
     assert!(errs.windows(2).all(|w| w[1] < w[0]), "the error decreases: {errs:?}");

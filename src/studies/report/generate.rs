@@ -64,10 +64,10 @@ pub fn generate(
     progress.plan(solves);
     let mut counter = 0;
     std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
-    let (runs, _, _) = work_precision(&l, &rungs, progress, &mut counter)?;
+    let runs = work_precision(&l, &rungs, progress, &mut counter)?;
     let (dofs, elements, contact_rows) = (l.element.n_dofs(), l.element.n_points(), l.obstacles.rows().n_rows());
     let convergence = match levels {
-        Ok(levels) if levels.len() >= 2 => Ok(convergence_study(&source, &levels, None, progress, &mut counter)?),
+        Ok(levels) if levels.len() >= 2 => Ok(convergence_study(&source, &levels, progress, &mut counter)?),
         Ok(_) => Err("the scene's mesh is too coarse to coarsen (fewer than two distinct levels)".to_string()),
         Err(why) => Err(why),
     };
@@ -76,7 +76,7 @@ pub fn generate(
             let element: Box<dyn saddle_core::FiniteElement> =
                 if other == "p2" { Box::new(saddle_core::P2::default()) } else { Box::new(saddle_core::P1::default()) };
             let other_source = SceneSource { scene: source.scene.with_element(element), ..source.clone() };
-            let other_study = convergence_study(&other_source, &cells, None, progress, &mut counter)?;
+            let other_study = convergence_study(&other_source, &cells, progress, &mut counter)?;
             Ok(if other == "p2" {
                 ElementComparison::new(own_study.clone(), other_study)
             } else {

@@ -171,14 +171,13 @@ impl Report {
 
 /// Runs the work–precision ladder on `l`: the reference ([`runs::reference_solver`]) first,
 /// then every other rung. Returns the records in ladder order (the [`RungKind::Reference`] rung
-/// reports the reference run), the reference solution and its wall time. `counter` numbers the
-/// runs for `progress`.
+/// reports the reference run). `counter` numbers the runs for `progress`.
 pub fn work_precision(
     problem: &DiscreteProblem,
     rungs: &[Rung],
     progress: &mut dyn Progress,
     counter: &mut usize,
-) -> Result<(Vec<RunRecord>, Solution, f64), ReportError> {
+) -> Result<Vec<RunRecord>, ReportError> {
     let l = &problem.lagrangian();
     let reference_rung = rungs
         .iter()
@@ -241,20 +240,7 @@ pub fn work_precision(
             kept[i] = timed.result.ok();
         }
     }
-    let Timed { result, .. } = reference_timed;
-    Ok((records, result.expect("checked above"), reference_wall))
-}
-
-/// A level whose solve is already known (the work–precision reference on the scene's mesh).
-pub struct KnownLevel {
-    /// Its cells.
-    pub cells: [usize; 3],
-    /// The problem.
-    pub problem: DiscreteProblem,
-    /// Its solution by [`runs::reference_solver`] (or [`runs::level_solver`]).
-    pub solution: Solution,
-    /// The solve's wall time, seconds.
-    pub wall_s: f64,
+    Ok(records)
 }
 
 /// A level's solve and its fields, kept while the next coarser level is compared with it.
@@ -266,21 +252,16 @@ struct Solved {
 
 /// The mesh convergence study of `source` on the box meshes `levels` (ascending; the last is
 /// the finest and the reference of the errors). Every level is solved by
-/// [`runs::level_solver`], except a level given as `known`. Levels are processed from fine
+/// [`runs::level_solver`]. Levels are processed from fine
 /// to coarse, so that only the finest and the next finer level are kept in memory.
 pub fn convergence_study(
     source: &SceneSource,
     levels: &[[usize; 3]],
-    known: Option<KnownLevel>,
     progress: &mut dyn Progress,
     counter: &mut usize,
 ) -> Result<ConvergenceStudy, ReportError> {
     let solver = runs::level_solver();
-    let mut known = known;
     let mut solve_level = |cells: [usize; 3], progress: &mut dyn Progress| -> Result<_, ReportError> {
-        if let Some(k) = known.take_if(|k| k.cells == cells) {
-            return Ok((k.problem, Timed { result: Ok(k.solution), wall_s: k.wall_s }));
-        }
         let l = source.problem(Some(cells))?;
         let label = format!(
             "convergence: newton on {}x{}x{} cells ({} dofs)",

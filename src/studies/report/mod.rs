@@ -42,7 +42,6 @@ pub mod transfer;
 
 pub use generate::generate;
 pub use measure::{
-    KnownLevel, LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study,
-    work_precision,
+    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study, work_precision,
 };
 pub use transfer::OutsideMesh;
