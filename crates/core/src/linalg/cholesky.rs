@@ -90,20 +90,25 @@ impl SparseCholesky {
     /// when the machine cannot give it (an error, not an abort).
     fn allocate(&mut self) -> Result<(), LinalgError> {
         let len = self.symbolic.len_val();
-        let (what, n) = (self.what.clone(), self.n());
-        let out_of_memory = |bytes: usize| LinalgError::OutOfMemory { what: what.clone(), n, bytes };
         if self.l_values.len() != len {
             let mut values = Vec::new();
-            values.try_reserve_exact(len).map_err(|_| out_of_memory(len * std::mem::size_of::<f64>()))?;
+            if values.try_reserve_exact(len).is_err() {
+                return Err(self.out_of_memory(self.factor_bytes()));
+            }
             values.resize(len, 0.0);
             self.l_values = values;
         }
         if self.scratch_cols == 0 {
             let req = self.scratch_req(1);
-            self.scratch = MemBuffer::try_new(req).map_err(|_| out_of_memory(req.size_bytes()))?;
+            self.scratch = MemBuffer::try_new(req).map_err(|_| self.out_of_memory(req.size_bytes()))?;
             self.scratch_cols = 1;
         }
         Ok(())
+    }
+
+    /// The error of an allocation of `bytes` the machine refused.
+    fn out_of_memory(&self, bytes: usize) -> LinalgError {
+        LinalgError::OutOfMemory { what: self.what.clone(), n: self.n(), bytes }
     }
 
     /// Bytes of the factor's storage (L's entries), known from the analysis alone.
