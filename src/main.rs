@@ -1,5 +1,5 @@
 //! The `saddle` command line: `saddle run SCENE.toml [--out DIR] [--solver TYPE]` and
-//! `saddle report SCENE.toml --out DIR [--quick] [--levels K,..]` and `saddle bench SCENE.toml [--out DIR] [--sizes N,..]
+//! `saddle report SCENE.toml --out DIR [--quick] [--levels K,..] [--quantity NAME]` and `saddle bench SCENE.toml [--out DIR] [--sizes N,..]
 //! [--solvers T,..]`.
 
 use clap::{Parser, Subcommand};
@@ -72,6 +72,11 @@ enum Command {
         /// k·base), e.g. 2,3,4,5; the reference is the extrapolation of the finest three.
         #[arg(long, value_delimiter = ',')]
         levels: Option<Vec<usize>>,
+        /// The quantity of interest (the `U` columns, the Richardson extrapolation, P1 against
+        /// P2): one the scene reports (`force`, `left.U`, `sym.Fz`, …) [default: the scene's
+        /// first extra unknown].
+        #[arg(long)]
+        quantity: Option<String>,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -383,12 +388,13 @@ fn report(scene: PathBuf, out: PathBuf, options: ReportOptions, quiet: bool) -> 
     let result = report::generate(&scene, &out, &options, &mut bar);
     bar.bar.finish_and_clear();
     let r = result?;
+    let q = r.quantity.as_ref().map_or("quantity", |(n, _)| n.as_str());
     println!("  {} ({} dofs): {} runs in {:.0} s", r.title, r.dofs, r.runs.len(), r.total_s);
     for t in report::tables::tightest(&r.runs) {
         let e = t.errors.expect("tightest runs have errors");
         println!(
-            "  {:<8} {:<44} σ̂ error {:.2e}  U error {:.2e}  {:.1} s",
-            t.solver, t.setting, e.stress_rel, e.u_rel, t.wall_s
+            "  {:<8} {:<44} σ̂ error {:.2e}  {} error {:.2e}  {:.1} s",
+            t.solver, t.setting, e.stress_rel, q, e.u_rel, t.wall_s
         );
     }
     match &r.convergence {
@@ -521,8 +527,8 @@ fn main() -> ExitCode {
         Command::Run { scene, out, solver, discretisation, cells, quiet } => {
             run(scene, out, (solver, discretisation, cells), quiet).map_err(|e| e.to_string())
         }
-        Command::Report { scene, out, quick, levels, quiet } => {
-            report(scene, out, ReportOptions { quick, levels }, quiet).map_err(|e| e.to_string())
+        Command::Report { scene, out, quick, levels, quantity, quiet } => {
+            report(scene, out, ReportOptions { quick, levels, quantity }, quiet).map_err(|e| e.to_string())
         }
         Command::Sweep { scene, out, factors, solver, discretisation, x, y } => {
             sweep(scene, out, factors, (solver, discretisation), (x, y))

@@ -502,3 +502,118 @@ fn theorem_2_the_stress_error_decreases_at_least_like_root_h() {
     .unwrap();
     assert!(strain_fit >= 0.5, "{strain_fit}");
 }
+
+/// Homogeneous compression (theory §7.1, examples/homogeneous.toml): the displacement U of the
+/// unit cube's bottom face under the force F, U = F/E + √(2/3)(√(2/3)F − k₀)/h beyond first
+/// yield (E = 100, k₀ = 1, h = 5; the scene file's header).
+fn homogeneous_u(f: f64) -> f64 {
+    let (e, k0, h) = (100.0, 1.0, 5.0);
+    let s = (2.0f64 / 3.0).sqrt() * f;
+    f / e + (2.0f64 / 3.0).sqrt() * (s - k0).max(0.0) / h
+}
+
+/// The homogeneous scene with the obstacle table `obstacle` in place of its punch, written to
+/// `dir/name`.
+fn homogeneous_with(dir: &Path, name: &str, obstacle: &str) -> std::path::PathBuf {
+    let mut t = example("homogeneous.toml");
+    t.insert("obstacle".into(), toml::Value::Table(toml::from_str(obstacle).unwrap()));
+    let path = dir.join(name);
+    std::fs::write(&path, toml::to_string(&t).unwrap()).unwrap();
+    path
+}
+
+/// The rows of a CSV text whose fields may be quoted (`work_precision.csv`'s settings).
+fn quoted_rows(text: &str) -> Vec<CsvRow> {
+    let mut lines = text.lines();
+    let head = split_csv(lines.next().unwrap());
+    lines.map(|l| head.iter().cloned().zip(split_csv(l)).collect()).collect()
+}
+
+/// `saddle report --quick --quiet SCENE --out DIR [extra]`: (exit code, stderr).
+fn report_cli(scene: &Path, out: &Path, extra: &[&str]) -> (Option<i32>, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["report", scene.to_str().unwrap(), "--quick", "--quiet", "--out", out.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap();
+    (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+/// The report's quantity is the one named by `--quantity`: on the homogeneous cube pushed by a
+/// prescribed displacement (`rigid_punch_displacement`, no extra unknown) the force Σλ is the
+/// closed form F = 2 of the displacement U(2) (theory §7.1) at every level of both elements and
+/// in every run, its errors are finite, and the tables are labelled `force`. An unknown name is
+/// refused before any solve, listing the quantities the scene reports.
+#[test]
+fn report_of_a_named_quantity_the_force_of_a_displacement_punch() {
+    let dir = tempfile::tempdir().unwrap();
+    let obstacle = format!(
+        "type = \"rigid_punch_displacement\"\nU = {:?}\nzone = {{ group = \"zmin\" }}\ngap = {{ type = \"flat\" }}",
+        homogeneous_u(2.0)
+    );
+    let scene = homogeneous_with(dir.path(), "pushed.toml", &obstacle);
+    let out = dir.path().join("rep");
+    let (code, stderr) = report_cli(&scene, &out, &["--quantity", "force"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+    let (convergence, elements, runs) =
+        (csv_rows(&read("convergence.csv")), csv_rows(&read("elements.csv")), quoted_rows(&read("work_precision.csv")));
+    assert!(convergence.len() >= 2 && elements.len() >= 3 && runs.len() >= 3);
+    for r in &convergence {
+        assert!((csv_num(r, "U") - 2.0).abs() < 1e-9, "{r:?}");
+        assert!(csv_num(r, "err_U_rel") < 1e-9, "{r:?}");
+    }
+    for r in &elements {
+        assert!((csv_num(r, "u") - 2.0).abs() < 1e-9, "{r:?}");
+    }
+    let reference = runs.iter().find(|r| r["reference"] == "true").unwrap();
+    assert!((csv_num(reference, "U") - 2.0).abs() < 1e-9, "{reference:?}");
+    for r in runs.iter().filter(|r| r["converged"] == "true") {
+        // as every error of report_quick_on_a_small_johnson_scene: at most 2 · the KKT residuals
+        let bound = 2.0 * (csv_num(r, "kkt_rel") + csv_num(reference, "kkt_rel"));
+        assert!(csv_num(r, "err_U_rel") <= bound, "{r:?}");
+    }
+    let md = read("report.md");
+    for part in ["Quantity of interest: `force` (`--quantity`)", "| force error |", "--quick --quantity force`"] {
+        assert!(md.contains(part), "report.md lacks {part}:\n{md}");
+    }
+    let (code, stderr) = report_cli(&scene, &dir.path().join("none"), &["--quantity", "F"]);
+    assert_eq!(code, Some(1), "{stderr}");
+    for part in ["--quantity \"F\"", "known:", "force", "contact_area", "pushed.toml"] {
+        assert!(stderr.contains(part), "{part}: {stderr}");
+    }
+    assert!(!dir.path().join("none").exists(), "nothing is written");
+}
+
+/// Without `--quantity` the report's quantity is the scene's first extra unknown by the name its
+/// obstacle gives it: the rigid sphere's `V` (its report has no `U`, so the U columns were NaN
+/// before). On the homogeneous cube pushed by a sphere of radius 10⁴ (sag over the face
+/// r²/2R ≤ 2.5e-5, 2e-4 of U) V is the flat punch's U(2) within 1e-3, at every level.
+#[test]
+fn report_of_the_first_extra_unknown_the_spheres_v() {
+    let dir = tempfile::tempdir().unwrap();
+    let obstacle = "type = \"rigid_sphere\"\ncenter = [0.5, 0.5, -1.0e4]\nR = 1.0e4\ndirection = [0.0, 0.0, 1.0]\n\
+                    F = 2.0\nzone = { group = \"zmin\" }";
+    let scene = homogeneous_with(dir.path(), "sphere.toml", obstacle);
+    let out = dir.path().join("rep");
+    let (code, stderr) = report_cli(&scene, &out, &[]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+    let u = homogeneous_u(2.0);
+    let convergence = csv_rows(&read("convergence.csv"));
+    assert!(convergence.len() >= 2);
+    for r in &convergence {
+        let v = csv_num(r, "U");
+        println!("{} V = {v:.9e} ({:.2e} from U(2)), err {}", r["cells"], (v - u) / u, r["err_U_rel"]);
+        assert!(((v - u) / u).abs() < 1e-3, "{r:?}");
+        assert!(csv_num(r, "err_U_rel").is_finite(), "{r:?}");
+    }
+    let runs = quoted_rows(&read("work_precision.csv"));
+    let reference = runs.iter().find(|r| r["reference"] == "true").unwrap();
+    assert!(((csv_num(reference, "U") - u) / u).abs() < 1e-3, "{reference:?}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.contains("Quantity of interest: `V`, the scene's first extra unknown") && md.contains("| V error |"),
+        "{md}"
+    );
+}

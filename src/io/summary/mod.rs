@@ -407,13 +407,37 @@ impl ObstacleSummary {
     }
 }
 
-/// The quantity `quantity` of the only obstacle's report (None without obstacle, with several,
-/// or when it reports no such quantity): how scenes with one punch read its `U`.
-pub fn single_quantity(p: ProblemView<'_>, sol: &Solution, quantity: &str) -> Option<f64> {
-    match p.contact_reports(&sol.extras, &sol.lambda).as_slice() {
-        [r] => r.report.get(quantity),
-        _ => None,
+/// The quantity `name` of `sol` as a summary of `p` reports it ([`reported_quantities`]): an
+/// obstacle's quantity (plain with one obstacle, `name.quantity` with several, as in `contact`),
+/// an extra unknown by its name (`left.U`; NaN when undetermined, theory §11.3), or a component of
+/// a support's reaction (`key.Fz`, theory §14). None when nothing is so named.
+pub fn named_quantity(p: ProblemView<'_>, sol: &Solution, name: &str) -> Option<f64> {
+    let reports = reports_with_imprints(p, &sol.u, &sol.extras, &sol.lambda, &sol.undetermined);
+    if let Some(v) = contact_entries(p, &reports).get(name) {
+        return Some(*v);
     }
+    if let Some(i) = p.extra_names().iter().position(|n| n == name) {
+        return Some(if sol.undetermined.contains(&i) { f64::NAN } else { sol.extras.get(i).copied()? });
+    }
+    reaction_quantities(&reactions_of(p, &sol.stress.sigma)).find(|(n, _)| n == name).map(|(_, v)| v)
+}
+
+/// The quantity of interest of `p` when none is named: its first extra unknown by the name its
+/// obstacle gives it (`extra_names`, prefixed `name.` for a named obstacle), else the first
+/// quantity its first obstacle reports (as `contact` names it); None without obstacles.
+pub fn first_quantity(p: ProblemView<'_>) -> Option<String> {
+    if let Some(n) = p.extra_names().into_iter().next() {
+        return Some(n);
+    }
+    let reports = p.contact_reports(&vec![0.0; p.l.n_extras()], &vec![0.0; p.l.n_rows()]);
+    let q = reports.first()?.report.quantities.first()?.0.clone();
+    Some(match reports.len() {
+        1 => q,
+        _ => {
+            let name = reports[0].name.clone().unwrap_or_else(|| p.obstacles.obstacles().path("obstacle", 0));
+            format!("{name}.{q}")
+        }
+    })
 }
 
 /// Each obstacle's report on the solution (`u`, `extras`, `lambda`), with its imprint

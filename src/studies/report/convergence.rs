@@ -218,7 +218,8 @@ pub struct LevelResult {
     pub iterations: usize,
     /// The recomputed relative KKT residual.
     pub kkt: f64,
-    /// U as the single obstacle reports it (NaN without such a quantity).
+    /// The quantity of interest U, by its name ([`ConvergenceStudy::quantity`]; NaN without
+    /// such a quantity).
     pub u: f64,
     /// |U − U_finest| / |U_finest|.
     pub err_u: f64,
@@ -274,6 +275,8 @@ pub struct ConvergenceStudy {
     /// The polynomial degree p of the element's displacements: orders of U in 0.25 ..= 2p + ½
     /// are plausible ([`ConvergenceStudy::plausible_order`]).
     pub degree: usize,
+    /// The name of the quantity of interest U of the levels (`quantity` when none was named).
+    pub quantity: String,
 }
 
 /// What h is (module docs).
@@ -328,7 +331,13 @@ impl ConvergenceStudy {
             stress_consecutive_rate_fit,
             h_definition: H_MEAN,
             degree: 1,
+            quantity: "quantity".into(),
         }
+    }
+
+    /// The same study of the quantity of interest named `name`.
+    pub fn of_quantity(self, name: String) -> Self {
+        Self { quantity: name, ..self }
     }
 
     /// The same study of an element of displacement degree `degree`.

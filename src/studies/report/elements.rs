@@ -24,6 +24,8 @@ pub struct ElementComparison {
     pub reference_uncertainty: f64,
     /// How the reference was made.
     pub reference: String,
+    /// The name of the quantity of interest U (the P2 study's).
+    pub quantity: String,
 }
 
 /// The cells of the P2 levels with the nodes of the P1 levels `p1` (half the cells, at least
@@ -74,7 +76,14 @@ impl ElementComparison {
             ),
             (None, None) => (f64::NAN, f64::NAN, "none (no P2 level)".into()),
         };
-        Self { studies: vec![("p1".into(), p1), ("p2".into(), p2)], reference_u, reference_uncertainty, reference }
+        let quantity = p2.quantity.clone();
+        Self {
+            studies: vec![("p1".into(), p1), ("p2".into(), p2)],
+            reference_u,
+            reference_uncertainty,
+            reference,
+            quantity,
+        }
     }
 
     /// |U − U_ref| / |U_ref| of a level's U; NaN when it lies within the reference's
@@ -139,14 +148,18 @@ impl ElementComparison {
     /// The section of `report.md`.
     pub fn markdown(&self) -> String {
         let mut s = String::new();
+        let q = &self.quantity;
         let _ = writeln!(
             s,
             "Both elements on meshes with the same nodes (P2 on half the cells), each level solved by the \
-             reference solver. U against {} (U = {:.6e}); σ̂ against each element's own finest level (P2 by \
-             element means). A U error within the reference's uncertainty is not claimed (–).\n",
+             reference solver. {q} against {} ({q} = {:.6e}); σ̂ against each element's own finest level (P2 by \
+             element means). A {q} error within the reference's uncertainty is not claimed (–).\n",
             self.reference, self.reference_u
         );
-        s.push_str("| element | cells | dofs | wall (s) | U | U error | σ̂ error (own finest) |\n|---|---|---:|---:|---:|---:|---:|\n");
+        let _ = writeln!(
+            s,
+            "| element | cells | dofs | wall (s) | {q} | {q} error | σ̂ error (own finest) |\n|---|---|---:|---:|---:|---:|---:|"
+        );
         for (e, study) in &self.studies {
             for l in &study.levels {
                 let _ = writeln!(
@@ -168,7 +181,10 @@ impl ElementComparison {
                 let _ = writeln!(s, "\n{e}: σ̂ converges at the fitted rate {r:.2} in h.");
             }
         }
-        s.push_str("\nThe least wall time to bring U within an accuracy of the reference:\n\n| accuracy | p1 | p2 | sooner |\n|---:|---|---|---|\n");
+        let _ = writeln!(
+            s,
+            "\nThe least wall time to bring {q} within an accuracy of the reference:\n\n| accuracy | p1 | p2 | sooner |\n|---:|---|---|---|"
+        );
         let show = |t: Option<(f64, [usize; 3], usize)>| {
             t.map_or("not reached".to_string(), |(w, c, d)| format!("{w:.2} s ({}×{}×{}, {d} dofs)", c[0], c[1], c[2]))
         };

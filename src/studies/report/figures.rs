@@ -1,11 +1,12 @@
 //! The report's images (cargo feature `report`), drawn by [`crate::io::plot`]:
 //!
-//! * `work_precision.{png,svg}`: error against wall time (theory §5), σ̂ in the energy norm and U in
-//!   two panels, one line with markers per solver through its converged runs; runs that stopped
+//! * `work_precision.{png,svg}`: error against wall time (theory §5), σ̂ in the energy norm and the
+//!   quantity of interest (by its name) in two panels, one line with markers per solver through its converged runs; runs that stopped
 //!   short are open markers off the line; errors of exactly 0 (the reference) are not drawn.
 //! * `convergence.{png,svg}`: errors against the mesh size h (theory §3 Theorem 2) with a reference
 //!   line of slope 1/2.
-//! * `elements.{png,svg}`: the error of U against wall time, one line per element (theory §10).
+//! * `elements.{png,svg}`: the error of the quantity of interest against wall time, one line per
+//!   element (theory §10).
 
 use super::convergence::{ConvergenceStudy, LevelResult};
 use super::measure::Report;
@@ -63,7 +64,10 @@ pub fn work_precision(report: &Report, png: &Path, svg: &Path) -> Result<(), Plo
     };
     let panels = vec![
         panel("stress (σ, ξ) in the energy norm, relative to the reference", |e| e.stress_rel),
-        panel("punch displacement U, relative to the reference", |e| e.u_rel),
+        panel(
+            &format!("{}, relative to the reference", report.quantity.as_ref().map_or("quantity", |(n, _)| n.as_str())),
+            |e| e.u_rel,
+        ),
     ];
     let legend = panels[0].series.clone();
     let reference = report.reference().map(|r| {
@@ -139,7 +143,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
         let u = r.uncertainty / r.value.abs();
         let bars = line.iter().map(|&(h, e)| (h, (e - u).max(ERROR_FLOOR), e + u)).collect();
         series.push(Series {
-            name: format!("U vs Richardson extrapolation (bars: its uncertainty ±{:.1e})", u),
+            name: format!("{} vs Richardson extrapolation (bars: its uncertainty ±{:.1e})", study.quantity, u),
             color: COLORS[1],
             marker: Marker::Triangle,
             line,
@@ -149,7 +153,7 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
         });
     } else {
         series.push(Series {
-            name: "U vs finest".into(),
+            name: format!("{} vs finest", study.quantity),
             color: COLORS[1],
             marker: Marker::Triangle,
             line: pts(|l| l.err_u),
@@ -213,14 +217,10 @@ pub fn convergence(report: &Report, study: &ConvergenceStudy, png: &Path, svg: &
     render(&fig, png, svg)
 }
 
-/// `elements.png` and `.svg`: the error of U against the wall time of each level, one line per
-/// element (theory §10).
-pub fn elements(series: &[(String, Vec<(f64, f64)>)], png: &Path, svg: &Path) -> Result<(), PlotError> {
-    let labels = [
-        "saddle report: p1 against p2",
-        "error of U against wall time",
-        "wall time of the solve (s)",
-        "relative error of U",
-    ];
+/// `elements.png` and `.svg`: the error of the quantity of interest `quantity` against the wall
+/// time of each level, one line per element (theory §10).
+pub fn elements(series: &[(String, Vec<(f64, f64)>)], quantity: &str, png: &Path, svg: &Path) -> Result<(), PlotError> {
+    let (caption, y) = (format!("error of {quantity} against wall time"), format!("relative error of {quantity}"));
+    let labels = ["saddle report: p1 against p2", caption.as_str(), "wall time of the solve (s)", y.as_str()];
     lines(series, labels, false, png, svg)
 }

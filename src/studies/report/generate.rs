@@ -7,10 +7,12 @@ use super::elements::{self, ElementComparison};
 #[cfg(feature = "report")]
 use super::figures;
 use super::measure::{
-    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study, work_precision,
+    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study_of,
+    work_precision,
 };
 use super::runs::{RungKind, ladder};
 use super::tables;
+use crate::io::summary::{first_quantity, reported_quantities};
 use std::path::Path;
 use std::time::Instant;
 
@@ -24,6 +26,8 @@ pub fn generate(
     let t0 = Instant::now();
     let source = SceneSource::read(scene)?;
     let l = source.problem(None)?;
+    let quantity = quantity_of(&source, &l, options)?;
+    let q = quantity.as_ref().map(|(n, _)| n.as_str());
     let rungs = ladder(options.quick);
     let base = source.box_cells();
     let asked = asked_levels(&source, options)?;
@@ -64,10 +68,10 @@ pub fn generate(
     progress.plan(solves);
     let mut counter = 0;
     std::fs::create_dir_all(out).map_err(|source| ReportError::Io { path: out.to_path_buf(), source })?;
-    let runs = work_precision(&l, &rungs, progress, &mut counter)?;
+    let runs = work_precision(&l, &rungs, q, progress, &mut counter)?;
     let (dofs, elements, contact_rows) = (l.element.n_dofs(), l.element.n_points(), l.obstacles.rows().n_rows());
     let convergence = match levels {
-        Ok(levels) if levels.len() >= 2 => Ok(convergence_study(&source, &levels, progress, &mut counter)?),
+        Ok(levels) if levels.len() >= 2 => Ok(convergence_study_of(&source, &levels, q, progress, &mut counter)?),
         Ok(_) => Err("the scene's mesh is too coarse to coarsen (fewer than two distinct levels)".to_string()),
         Err(why) => Err(why),
     };
@@ -76,7 +80,7 @@ pub fn generate(
             let element: Box<dyn saddle_core::FiniteElement> =
                 if other == "p2" { Box::new(saddle_core::P2::default()) } else { Box::new(saddle_core::P1::default()) };
             let other_source = SceneSource { scene: source.scene.with_element(element), ..source.clone() };
-            let other_study = convergence_study(&other_source, &cells, progress, &mut counter)?;
+            let other_study = convergence_study_of(&other_source, &cells, q, progress, &mut counter)?;
             Ok(if other == "p2" {
                 ElementComparison::new(own_study.clone(), other_study)
             } else {
@@ -94,6 +98,7 @@ pub fn generate(
         contact_rows,
         quick: options.quick,
         levels: asked,
+        quantity,
         cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
         runs,
         scene_cells: base.ok(),
@@ -104,6 +109,23 @@ pub fn generate(
     };
     write_outputs(&mut report, out, t0)?;
     Ok(report)
+}
+
+/// The quantity of interest of the report on `source` (assembled as `l`): the one named by
+/// `--quantity`, checked against the quantities the scene reports ([`reported_quantities`]), else
+/// the scene's first extra unknown ([`first_quantity`]); with whether it was asked for.
+fn quantity_of(
+    source: &SceneSource,
+    l: &saddle_core::DiscreteProblem,
+    options: &ReportOptions,
+) -> Result<Option<(String, bool)>, ReportError> {
+    let Some(name) = &options.quantity else { return Ok(first_quantity(l.view()).map(|n| (n, false))) };
+    let known = reported_quantities(l.view());
+    if known.contains(name) {
+        Ok(Some((name.clone(), true)))
+    } else {
+        Err(ReportError::Quantity { name: name.clone(), known: known.join(", "), scene: source.path.clone() })
+    }
 }
 
 /// The family levels of `--levels`, checked (at least one, each k ≥ 1, on a scene whose mesh is a
@@ -147,7 +169,7 @@ fn write_outputs(report: &mut Report, out: &Path, t0: Instant) -> Result<(), Rep
             figures::convergence(report, study, &out.join("convergence.png"), &out.join("convergence.svg"))?;
         }
         if let Ok(c) = &report.element_comparison {
-            figures::elements(&c.series(), &out.join("elements.png"), &out.join("elements.svg"))?;
+            figures::elements(&c.series(), &c.quantity, &out.join("elements.png"), &out.join("elements.svg"))?;
         }
     }
     report.total_s = t0.elapsed().as_secs_f64();

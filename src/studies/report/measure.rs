@@ -9,7 +9,7 @@ use super::transfer::{self, OutsideMesh, Quadrature, SampleMap};
 #[cfg(feature = "report")]
 use crate::io::plot::PlotError;
 use crate::io::scene::Scene;
-use crate::io::summary::single_quantity;
+use crate::io::summary::{first_quantity, named_quantity};
 use saddle_core::{DiscreteProblem, Monitor, SceneError, Silent, Solution, SolveError, Workspace, kkt};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -44,6 +44,16 @@ pub enum ReportError {
         /// The scene file.
         scene: PathBuf,
     },
+    /// `--quantity` that names no quantity the scene reports.
+    #[error("--quantity {name:?} is not a quantity the scene reports; known: {known} ({scene})")]
+    Quantity {
+        /// The name asked for.
+        name: String,
+        /// The quantities the scene reports, comma-separated.
+        known: String,
+        /// The scene file.
+        scene: PathBuf,
+    },
     /// A plot could not be drawn.
     #[cfg(feature = "report")]
     #[error(transparent)]
@@ -71,6 +81,10 @@ pub struct ReportOptions {
     /// The levels k of the convergence study on a mesh family (`mesh.base`, theory §7.3), in
     /// place of [`LEVELS`]: the family's levels whose extrapolation is the reference (`--levels`).
     pub levels: Option<Vec<usize>>,
+    /// The quantity of interest by name (`--quantity`; [`named_quantity`]): an obstacle's
+    /// quantity, an extra unknown or a reaction component. None: the scene's first extra unknown
+    /// ([`first_quantity`]).
+    pub quantity: Option<String>,
 }
 
 /// Refinement factors of the scene's cells: for the default scene (32×32×16) 4, 6, 8, 11, 16
@@ -146,6 +160,10 @@ pub struct Report {
     pub quick: bool,
     /// The family levels asked for (`--levels`).
     pub levels: Option<Vec<usize>>,
+    /// The quantity of interest (the `U` columns of the CSV files): its name, and whether it was
+    /// asked for (`--quantity`) rather than the scene's first extra unknown; None when the scene
+    /// reports none.
+    pub quantity: Option<(String, bool)>,
     /// Cores available (`std::thread::available_parallelism`).
     pub cores: usize,
     /// The work–precision runs, the reference among them.
@@ -170,11 +188,13 @@ impl Report {
 }
 
 /// Runs the work–precision ladder on `l`: the reference ([`runs::reference_solver`]) first,
-/// then every other rung. Returns the records in ladder order (the [`RungKind::Reference`] rung
-/// reports the reference run). `counter` numbers the runs for `progress`.
+/// then every other rung, each recording the quantity of interest `quantity`. Returns the records
+/// in ladder order (the [`RungKind::Reference`] rung reports the reference run). `counter`
+/// numbers the runs for `progress`.
 pub fn work_precision(
     problem: &DiscreteProblem,
     rungs: &[Rung],
+    quantity: Option<&str>,
     progress: &mut dyn Progress,
     counter: &mut usize,
 ) -> Result<Vec<RunRecord>, ReportError> {
@@ -204,7 +224,7 @@ pub fn work_precision(
     let reference = reference_timed.result.as_ref().expect("checked above");
     for (i, rung) in rungs.iter().enumerate() {
         if matches!(rung.kind, RungKind::Reference) {
-            records.push(record(problem, rung, &reference_timed, reference));
+            records.push(record(problem, rung, &reference_timed, reference, quantity));
             continue;
         }
         let label = rung.label();
@@ -229,7 +249,7 @@ pub fn work_precision(
             },
             RungKind::Reference => unreachable!("handled above"),
         };
-        let mut rec = record(problem, rung, &timed, reference);
+        let mut rec = record(problem, rung, &timed, reference, quantity);
         if let Some(from) = start {
             runs::add_start_time(&mut rec, &records[from]);
         }
@@ -251,12 +271,26 @@ struct Solved {
 }
 
 /// The mesh convergence study of `source` on the box meshes `levels` (ascending; the last is
-/// the finest and the reference of the errors). Every level is solved by
-/// [`runs::level_solver`]. Levels are processed from fine
-/// to coarse, so that only the finest and the next finer level are kept in memory.
+/// the finest and the reference of the errors), of the scene's first extra unknown
+/// ([`convergence_study_of`] with no quantity named).
 pub fn convergence_study(
     source: &SceneSource,
     levels: &[[usize; 3]],
+    progress: &mut dyn Progress,
+    counter: &mut usize,
+) -> Result<ConvergenceStudy, ReportError> {
+    convergence_study_of(source, levels, None, progress, counter)
+}
+
+/// The mesh convergence study of `source` on the box meshes `levels` (ascending; the last is
+/// the finest and the reference of the errors), its quantity of interest `quantity` by name
+/// ([`named_quantity`]; None: the scene's first extra unknown, [`first_quantity`]). Every level
+/// is solved by [`runs::level_solver`]. Levels are processed from fine to coarse, so that only
+/// the finest and the next finer level are kept in memory.
+pub fn convergence_study_of(
+    source: &SceneSource,
+    levels: &[[usize; 3]],
+    quantity: Option<&str>,
     progress: &mut dyn Progress,
     counter: &mut usize,
 ) -> Result<ConvergenceStudy, ReportError> {
@@ -280,8 +314,15 @@ pub fn convergence_study(
         *counter += 1;
         Ok((l, timed))
     };
-    // U as the single obstacle reports it, by name
-    let u_of = |p: &DiscreteProblem, s: &Solution| single_quantity(p.view(), s, "U").unwrap_or(f64::NAN);
+    let Some((&finest_cells, coarser)) = levels.split_last() else {
+        return Ok(ConvergenceStudy::from_levels(vec![]));
+    };
+    let (fl, finest_timed) = solve_level(finest_cells, progress)?;
+    // the quantity of interest, by name
+    let name = quantity.map(str::to_string).or_else(|| first_quantity(fl.view()));
+    let u_of = |p: &DiscreteProblem, s: &Solution| {
+        name.as_deref().and_then(|n| named_quantity(p.view(), s, n)).unwrap_or(f64::NAN)
+    };
     let level_result = |p: &DiscreteProblem, cells: [usize; 3], timed: &Timed| {
         let l = &p.lagrangian();
         let (status, converged, iterations, kkt, u) = match &timed.result {
@@ -312,10 +353,6 @@ pub fn convergence_study(
             diff_stress_next: f64::NAN,
         }
     };
-    let Some((&finest_cells, coarser)) = levels.split_last() else {
-        return Ok(ConvergenceStudy::from_levels(vec![]));
-    };
-    let (fl, finest_timed) = solve_level(finest_cells, progress)?;
     let degree = fl.element.degree();
     let mut finest_result = level_result(&fl, finest_cells, &finest_timed);
     let fsol = finest_timed.result.map_err(ReportError::Reference)?;
@@ -351,5 +388,9 @@ pub fn convergence_study(
         results.push(res);
     }
     results.reverse();
-    Ok(ConvergenceStudy::from_levels(results).of_degree(degree))
+    let study = ConvergenceStudy::from_levels(results).of_degree(degree);
+    Ok(match name {
+        Some(n) => study.of_quantity(n),
+        None => study,
+    })
 }

@@ -10,7 +10,9 @@
 //!   box meshes ([`convergence`], [`measure::LEVELS`], or a mesh family's levels named by
 //!   [`measure::ReportOptions::levels`]), each solved by the reference solver; errors against
 //!   the finest level through the transfer of P0 fields ([`transfer`]), observed rates next to
-//!   Theorem 2's guaranteed 1/2, a Richardson extrapolation of U. A scene whose mesh is not a
+//!   Theorem 2's guaranteed 1/2, a Richardson extrapolation of the quantity of interest U (the
+//!   scene's first extra unknown by the name its obstacle gives it, or the quantity named by
+//!   [`measure::ReportOptions::quantity`], `--quantity`). A scene whose mesh is not a
 //!   `box` gets no study: `convergence.csv` holds its header only and `report.md` says why;
 //! * `elements.csv`, `elements.png`, `elements.svg` — P1 against P2 ([`elements`], theory §10):
 //!   the convergence study repeated with the other element on meshes with the same nodes, U of
@@ -42,6 +44,7 @@ pub mod transfer;
 
 pub use generate::generate;
 pub use measure::{
-    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study, work_precision,
+    LEVELS, Progress, QUICK_LEVELS, Report, ReportError, ReportOptions, SceneSource, convergence_study,
+    convergence_study_of, work_precision,
 };
 pub use transfer::OutsideMesh;

@@ -2,8 +2,10 @@
 //! run timed and compared with a tightly converged reference of the same discrete problem.
 //!
 //! Errors (theory §5), all relative to the reference:
-//! * U: |U − U_ref| / |U_ref| (the largest over the extra unknowns; without extras the max-norm
-//!   of u, as in [`saddle_solvers::conformance::agreement`]);
+//! * the quantity of interest q (the scene's first extra unknown, or one named by `--quantity`;
+//!   [`crate::io::summary::named_quantity`]): |q − q_ref| / |q_ref|; where q is not finite at
+//!   both, the largest over the extra unknowns (without extras the max-norm of u), as in
+//!   [`saddle_solvers::conformance::agreement`];
 //! * σ̂: [σ̂ − σ̂_ref]^{1/2} / [σ̂_ref]^{1/2} in the energy norm of theory §1
 //!   ([`saddle_solvers::conformance::energy_distance`]) — the σ̂ the solver returns;
 //! * ε(u): ‖ε(u − u_ref)‖_{L²} / ‖ε(u_ref)‖_{L²}, element volumes as weights.
@@ -11,7 +13,7 @@
 //! The KKT residual is recomputed from the returned solution by L, independently of the solver.
 
 use super::transfer::{l2_distance, strains};
-use crate::io::summary::single_quantity;
+use crate::io::summary::named_quantity;
 use saddle_core::{
     DiscreteProblem, Lagrangian, Monitor, PhaseTimer, Solution, SolveError, Solver, StopReason, Workspace, kkt,
 };
@@ -140,7 +142,7 @@ pub fn ladder(quick: bool) -> Vec<Rung> {
 /// Errors of a solution against the reference (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Errors {
-    /// U, relative.
+    /// The quantity of interest, relative (module docs; `U` in the CSV columns).
     pub u_rel: f64,
     /// σ̂ in the energy norm, relative.
     pub stress_rel: f64,
@@ -186,8 +188,8 @@ pub struct RunRecord {
     pub wall_s: f64,
     /// The solver's own time: the sum of its reported phases, seconds (NaN after an error).
     pub solver_s: f64,
-    /// U as the scene's single obstacle reports it, by name (NaN without a solution, without
-    /// or with several obstacles, or when the obstacle reports no `U`).
+    /// The quantity of interest, by its name ([`named_quantity`]; NaN without a solution or
+    /// without a quantity).
     pub u: f64,
     /// Errors against the reference (None after an error).
     pub errors: Option<Errors>,
@@ -237,8 +239,15 @@ pub fn timed_polish(newton: &Newton, l: &Lagrangian<'_>, start: &Solution, monit
     Timed { result, wall_s: t0.elapsed().as_secs_f64() }
 }
 
-/// The record of a run: its status, time, errors against `reference` and recomputed KKT residual.
-pub fn record(problem: &DiscreteProblem, rung: &Rung, timed: &Timed, reference: &Solution) -> RunRecord {
+/// The record of a run: its status, time, the quantity of interest `quantity`, errors against
+/// `reference` and recomputed KKT residual.
+pub fn record(
+    problem: &DiscreteProblem,
+    rung: &Rung,
+    timed: &Timed,
+    reference: &Solution,
+    quantity: Option<&str>,
+) -> RunRecord {
     let l = &problem.lagrangian();
     let mut rec = RunRecord {
         solver: rung.solver.to_string(),
@@ -261,8 +270,14 @@ pub fn record(problem: &DiscreteProblem, rung: &Rung, timed: &Timed, reference: 
             rec.status = status_of(sol.report.stop_reason).to_string();
             rec.iterations = sol.report.iterations;
             rec.solver_s = sol.report.wall_s();
-            rec.u = single_quantity(problem.view(), sol, "U").unwrap_or(f64::NAN);
-            rec.errors = Some(errors(l, sol, reference));
+            let q = |s: &Solution| quantity.and_then(|n| named_quantity(problem.view(), s, n)).unwrap_or(f64::NAN);
+            rec.u = q(sol);
+            let mut e = errors(l, sol, reference);
+            let q_ref = q(reference);
+            if rec.u.is_finite() && q_ref.is_finite() {
+                e.u_rel = (rec.u - q_ref).abs() / q_ref.abs().max(f64::MIN_POSITIVE);
+            }
+            rec.errors = Some(e);
             rec.kkt = kkt(l, &sol.iterate(), &mut Workspace::new(l)).max();
             rec.note = sol.report.warnings.join("; ");
         }

@@ -2,8 +2,9 @@
 //!
 //! CSV: one header line, comma separated, fields quoted when they hold a comma or a quote, a
 //! missing or undefined number left empty. Column names carry their units: `_s` seconds,
-//! `_us` microseconds, `_rel` a dimensionless relative quantity; U and h are in the scene's
-//! length unit.
+//! `_us` microseconds, `_rel` a dimensionless relative quantity; h is in the scene's length
+//! unit. The columns `U` hold the report's quantity of interest (the scene's first extra unknown
+//! or the one named by `--quantity`; `report.md` names it), in its own unit.
 
 use super::convergence::{ConvergenceStudy, GCI_SAFETY};
 use super::measure::Report;
@@ -108,10 +109,11 @@ fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
-/// The work–precision table of `report.md`.
-pub fn work_precision_table(runs: &[RunRecord]) -> String {
-    let mut s = String::from(
-        "| solver | setting | status | iterations | wall time (s) | U error | σ̂ error (energy) | ε(u) error | KKT residual |\n\
+/// The work–precision table of `report.md`, the error of the quantity of interest labelled
+/// `quantity`.
+pub fn work_precision_table(runs: &[RunRecord], quantity: &str) -> String {
+    let mut s = format!(
+        "| solver | setting | status | iterations | wall time (s) | {quantity} error | σ̂ error (energy) | ε(u) error | KKT residual |\n\
          |---|---|---|---|---|---|---|---|---|\n",
     );
     for r in runs {
@@ -153,10 +155,11 @@ pub fn tightest(runs: &[RunRecord]) -> Vec<&RunRecord> {
 
 /// The convergence table of `report.md`; the level with `scene_cells` is marked as the scene's.
 pub fn convergence_table(study: &ConvergenceStudy, scene_cells: Option<[usize; 3]>) -> String {
-    let against = if study.richardson.is_some() { "vs Richardson U*" } else { "vs finest" };
+    let q = &study.quantity;
+    let against = if study.richardson.is_some() { format!("vs Richardson {q}*") } else { "vs finest".into() };
     let mut s = format!(
-        "| cells | dofs | h | time (s) | µs/dof | status | U | U error ({against}) | σ̂ error (energy) | ε(u) error | \
-         rate U | rate σ̂ | rate ε(u) | rate σ̂ (consecutive) |\n\
+        "| cells | dofs | h | time (s) | µs/dof | status | {q} | {q} error ({against}) | σ̂ error (energy) | ε(u) error | \
+         rate {q} | rate σ̂ | rate ε(u) | rate σ̂ (consecutive) |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (i, l) in study.levels.iter().enumerate() {
@@ -196,7 +199,11 @@ pub fn markdown(report: &Report) -> String {
     let levels = report.levels.as_ref().map_or(String::new(), |ks| {
         format!(" --levels {}", ks.iter().map(|k| k.to_string()).collect::<Vec<_>>().join(","))
     });
-    let quick = format!("{}{levels}", if report.quick { " --quick" } else { "" });
+    let asked = match &report.quantity {
+        Some((n, true)) => format!(" --quantity {n}"),
+        _ => String::new(),
+    };
+    let quick = format!("{}{levels}{asked}", if report.quick { " --quick" } else { "" });
     let _ = writeln!(
         s,
         "Scene `{}`: {} dofs, {} tetrahedra, {} candidate contact nodes. Machine: {} cores. \
@@ -209,6 +216,16 @@ pub fn markdown(report: &Report) -> String {
         report.total_s,
         report.scene.display(),
     );
+    let q = report.quantity.as_ref().map_or("quantity", |(n, _)| n.as_str());
+    let _ = match &report.quantity {
+        Some((n, true)) => writeln!(s, "Quantity of interest: `{n}` (`--quantity`); the CSV columns `U` hold it.\n"),
+        Some((n, false)) => writeln!(
+            s,
+            "Quantity of interest: `{n}`, the scene's first extra unknown (another: `--quantity NAME`); the CSV \
+             columns `U` hold it.\n"
+        ),
+        None => writeln!(s, "Quantity of interest: none (the scene reports no quantity); its columns are empty.\n"),
+    };
     let _ = writeln!(s, "## Work–precision\n");
     if report.plots {
         let _ = writeln!(
@@ -225,8 +242,8 @@ pub fn markdown(report: &Report) -> String {
     if let Some(r) = report.reference() {
         let _ = writeln!(
             s,
-            "Errors are relative and measured against the reference, {} ({}: KKT residual {}, U = {:.12e}, \
-             {:.1} s), which solves the same discrete problem (theory §3, §5): U; σ̂ in the energy norm \
+            "Errors are relative and measured against the reference, {} ({}: KKT residual {}, {q} = {:.12e}, \
+             {:.1} s), which solves the same discrete problem (theory §3, §5): {q}; σ̂ in the energy norm \
              [σ̂ − σ̂_ref]^½/[σ̂_ref]^½; ε(u) in L². Wall time is measured around each solve. Runs that stop short are listed with their status and drawn as open markers off \
              the lines; the reference itself has error 0 and is not drawn.\n",
             r.label(),
@@ -236,10 +253,11 @@ pub fn markdown(report: &Report) -> String {
             r.wall_s
         );
     }
-    s.push_str(&work_precision_table(&report.runs));
+    s.push_str(&work_precision_table(&report.runs, q));
     let _ = writeln!(s, "\n### Each solver at its tightest setting\n");
-    s.push_str(
-        "| solver | setting | σ̂ error (energy) | U error | ε(u) error | wall time (s) |\n|---|---|---|---|---|---|\n",
+    let _ = writeln!(
+        s,
+        "| solver | setting | σ̂ error (energy) | {q} error | ε(u) error | wall time (s) |\n|---|---|---|---|---|---|"
     );
     for r in tightest(&report.runs) {
         let e = r.errors.expect("tightest() keeps runs with errors");
@@ -308,18 +326,19 @@ pub fn markdown(report: &Report) -> String {
                     } else {
                         format!(
                             " The order is outside the range plausible for elements of degree {} (0.25 to {}): the \
-                             three levels are not in the asymptotic range, or U does not converge monotonically; treat \
-                             U* with caution.",
+                             three levels are not in the asymptotic range, or {q} does not converge monotonically; \
+                             treat {q}* with caution.",
                             study.degree,
                             study.plausible_order_max()
                         )
                     };
                     let _ = writeln!(
                         s,
-                        "Richardson extrapolation of U from the three finest levels: U* = {:.9e} ± {:.1e} ({:.2} %: \
-                         Roache's grid convergence index, safety factor {GCI_SAFETY}, at least the change of U* from the \
-                         previous triple), observed order p = {:.2} (U(h) ≈ U* + C h^p with C = {:.3e}); the U errors and \
-                         rates above are against U*, and an error within the uncertainty is not claimed (–).{caution}",
+                        "Richardson extrapolation of {q} from the three finest levels: {q}* = {:.9e} ± {:.1e} ({:.2} %: \
+                         Roache's grid convergence index, safety factor {GCI_SAFETY}, at least the change of {q}* from \
+                         the previous triple), observed order p = {:.2} ({q}(h) ≈ {q}* + C h^p with C = {:.3e}); the {q} \
+                         errors and rates above are against {q}*, and an error within the uncertainty is not claimed \
+                         (–).{caution}",
                         r.value,
                         r.uncertainty,
                         100.0 * r.uncertainty / r.value.abs(),
@@ -333,7 +352,7 @@ pub fn markdown(report: &Report) -> String {
                     } else {
                         "the differences of the three finest levels do not decrease with one sign"
                     };
-                    let _ = writeln!(s, "No Richardson extrapolation of U: {why}.");
+                    let _ = writeln!(s, "No Richardson extrapolation of {q}: {why}.");
                 }
             }
         }
@@ -358,7 +377,8 @@ pub fn markdown(report: &Report) -> String {
     let _ = writeln!(
         s,
         "\nColumns of the CSV files: times in seconds (`_s`) or microseconds (`_us`), errors and residuals \
-         relative (`_rel`), U and h in the scene's length unit."
+         relative (`_rel`), h in the scene's length unit, the columns `U` (`u` in elements.csv) the quantity \
+         of interest `{q}` in its own."
     );
     s
 }
