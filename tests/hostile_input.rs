@@ -647,6 +647,35 @@ fn mutated_example_scenes_fail_cleanly() {
     }
 }
 
+/// Every number of every example scene (on its tiny mesh) set to NaN, and to +∞, is refused
+/// before any solve — exit 1, nothing written — by an error naming the number's path and its
+/// value (`material.E = NaN`, `obstacle.zone.all[1].disc.radius = inf`). The property test above
+/// draws finite magnitudes only; TOML's `nan` and `inf` are hostile input of their own.
+#[test]
+fn every_number_set_to_nan_or_infinity_is_refused_naming_it() {
+    let mut checked = 0;
+    for (name, base) in base_scenes() {
+        let mut all = vec![];
+        paths(&toml::Value::Table(base.clone()), String::new(), &mut all);
+        for path in all {
+            let mut root = toml::Value::Table(base.clone());
+            if !at(&mut root, &path).is_float() {
+                continue;
+            }
+            for (v, shown) in [(f64::NAN, "NaN"), (f64::INFINITY, "inf")] {
+                *at(&mut root, &path) = v.into();
+                let (code, err, wrote) = run_limited(root.as_table().unwrap(), Duration::from_secs(60)).unwrap();
+                let case = format!("{name}: {path} = {shown}: exit {code}: {err}");
+                assert!(code == 1 && !wrote && !err.contains("panicked"), "{case}");
+                assert!(err.contains(&format!("{path} = {shown}")), "{case}");
+                checked += 1;
+            }
+        }
+    }
+    println!("{checked} numbers refused");
+    assert!(checked > 0, "the examples hold numbers");
+}
+
 // ---- issue 28: supports ----
 
 /// The tensile bar with `edit` applied to its list of `[[dirichlet]]` entries.
