@@ -318,7 +318,7 @@ fn newton_solves_the_default_scene_on_the_gmsh_mesh() {
         // measured difference, so a change of the mesh read or of the problem built on it that
         // moves U by another 0.4 % fails. For scale: one refinement of the box mesh raises U by
         // δ = U(24×24×12) − U(12×12×6) = 4.5 % (P1 tetrahedra are too stiff, so U rises on
-        // every refinement, README "Mesh convergence"), so the difference is well within the
+        // every refinement: the mesh convergence of docs/accuracy.md), so the difference is well within the
         // discretisation error of either mesh.
         let delta = u_fine - u_coarse;
         assert!(delta > 0.0, "U rises from the 12×12×6 box mesh ({u_coarse:e}) to the 24×24×12 one ({u_fine:e})");

@@ -379,8 +379,7 @@ fn a_load_on_clamped_facets_is_refused() {
 // ---- 5. load paths: linear cost, bounded output ----
 
 /// 301 steps: every step in summary.json and load_path.csv, at most 100 (+ the last) step VTU
-/// files (every 4th here), and the series lists exactly the files written. (The cost per step is measured in the
-/// README: constant from the first to the last hundred steps.)
+/// files (every 4th here), and the series lists exactly the files written.
 #[test]
 fn a_long_path_writes_a_bounded_number_of_step_files() {
     let mut t = tiny_indentation();

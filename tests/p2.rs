@@ -94,7 +94,7 @@ fn incompressible_u(element: &str, cells: [usize; 3]) -> f64 {
 #[test]
 fn p2_keeps_its_displacement_as_nu_tends_to_one_half() {
     // the small default mesh 12 × 12 × 6 against 16 × 16 × 8 cells: P2 within 5 %, P1 loses
-    // much more (README: 12 × 12 × 6 against 24 × 24 × 12, P2 0.998 and P1 0.46)
+    // much more (docs/locking.md: 12 × 12 × 6 against 24 × 24 × 12, P2 0.998)
     let p2 = incompressible_u("p2", [12, 12, 6]) / incompressible_u("p2", [16, 16, 8]);
     let p1 = incompressible_u("p1", [12, 12, 6]) / incompressible_u("p1", [16, 16, 8]);
     println!("U coarse / fine at ν = 0.4999: p2 {p2:.3}, p1 {p1:.3}");

@@ -1,6 +1,6 @@
 //! Issue 5, cases 1–7: stiff and extreme variants of the default scene (theory §6, small mesh),
 //! each run by every solver with a measured outcome. The full table (more values per case) is
-//! `cargo run --release --example stability`, which rewrites the README's stability table.
+//! `cargo run --release --example stability`, which rewrites the table of docs/stability.md.
 //!
 //! The scenes and solvers are typed values ([`Johnson`] with one parameter changed); a case
 //! that must fail is checked for its kind of error, so that a failure for another reason fails.
