@@ -358,14 +358,25 @@ fn nested_family_probe() {
 /// that uncertainty, P1's and P2's limits within the two uncertainties, the finest level within
 /// 1.5 % of Hertz. Every claim is checked; those measured not to hold (`NOT_HOLDING`,
 /// docs/accuracy.md "Hertz on nested levels") are printed, the others asserted.
-/// `cargo test --release --test hertz -- --ignored --nocapture nested_levels`
+/// `cargo test --release --test hertz -- --ignored --nocapture nested_levels` (about 50 min on a
+/// loaded machine, P2's k = 5 about half of it).
 #[test]
 #[ignore]
 fn nested_levels_converge_to_hertz() {
     use saddle::studies::report::convergence::extrapolate;
     const P2_LEVELS: [usize; 5] = [1, 2, 3, 4, 5];
-    const P1_LEVELS: [usize; 5] = [2, 4, 6, 8, 10];
-    const NOT_HOLDING: [&str; 0] = [];
+    const P1_LEVELS: [usize; 4] = [2, 4, 6, 8];
+    // measured not to hold (docs/accuracy.md, "Hertz on nested levels"): raw U on P2 (the far
+    // field's share turns at k = 3), P2's a on k = 3, 4, 5 (no order, so no limit to compare
+    // with P1's), the reported peak pressure from the coarsest level (a nodal mean below p₀
+    // there, a discretisation error above it on the finer levels)
+    const NOT_HOLDING: [&str; 5] = [
+        "P2 dual quadratic U monotone",
+        "P2 dual quadratic a extrapolates",
+        "P2 dual quadratic p0 monotone",
+        "P1 p0 monotone",
+        "P2 and P1 limits of a agree",
+    ];
     let (a_h, p0_h, delta_h) = hertz(0.3);
     let depth = NESTED.delta_depth();
     println!("{NESTED:?}; Hertz: a {a_h:.5}, p0 {p0_h:.5}, delta {delta_h:.6e}; delta against the axis node at depth {depth:.4}");
