@@ -379,7 +379,9 @@ fn nested_levels_converge_to_hertz() {
     ];
     let (a_h, p0_h, delta_h) = hertz(0.3);
     let depth = NESTED.delta_depth();
-    println!("{NESTED:?}; Hertz: a {a_h:.5}, p0 {p0_h:.5}, delta {delta_h:.6e}; delta against the axis node at depth {depth:.4}");
+    println!(
+        "{NESTED:?}; Hertz: a {a_h:.5}, p0 {p0_h:.5}, delta {delta_h:.6e}; delta against the axis node at depth {depth:.4}"
+    );
     let families: [(&str, &str, Option<&str>, &[usize]); 2] =
         [("P2 dual quadratic", "p2", Some("dual_quadratic"), &P2_LEVELS), ("P1", "p1", None, &P1_LEVELS)];
     let mut failed: Vec<String> = Vec::new();
