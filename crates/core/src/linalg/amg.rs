@@ -656,15 +656,8 @@ fn spectral_radius(a: &Csr, inv_diag: &[f64], steps: usize) -> f64 {
     for _ in 0..steps.min(n) {
         u.par_iter_mut().zip(&s).zip(&v).for_each(|((u, s), v)| *u = s * v);
         a.spmv(&u, &mut w);
-        let alpha: f64 = w
-            .par_iter_mut()
-            .zip(&s)
-            .zip(&v)
-            .map(|((w, s), v)| {
-                *w *= s;
-                *w * v
-            })
-            .sum();
+        w.par_iter_mut().zip(&s).for_each(|(w, s)| *w *= s);
+        let alpha = super::pcg::dot(&w, &v);
         w.par_iter_mut().zip(&v).zip(&v_prev).for_each(|((w, v), vp)| *w -= alpha * v + beta * vp);
         alphas.push(alpha);
         beta = w.iter().map(|x| x * x).sum::<f64>().sqrt();

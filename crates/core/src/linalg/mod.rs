@@ -12,6 +12,7 @@ pub mod dense_qp;
 pub mod distributed;
 pub mod error;
 pub mod pcg;
+pub mod reduce;
 
 pub use amg::{AmgParams, LevelInfo, NearNullSpace, SmoothedAggregation};
 pub use cholesky::SparseCholesky;

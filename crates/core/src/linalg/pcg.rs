@@ -12,6 +12,7 @@
 
 use super::csr::Csr;
 use super::error::PcgError;
+use super::reduce::{tree_sum, tree_sum_mut};
 use rayon::prelude::*;
 
 /// Entries per parallel task in the vector updates.
@@ -196,24 +197,21 @@ fn check_positive(value: f64, quantity: &str, iteration: usize) -> Result<(), Pc
 
 /// x += α p, r −= α q; returns r·r.
 fn update_x_r(alpha: f64, p: &[f64], q: &[f64], x: &mut [f64], r: &mut [f64]) -> f64 {
-    x.par_chunks_mut(CHUNK)
-        .zip(r.par_chunks_mut(CHUNK))
-        .zip(p.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
-        .map(|((x, r), (p, q))| {
-            let mut s = 0.0;
-            for (((x, r), p), q) in x.iter_mut().zip(r.iter_mut()).zip(p).zip(q) {
-                *x += alpha * p;
-                *r -= alpha * q;
-                s += *r * *r;
-            }
-            s
-        })
-        .sum()
+    tree_sum_mut(x, r, &|x, r, leaf| {
+        let mut s = 0.0;
+        for (((x, r), p), q) in x.iter_mut().zip(r.iter_mut()).zip(&p[leaf.clone()]).zip(&q[leaf.clone()]) {
+            *x += alpha * p;
+            *r -= alpha * q;
+            s += *r * *r;
+        }
+        s
+    })
 }
 
-/// x·y, in parallel.
+/// x·y, in parallel, the same bits on any number of threads ([`tree_sum`]).
 pub fn dot(x: &[f64], y: &[f64]) -> f64 {
-    x.par_chunks(CHUNK).zip(y.par_chunks(CHUNK)).map(|(x, y)| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>()).sum()
+    assert_eq!(x.len(), y.len());
+    tree_sum(0..x.len(), &|leaf| x[leaf.clone()].iter().zip(&y[leaf]).map(|(a, b)| a * b).sum())
 }
 
 #[cfg(test)]

@@ -2,11 +2,11 @@
 //! the primal energy J, the stress energy ½[σ̂, σ̂] and the dual energy. J − dual is the
 //! duality gap of a dual-feasible pair.
 
+use crate::linalg::reduce::tree_sum;
 use crate::problem::fields::StressField;
 use crate::problem::lagrangian::{Lagrangian, Workspace};
 use crate::problem::stresses::{MAX_HARDENING_DIM, energy_inner};
 use crate::problem::tensor::Sym;
-use rayon::prelude::*;
 
 /// Σ_T w_T ψ(ε_T): the stored energy of a strain field (theory §2); from a step's state
 /// Σ_T w_T ψ_n(ε_T) (theory §11.1). Summed over the ranks.
@@ -18,19 +18,19 @@ pub fn energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
 fn local_energy_of_strain(l: &Lagrangian<'_>, eps: &[Sym]) -> f64 {
     let law = *l.data.elasticity;
     let w = l.weights();
+    // each sum the same bits on any number of threads (the line search compares energies)
+    let points = 0..eps.len();
     match (l.data.plasticity(), l.data.state) {
-        (None, None) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| 0.5 * w * e.dot(&law.stress(e))).sum(),
-        (Some(p), None) => eps.par_iter().zip(w.par_iter()).map(|(e, w)| w * p.energy(&law, e)).sum(),
-        (None, Some(st)) => (eps, &st.plastic_strain[..], w)
-            .into_par_iter()
-            .map(|(e, ep, w)| {
-                let x = e - ep;
-                0.5 * w * x.dot(&law.stress(&x))
+        (None, None) => tree_sum(points, &|r| r.map(|i| 0.5 * w[i] * eps[i].dot(&law.stress(&eps[i]))).sum()),
+        (Some(p), None) => tree_sum(points, &|r| r.map(|i| w[i] * p.energy(&law, &eps[i])).sum()),
+        (None, Some(st)) => tree_sum(points, &|r| {
+            r.map(|i| {
+                let x = eps[i] - st.plastic_strain[i];
+                0.5 * w[i] * x.dot(&law.stress(&x))
             })
-            .sum(),
-        (Some(p), Some(st)) => {
-            (0..eps.len()).into_par_iter().map(|i| w[i] * p.step_energy(&law, st.step(i, &eps[i]))).sum()
-        }
+            .sum()
+        }),
+        (Some(p), Some(st)) => tree_sum(points, &|r| r.map(|i| w[i] * p.step_energy(&law, st.step(i, &eps[i]))).sum()),
     }
 }
 
@@ -56,15 +56,15 @@ pub fn stress_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
     let p = l.data.plasticity();
     let w = l.weights();
     let state = l.data.state;
-    let local = (0..stress.len())
-        .into_par_iter()
-        .map(|i| {
+    let local = tree_sum(0..stress.len(), &|r| {
+        r.map(|i| {
             let (s, q) = (&stress.sigma[i], stress.q(i));
             let dq = hardening_increment(q, state.map(|st| st.q(i)));
             let dq = &dq[..q.len()];
             0.5 * w[i] * energy_inner(p, &law, s, dq, s, dq)
         })
-        .sum();
+        .sum()
+    });
     l.comm().sum(local)
 }
 
@@ -82,7 +82,7 @@ pub fn dual_energy(l: &Lagrangian<'_>, stress: &StressField, lambda: &[f64]) -> 
 fn complementary_energy(l: &Lagrangian<'_>, stress: &StressField) -> f64 {
     let prestrain: f64 = l.data.state.map_or(0.0, |st| {
         let w = l.weights();
-        l.comm().sum((0..stress.len()).into_par_iter().map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum())
+        l.comm().sum(tree_sum(0..stress.len(), &|r| r.map(|i| w[i] * st.plastic_strain[i].dot(&stress.sigma[i])).sum()))
     });
     stress_energy(l, stress) + prestrain
 }

@@ -10,9 +10,9 @@ use crate::distributed_system::DistributedSystem;
 use crate::linear::{self, InSolver};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
 use saddle_core::error::ParameterError;
 use saddle_core::linalg::SparseCholesky;
+use saddle_core::linalg::reduce::tree_sum;
 use saddle_core::problem::energies::energy;
 use saddle_core::problem::lagrangian::{Lagrangian, Workspace};
 use saddle_core::problem::operators::Material;
@@ -223,7 +223,8 @@ impl PenaltySystem {
     /// uᵀK_el u + Σ k_V V² with `eps` = ε(u): twice the regularisation's energy over μ.
     fn regularisation(&self, l: &Lagrangian<'_>, v: &[f64], eps: &[Sym]) -> f64 {
         let c = &self.c_el;
-        let reg: f64 = eps.par_iter().zip(l.weights().par_iter()).map(|(e, w)| w * e.dot(&(c * e))).sum();
+        let w = l.weights();
+        let reg = tree_sum(0..eps.len(), &|r| r.map(|i| w[i] * eps[i].dot(&(c * eps[i]))).sum());
         // a rank's points summed over the ranks (theory §12; one process: themselves)
         l.comm().sum(reg) + self.k_v.iter().zip(v).map(|(k, x)| k * x * x).sum::<f64>()
     }
