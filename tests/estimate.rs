@@ -27,9 +27,24 @@ fn level(t: &toml::Table, cells: [i64; 3]) -> Level {
     let mut t = t.clone();
     set(&mut t, "mesh.cells", toml::Value::try_from(cells).unwrap());
     let (p, _) = build(&t);
+    let clock = std::time::Instant::now();
     let sol = solve_converged(&p, "newton", &*solver("type = \"newton\"\ntol = 1e-11"));
+    let solve_s = clock.elapsed().as_secs_f64();
     let l = p.lagrangian();
+    let clock = std::time::Instant::now();
     let est = estimate(&*p.element, &l, &sol.stress);
+    let estimate_s = clock.elapsed().as_secs_f64();
+    println!(
+        "{} cells {cells:?}: {} dofs, U = {:.8e}, η = {:.4e}, η_U = {:.4e}, δ = {:.4e}, Newton {} iterations {solve_s:.2} s, estimate {estimate_s:.3} s ({:.2} % of the solve)",
+        p.element.name(),
+        l.n_dofs(),
+        sol.extras[0],
+        est.energy,
+        est.extras[0].unwrap_or(f64::NAN),
+        p.element.strain_consistency_energy(l.data.elasticity, &sol.u),
+        sol.report.iterations,
+        100.0 * estimate_s / solve_s
+    );
     let h = (l.weights().iter().sum::<f64>() / p.element.mesh().n_elements() as f64).cbrt();
     let fields = PointFields::of(&p, &sol.u, &sol.stress);
     Level { p, sol, est, h, fields }
@@ -167,9 +182,10 @@ struct Row {
 /// energy error of level i is (d_i² + e_f²)^{1/2}, d_i its distance to the finest level and e_f
 /// the finest level's own error extrapolated from the last two differences (nested Galerkin
 /// errors are orthogonal in linear elasticity: e_i² = d_i² + e_f²; the order p from the
-/// consecutive differences). The true error of U is against Richardson's extrapolation of the
-/// last three levels with the order from the data.
-fn effectivity(levels: &[Level]) -> (Vec<Row>, f64, f64) {
+/// consecutive differences). The true error of U is against `u_ref` when given (a reference
+/// from a finer study), else Richardson's extrapolation of the last three levels with the order
+/// from the data.
+fn effectivity(levels: &[Level], u_ref: Option<f64>) -> (Vec<Row>, f64, f64) {
     let n = levels.len();
     assert!(n >= 3, "three levels at least");
     let step = |i: usize| distance(&levels[i], &levels[i + 1]);
@@ -181,7 +197,7 @@ fn effectivity(levels: &[Level]) -> (Vec<Row>, f64, f64) {
     let u = |i: usize| levels[i].sol.extras[0];
     let (u0, u1, u2) = (u(n - 3), u(n - 2), u(n - 1));
     let q = ((u0 - u1) / (u1 - u2)).ln() / r1.ln();
-    let u_inf = u2 + (u2 - u1) / (r2.powf(q) - 1.0);
+    let u_inf = u_ref.unwrap_or(u2 + (u2 - u1) / (r2.powf(q) - 1.0));
     let rows = levels[..n - 1]
         .iter()
         .map(|lv| {
@@ -199,9 +215,10 @@ fn effectivity(levels: &[Level]) -> (Vec<Row>, f64, f64) {
     (rows, p, q)
 }
 
-/// Prints the table and returns the effectivities (energy, U) of every row.
-fn table(name: &str, levels: &[Level]) -> Vec<(f64, f64)> {
-    let (rows, p, q) = effectivity(levels);
+/// Prints the table and returns the effectivities (energy, U) of every row; `u_ref` as in
+/// [`effectivity`].
+fn table(name: &str, levels: &[Level], u_ref: Option<f64>) -> Vec<(f64, f64)> {
+    let (rows, p, q) = effectivity(levels, u_ref);
     println!("{name}: observed order of the stress differences {p:.2}, of U {q:.2}");
     println!("| h | dofs | η | true error | η / error | η_U | |U − U_∞| | η_U / error |");
     for r in &rows {
@@ -288,7 +305,7 @@ fn a_run_writes_the_estimate_unless_switched_off() {
 #[test]
 fn the_effectivity_on_elastic_hertz_lies_within_half_to_three() {
     let levels: Vec<Level> = [6, 12, 24].iter().map(|&n| level(&hertz(), [n, n, n])).collect();
-    for (i, (e, eu)) in table("Hertz P1", &levels).into_iter().enumerate() {
+    for (i, (e, eu)) in table("Hertz P1", &levels, None).into_iter().enumerate() {
         assert!((0.5..=3.0).contains(&e), "level {i}: energy effectivity {e:.3}");
         assert!((0.5..=3.0).contains(&eu), "level {i}: U effectivity {eu:.3}");
     }
@@ -311,22 +328,66 @@ fn hertz_family_p2() -> toml::Table {
     t
 }
 
-/// The effectivity table of the report (theory §15.4): P1 — Hertz on the levels 8, 16 against
-/// 32 cells a side, the plastic default scene on 8×8×4 and 16×16×8 against 32×32×16; P2 (B̄,
-/// dual quadratic rows) — Hertz on its nested family's levels 1, 2 against 4
-/// ([`hertz_family_p2`]), the plastic default scene on examples/johnson_family.toml's levels
-/// 1, 2 against 4. Slow (tens of minutes).
+/// P2's Hertz rows of the effectivity table (theory §15.4): P2 (B̄, dual quadratic rows),
+/// levels 1 and 2 of the nested family with a uniform core ([`hertz_family_p2`]) against level
+/// 4 (189k dofs: 21 min on the loaded 2-core machine). The energy estimate lies within
+/// [0.5, 3] of the true error (measured 0.70, 0.75); U's does not (7.6 and 55: B̄'s U converges
+/// far faster than the compliance identity's η²/F says, theory §15.4), printed, not asserted.
+#[test]
+#[ignore]
+fn effectivity_table_p2_hertz() {
+    let levels: Vec<Level> = [1, 2, 4].iter().map(|&k| family_level(&hertz_family_p2(), [5, 5, 5], k)).collect();
+    for (i, (e, eu)) in table("Hertz P2", &levels, None).into_iter().enumerate() {
+        println!("level {i}: U effectivity {eu:.3} (not asserted: theory §15.4)");
+        assert!((0.5..=3.0).contains(&e), "level {i}: energy effectivity {e:.3}");
+    }
+}
+
+/// The effectivity table of the report (theory §15.4), P1: Hertz on the levels 8, 16 against 32
+/// cells a side, the plastic default scene on 8×8×4 and 16×16×8 against 32×32×16. Slow
+/// (minutes). P2's rows: [`effectivity_table_p2_hertz`] and
+/// [`the_energy_effectivity_of_p2_on_the_plastic_default_scene_lies_within_half_to_three`].
 #[test]
 #[ignore]
 fn effectivity_table() {
     let levels: Vec<Level> = [8, 16, 32].iter().map(|&n| level(&hertz(), [n, n, n])).collect();
-    table("Hertz P1", &levels);
+    table("Hertz P1", &levels, None);
     let johnson = example("johnson.toml");
     let levels: Vec<Level> = [8, 16, 32].iter().map(|&n| level(&johnson, [n, n, n / 2])).collect();
-    table("default scene (plastic) P1", &levels);
-    let levels: Vec<Level> = [1, 2, 4].iter().map(|&k| family_level(&hertz_family_p2(), [5, 5, 5], k)).collect();
-    table("Hertz P2 (nested family)", &levels);
+    table("default scene (plastic) P1", &levels, None);
+}
+
+/// The Hertz rows of P2 without B̄ (`mean_dilatation = false`, plain P2, which does not lock
+/// at ν = 0.3), to separate B̄ from the rest in the effectivity of U (theory §15.4; its levels
+/// 1 and 2 were measured, level 4 not run to the end). Slow (about 20 min).
+#[test]
+#[ignore]
+fn effectivity_table_p2_without_mean_dilatation() {
+    let mut t = hertz_family_p2();
+    set(&mut t, "discretisation.mean_dilatation", toml::Value::Boolean(false));
+    let levels: Vec<Level> = [1, 2, 4].iter().map(|&k| family_level(&t, [5, 5, 5], k)).collect();
+    table("Hertz P2 without B̄", &levels, None);
+}
+
+/// The default scene's U with P2 (B̄, dual quadratic rows) extrapolated from the levels 3, 4, 5
+/// of examples/johnson_family.toml (Richardson, order 3.32 from the data): 8.41731e-3 ± 0.27 %
+/// (docs/accuracy.md, "The default scene on nested levels").
+const JOHNSON_U_P2: f64 = 8.41731e-3;
+
+/// P2's energy effectivity on the plastic default scene, cheap levels (theory §15.4): the nested
+/// family of examples/johnson_family.toml (B̄, dual quadratic rows, graded, Γ₁'s edges aligned)
+/// on the base 4×4×2, levels 1, 2 against 4 (cells 4×4×2, 8×8×4 against 16×16×8; a minute).
+/// The energy estimate lies within [0.5, 3] of the true error (measured 0.75, 0.60). U against
+/// [`JOHNSON_U_P2`] (these levels' U is not monotone, so they extrapolate to nothing) is
+/// printed, not asserted: measured 0.61 and 15.4 (theory §15.4).
+#[test]
+fn the_energy_effectivity_of_p2_on_the_plastic_default_scene_lies_within_half_to_three() {
     let family = example("johnson_family.toml");
-    let levels: Vec<Level> = [1, 2, 4].iter().map(|&k| family_level(&family, [8, 8, 4], k)).collect();
-    table("default scene (plastic) P2 (johnson_family)", &levels);
+    let levels: Vec<Level> = [1, 2, 4].iter().map(|&k| family_level(&family, [4, 4, 2], k)).collect();
+    for (i, (e, eu)) in
+        table("default scene (plastic) P2, base 4×4×2", &levels, Some(JOHNSON_U_P2)).into_iter().enumerate()
+    {
+        println!("level {i}: U effectivity {eu:.3} (not asserted: theory §15.4)");
+        assert!((0.5..=3.0).contains(&e), "level {i}: energy effectivity {e:.3}");
+    }
 }
