@@ -24,7 +24,8 @@
 //! The plots need the cargo feature `report` (on by default; `figures`); without it the CSV files
 //! and `report.md` are written and `report.md` says that the images were not drawn.
 //!
-//! The modules, each using only those above it: [`transfer`], [`convergence`], [`runs`]
+//! The modules, each using only those above it: [`transfer`], [`pointwise`] (fields compared at
+//! points, for P2: theory §15.4), [`convergence`], [`runs`]
 //! (the ladder and error measures), [`elements`], [`measure`] (the runs and studies),
 //! [`tables`], `figures`, [`generate`](mod@generate) (all of it into a folder).
 //!
@@ -38,6 +39,7 @@ pub mod elements;
 pub mod figures;
 pub mod generate;
 pub mod measure;
+pub mod pointwise;
 pub mod runs;
 pub mod tables;
 pub mod transfer;

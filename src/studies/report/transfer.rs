@@ -186,6 +186,11 @@ fn element_box(mesh: &TetMesh, e: usize) -> ([f64; 3], [f64; 3]) {
 
 /// The smallest barycentric coordinate of `p` in element `e` (≥ 0 inside).
 fn min_barycentric(mesh: &TetMesh, e: usize, p: [f64; 3]) -> f64 {
+    barycentric(mesh, e, p).into_iter().fold(f64::INFINITY, f64::min)
+}
+
+/// The barycentric coordinates of `p` in element `e`, in the order of its vertices.
+pub fn barycentric(mesh: &TetMesh, e: usize, p: [f64; 3]) -> [f64; 4] {
     let [a, b, c, d] = mesh.tets[e].map(|n| mesh.nodes[n]);
     let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
     let (u, v, w, r) = (sub(b, a), sub(c, a), sub(d, a), sub(p, a));
@@ -194,7 +199,7 @@ fn min_barycentric(mesh: &TetMesh, e: usize, p: [f64; 3]) -> f64 {
     };
     let vol = det(u, v, w);
     let (l1, l2, l3) = (det(r, v, w) / vol, det(u, r, w) / vol, det(u, v, r) / vol);
-    (1.0 - l1 - l2 - l3).min(l1).min(l2).min(l3)
+    [1.0 - l1 - l2 - l3, l1, l2, l3]
 }
 
 /// The centroid of element `e`.

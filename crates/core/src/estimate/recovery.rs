@@ -27,19 +27,22 @@ pub struct ElementField {
 impl ElementField {
     /// The field of `stress` on `element`'s mesh.
     pub fn new(element: &dyn Discretisation, l: &Lagrangian<'_>, stress: &StressField) -> Self {
-        let k = element.points_per_element();
         let m = 6 + l.data.hardening_dim().min(stress.q.dim());
+        Self::of_points(element, m, |i, c| if c < 6 { stress.sigma[i][c] } else { stress.q(i)[c - 6] })
+    }
+
+    /// The field through values at `element`'s stress points: `value(i, c)` is component `c` of
+    /// `m` at point `i` (element e's points are `e·k..(e + 1)·k`, k points per element). Any
+    /// pointwise quantity (stresses, strains) becomes a field within the elements this way.
+    pub fn of_points(element: &dyn Discretisation, m: usize, value: impl Fn(usize, usize) -> f64 + Sync) -> Self {
+        let k = element.points_per_element();
         let to_vertices = interpolation(&element.point_barycentrics());
         let n = element.mesh().n_elements();
         let mut vertex = vec![0.0; n * 4 * m];
         vertex.par_chunks_mut(4 * m).enumerate().for_each(|(e, out)| {
-            let value = |q: usize, c: usize| {
-                let i = e * k + q;
-                if c < 6 { stress.sigma[i][c] } else { stress.q(i)[c - 6] }
-            };
             for a in 0..4 {
                 for c in 0..m {
-                    out[a * m + c] = (0..k).map(|q| to_vertices[a][q] * value(q, c)).sum();
+                    out[a * m + c] = (0..k).map(|q| to_vertices[a][q] * value(e * k + q, c)).sum();
                 }
             }
         });
@@ -51,9 +54,10 @@ impl ElementField {
         self.m
     }
 
-    /// The value at barycentric coordinates `lambda` of element `e`, into `out` (m entries).
+    /// The value at barycentric coordinates `lambda` of element `e` (in the order of the
+    /// element's vertices in the mesh), into `out` (m entries).
     #[inline]
-    fn at(&self, e: usize, lambda: &[f64; 4], out: &mut [f64]) {
+    pub fn at(&self, e: usize, lambda: &[f64; 4], out: &mut [f64]) {
         let v = &self.vertex[e * 4 * self.m..(e + 1) * 4 * self.m];
         for (c, o) in out.iter_mut().enumerate() {
             *o = (0..4).map(|a| lambda[a] * v[a * self.m + c]).sum();

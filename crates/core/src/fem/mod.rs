@@ -18,6 +18,7 @@ use crate::error::{ParameterError, SceneError};
 use crate::mesh::TetMesh;
 use crate::mesh::dofs::{Dirichlet, DofMap};
 use crate::problem::displacements::ConstraintRows;
+use crate::problem::elasticity::Elasticity;
 use crate::problem::operators::ElementOperators;
 use std::fmt::Debug;
 
@@ -113,6 +114,13 @@ pub trait Discretisation: ElementOperators {
     /// default) for a rank's part of a distributed problem.
     fn unconstrained(&self) -> Option<Box<dyn Discretisation>> {
         None
+    }
+    /// (a − a_h)(u, u) for the displacement `u`: the elastic energy ∫ ε(u):Cε(u) of the exact
+    /// strain minus that of the element's strain operator, ∫ (Bu):C(Bu) (theory §15.2: the
+    /// compliance identity of the goal estimate carries it for an element whose B is not ε).
+    /// Zero, the default, for an element whose B is the strain of its displacements.
+    fn strain_consistency_energy(&self, _law: &Elasticity, _u: &[f64]) -> f64 {
+        0.0
     }
     /// The element's contact rows of an obstacle's nodal rows `nodal`: the nodal rows (the
     /// default), or rows recombined from them (P2's dual quadratic rows, theory §10.1). An error

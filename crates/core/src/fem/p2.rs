@@ -22,6 +22,7 @@ use crate::error::SceneError;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::mesh::{TET_EDGES, TetMesh};
 use crate::problem::displacements::ConstraintRows;
+use crate::problem::elasticity::Elasticity;
 use crate::problem::operators::{ElementOperators, Material, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::tensor::{SQRT2, Sym, SymOp};
@@ -179,6 +180,28 @@ impl P2Element {
         self
     }
 
+    /// ∇u at the four points of element `e`: Σ_a u_a ⊗ ∇N_a(x_q).
+    #[inline]
+    fn point_gradients(&self, e: usize, u: &[f64]) -> [[[f64; 3]; 3]; POINTS] {
+        let g = &self.parts.grads[e];
+        let mut m = [[[0.0; 3]; 3]; POINTS];
+        for (a, &n) in self.nodes[e].iter().enumerate() {
+            let ua = self.parts.nodal(u, n);
+            if ua == [0.0; 3] {
+                continue;
+            }
+            for (q, mq) in m.iter_mut().enumerate() {
+                let ga = shape_gradient(g, a, q);
+                for i in 0..3 {
+                    for k in 0..3 {
+                        mq[i][k] += ua[i] * ga[k];
+                    }
+                }
+            }
+        }
+        m
+    }
+
     /// Column j of Σ_T Σ_q w_q B̄_qᵀ C_q B̄_q (rows ≥ j), gathered from the elements around its
     /// node.
     fn assemble_column(&self, j: usize, col: &mut [f64], material: &Material<'_>) {
@@ -247,6 +270,26 @@ impl Discretisation for P2Element {
         "p2"
     }
 
+    /// B̄ (theory §10.1) leaves out of the energy the volumetric strain's deviation from its
+    /// element mean: ε(u):Cε(u) − ε̄:Cε̄ = K((tr ε)² − θ̄²) pointwise (the deviators agree), whose
+    /// integral over T is K∫_T (tr ε − θ̄_T)², tr ε linear, so the four-point rule is exact.
+    fn strain_consistency_energy(&self, law: &Elasticity, u: &[f64]) -> f64 {
+        if !self.mean_dilatation {
+            return 0.0;
+        }
+        let bulk = law.bulk_modulus();
+        (0..self.nodes.len())
+            .into_par_iter()
+            .map(|e| {
+                let m = self.point_gradients(e, u);
+                let theta: [f64; POINTS] = std::array::from_fn(|q| m[q][0][0] + m[q][1][1] + m[q][2][2]);
+                let mean = theta.iter().sum::<f64>() / POINTS as f64;
+                let w = &self.weights[e * POINTS..(e + 1) * POINTS];
+                bulk * theta.iter().zip(w).map(|(t, w)| w * (t - mean) * (t - mean)).sum::<f64>()
+            })
+            .sum()
+    }
+
     /// VTK_QUADRATIC_TETRA: vertices, then the edge nodes in VTK's order.
     fn degree(&self) -> usize {
         2
@@ -301,23 +344,7 @@ impl ElementOperators for P2Element {
     fn strain(&self, u: &[f64], eps: &mut [Sym]) {
         let md = self.mean_dilatation;
         eps.par_chunks_mut(POINTS).enumerate().for_each(|(e, out)| {
-            let g = &self.parts.grads[e];
-            // ∇u at each point = Σ_a u_a ⊗ ∇N_a(x_q)
-            let mut m = [[[0.0; 3]; 3]; POINTS];
-            for (a, &n) in self.nodes[e].iter().enumerate() {
-                let ua = self.parts.nodal(u, n);
-                if ua == [0.0; 3] {
-                    continue;
-                }
-                for (q, mq) in m.iter_mut().enumerate() {
-                    let ga = shape_gradient(g, a, q);
-                    for i in 0..3 {
-                        for k in 0..3 {
-                            mq[i][k] += ua[i] * ga[k];
-                        }
-                    }
-                }
-            }
+            let m = self.point_gradients(e, u);
             let theta: [f64; POINTS] = std::array::from_fn(|q| m[q][0][0] + m[q][1][1] + m[q][2][2]);
             let mean = theta.iter().sum::<f64>() / POINTS as f64;
             let s = 1.0 / SQRT2;
