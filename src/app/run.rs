@@ -6,7 +6,7 @@ use super::path;
 use super::setup::{Loaded, Outcome, RunError, finish};
 use crate::io::summary::estimate::EstimateSummary;
 use crate::io::vtu::CellField;
-use saddle_core::{Evolution, Monitor, PathError};
+use saddle_core::{Evolution, Monitor, PathError, ProblemView};
 use std::path::Path;
 
 /// Solves a loaded problem and writes `out_dir/summary.json` and `out_dir/solution.vtu`. The
@@ -56,6 +56,9 @@ pub fn solve_and_write_with(
     // the a posteriori estimate (theory §15), on one machine
     let estimate = (loaded.output.error_estimate && ranks.size() == 1)
         .then(|| timer.time("estimate", || saddle_core::estimate(view.element, &view.l, &step.solution.stress)));
+    if let Some(w) = estimate.as_ref().and_then(|e| goal_estimate_warning(view, &step.solution.u, e)) {
+        summary.warnings.push(w);
+    }
     let cells: Vec<CellField<'_>> = estimate.iter().map(|e| ("error_indicator", &e.indicators[..])).collect();
     let files = timer.time("write", || ranks.write_solution(out_dir, "solution", view, &step.solution, &cells));
     let files = RunError::agree(ranks, files.map_err(io_error(&out_dir.join("solution"))))?;
@@ -68,6 +71,25 @@ pub fn solve_and_write_with(
     ranks.describe(&mut summary);
     let written = finish(ranks, out, &summary, &files, out_dir)?;
     Ok(Outcome { solution: step.solution, summary, out_dir: out_dir.to_path_buf(), written })
+}
+
+/// The extras' compliance estimates η²/|f| assume the element's energy is the continuous one
+/// on its space (theory §15.2); where the element's strain is not ε(u) (B̄), its consistency
+/// energy δ = (a − a_h)(u, u) enters the identity. A warning when δ exceeds a tenth of η².
+fn goal_estimate_warning(view: ProblemView<'_>, u: &[f64], e: &saddle_core::ErrorEstimate) -> Option<String> {
+    if e.extras.iter().all(Option::is_none) {
+        return None;
+    }
+    let delta = view.element.strain_consistency_energy(view.l.data.elasticity, u);
+    let eta2 = e.energy * e.energy;
+    (delta > 0.1 * eta2).then(|| {
+        format!(
+            "error_estimate: the element's strain is not the strain of its displacements (its \
+             consistency energy {delta:.3e} is {:.1} η²), so the extras' estimates η²/|f| may \
+             overstate their errors many times (theory §15.4); the energy estimate is not affected",
+            delta / eta2.max(f64::MIN_POSITIVE)
+        )
+    })
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + use<> {
