@@ -22,7 +22,7 @@ use crate::error::SceneError;
 use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::mesh::{TET_EDGES, TetMesh};
 use crate::problem::displacements::ConstraintRows;
-use crate::problem::operators::{ElementOperators, Material, RigidBodyModes};
+use crate::problem::operators::{ElementOperators, Material, PressureRows, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::tensor::{SQRT2, Sym, SymOp};
 use rayon::prelude::*;
@@ -288,6 +288,40 @@ impl ElementOperators for P2Element {
 
     fn pattern(&self) -> &SymmetricPattern {
         &self.parts.pattern
+    }
+
+    /// With B̄ the trace of ε̄ at the four points of T is θ̄_T = (1/|T|)∫_T div u: B's row T holds
+    /// ∫_T ∂_c N_a = |T| (∇λ_i + ∇λ_j)_c for the edge node (i, j) and nothing for a vertex
+    /// ([`mean_gradient`]). Plain P2 has no element-constant trace.
+    fn pressure_rows(&self) -> Option<PressureRows> {
+        if !self.mean_dilatation {
+            return None;
+        }
+        let ne = self.nodes.len();
+        let mut rows = PressureRows {
+            ptr: Vec::with_capacity(ne + 1),
+            dof: Vec::with_capacity(18 * ne),
+            val: Vec::with_capacity(18 * ne),
+            volume: Vec::with_capacity(ne),
+            points: POINTS,
+        };
+        rows.ptr.push(0);
+        for (e, t) in self.nodes.iter().enumerate() {
+            let volume: f64 = self.weights[POINTS * e..POINTS * (e + 1)].iter().sum();
+            let g = &self.parts.grads[e];
+            for (a, &n) in t.iter().enumerate().skip(4) {
+                let mean = mean_gradient(g, a);
+                for k in 0..3 {
+                    if let Some(j) = self.parts.dofs.free(n, k) {
+                        rows.dof.push(j as u32);
+                        rows.val.push(volume * self.parts.dofs.along(n, k, |c| mean[c]));
+                    }
+                }
+            }
+            rows.ptr.push(rows.dof.len());
+            rows.volume.push(volume);
+        }
+        Some(rows)
     }
 
     fn n_points(&self) -> usize {
