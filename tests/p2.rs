@@ -326,13 +326,8 @@ fn newton_cg_per_solve(
 ) -> (f64, f64, f64) {
     let amg = saddle::core::linalg::AmgParams { tangent_smoother_degree: tangent_degree, ..Default::default() };
     // the path this measures: CG on K with the multigrid of K, not the pressure block
-    let newton = saddle::solvers::Newton {
-        linear,
-        amg,
-        max_iter: 200,
-        pressure_block_ratio: f64::MAX,
-        ..Default::default()
-    };
+    let newton =
+        saddle::solvers::Newton { linear, amg, max_iter: 200, pressure_block_ratio: f64::MAX, ..Default::default() };
     let (u, force, cg, _) = newton_counts(t, newton);
     (u, force, cg)
 }
@@ -369,7 +364,9 @@ fn the_pressure_block_gives_the_direct_answer_in_at_most_60_minres_iterations_pe
     let (direct, ..) = run(Direct, PRESSURE_BLOCK_RATIO);
     let (u_cg, cg, none) = run(Amg, f64::MAX);
     let (u_block, minres, solves) = run(Amg, PRESSURE_BLOCK_RATIO);
-    println!("direct U {direct:.12e}; CG on K {u_cg:.12e}, {cg:.1} per solve; block {u_block:.12e}, {minres:.1} MINRES per solve ({solves} solves)");
+    println!(
+        "direct U {direct:.12e}; CG on K {u_cg:.12e}, {cg:.1} per solve; block {u_block:.12e}, {minres:.1} MINRES per solve ({solves} solves)"
+    );
     assert!(none == 0.0 && solves > 0.0, "the block path: {none} and {solves} solves");
     for u in [u_cg, u_block] {
         assert!((u - direct).abs() <= 1e-8 * direct.abs(), "{u} against the direct {direct}");

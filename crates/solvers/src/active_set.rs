@@ -634,9 +634,8 @@ impl ActiveSetSystem {
             .flatten()
             .map(|rows| Box::new(PressureBlock::new(rows, l.n_dofs(), &c, rule.residual)));
         let split = block.as_ref().map(|b| b.split_part(l.pattern(), &k_values));
-        let amg = SmoothedAggregation::new(split.as_ref().unwrap_or(&k), &near_null, amg).map_err(|e| SolveError::Unsupported {
-            solver: solver.into(),
-            message: format!("multigrid set-up: {e}"),
+        let amg = SmoothedAggregation::new(split.as_ref().unwrap_or(&k), &near_null, amg).map_err(|e| {
+            SolveError::Unsupported { solver: solver.into(), message: format!("multigrid set-up: {e}") }
         })?;
         let n = l.n_dofs();
         let built_products = amg.products_per_cycle();
@@ -900,7 +899,9 @@ impl ActiveSetSystem {
                 let use_block = block.is_some();
                 if *last_iterations > *refresh_above {
                     match block.as_deref() {
-                        None => follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, built_on, refreshes),
+                        None => {
+                            follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, built_on, refreshes)
+                        }
                         Some(block) => follow_the_split_tangent(amg, block, l.pattern(), k_dofs, built_on, refreshes),
                     }
                 }

@@ -44,8 +44,8 @@ use std::sync::Mutex;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BlockResidual {
-    /// MINRES's own: ‖r‖_{𝓜⁻¹} of the saddle system at the tolerance times ‖b‖_{𝓜⁻¹} (the
-    /// default; Newton's KKT residual judges the answer either way).
+    /// MINRES's own: ‖r‖_{𝓜⁻¹} of the saddle system at the tolerance times that of the start
+    /// (the default; Newton's KKT residual judges the answer either way).
     #[default]
     Saddle,
     /// CG's: ‖b − K x‖ at the tolerance times ‖b‖, the displacement system's residual, in which
@@ -215,7 +215,7 @@ impl PressureBlock {
         // the consistent pressure of the initial guess, p = C⁻¹ B̃ x
         z[..n].copy_from_slice(x);
         {
-            let (t, q, _) = &mut *scratch.lock().unwrap_or_else(|e| e.into_inner());
+            let (t, q, _) = &mut *op.scratch.lock().unwrap_or_else(|e| e.into_inner());
             op.pressure_rows(x, t, q);
             for ((p, q), c) in z[n..].iter_mut().zip(q.iter()).zip(c.iter()) {
                 *p = q / c;

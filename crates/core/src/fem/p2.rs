@@ -541,6 +541,31 @@ mod tests {
     }
 
     #[test]
+    fn pressure_rows_give_the_trace_of_the_mean_dilatation_strain() {
+        // tr ε̄ at each of an element's four points is (B u)_T / |T| (theory §10.1), for any u,
+        // with and without nodal frames; plain P2 has no element-constant trace
+        let mut rng = StdRng::seed_from_u64(11);
+        for l in [problem(true), inclined(true)] {
+            let rows = l.pressure_rows().unwrap();
+            assert_eq!(rows.n_rows(), l.parts.mesh.n_elements());
+            let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut eps = vec![Sym::zeros(); l.n_points()];
+            l.strain(&u, &mut eps);
+            let mut worst: f64 = 0.0;
+            for e in 0..rows.n_rows() {
+                let r = rows.ptr[e]..rows.ptr[e + 1];
+                let bu: f64 = rows.dof[r.clone()].iter().zip(&rows.val[r]).map(|(&j, v)| v * u[j as usize]).sum();
+                for q in 0..POINTS {
+                    let t = &eps[POINTS * e + q];
+                    worst = worst.max((t[0] + t[1] + t[2] - bu / rows.volume[e]).abs());
+                }
+            }
+            assert!(worst < 1e-12, "{worst}");
+        }
+        assert!(problem(false).pressure_rows().is_none());
+    }
+
+    #[test]
     fn rigid_motions_have_no_strain() {
         let mesh = BoxMesh::new([0.0; 3], [1.0; 3], [2, 2, 2]).mesh().unwrap();
         let l = P2Element::new(mesh, &[]).unwrap();

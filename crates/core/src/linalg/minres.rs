@@ -5,7 +5,8 @@
 //! MINRES minimises ‖b − 𝒜 z‖_{𝓜⁻¹} over the Krylov space of 𝓜⁻¹𝒜 by a three-term Lanczos
 //! recurrence and Givens rotations; unlike CG it needs 𝒜 symmetric only, so it solves saddle-point
 //! systems [A Bᵀ; B −C] with a block-diagonal preconditioner (Silvester & Wathen 1994). The
-//! iteration stops on MINRES's own estimate ‖b − 𝒜 z‖_{𝓜⁻¹} ≤ tol ‖b‖_{𝓜⁻¹}, or on a residual of
+//! iteration stops on MINRES's own estimate ‖b − 𝒜 z‖_{𝓜⁻¹} ≤ tol ‖b − 𝒜 z₀‖_{𝓜⁻¹} (z₀ the
+//! start), or on a residual of
 //! the caller's ([`Residual`]; for the pressure block: that of the displacement system K x = b
 //! the saddle system is equivalent to), checked whenever the estimate has fallen by the
 //! tolerance, the iteration going on with the estimate's target lowered until the caller's is
@@ -69,8 +70,8 @@ impl Minres {
         self.r1.len()
     }
 
-    /// Solves 𝒜 z = b from the initial guess in `z` until ‖b − 𝒜 z‖_{𝓜⁻¹} ≤ `tol` ‖b‖_{𝓜⁻¹}
-    /// (MINRES's own estimate; `residual` None) or the caller's `residual` of z is at most
+    /// Solves 𝒜 z = b from the initial guess z₀ in `z` until ‖b − 𝒜 z‖_{𝓜⁻¹} ≤ `tol`
+    /// ‖b − 𝒜 z₀‖_{𝓜⁻¹} (MINRES's own estimate; `residual` None) or the caller's `residual` of z is at most
     /// `tol`, or `max_iter` iterations. With a caller's residual, it is evaluated whenever the
     /// estimate has met its target (at first `tol`), and if it is not met yet the target is
     /// lowered by the ratio and the iteration goes on. Not converging is reported; a breakdown
@@ -97,7 +98,11 @@ impl Minres {
         m.apply(b, y);
         let norm_b = dot(b, y);
         if !(norm_b >= 0.0 && norm_b.is_finite()) {
-            return Err(PcgError::Breakdown { iteration: 0, quantity: "b·M⁻¹b (is M positive definite?)".into(), value: norm_b });
+            return Err(PcgError::Breakdown {
+                iteration: 0,
+                quantity: "b·M⁻¹b (is M positive definite?)".into(),
+                value: norm_b,
+            });
         }
         let norm_b = norm_b.sqrt();
         let mut rel = match residual.as_deref_mut() {
@@ -117,7 +122,11 @@ impl Minres {
         m.apply(r1, y);
         let beta1 = dot(r1, y);
         if !(beta1 > 0.0 && beta1.is_finite()) {
-            return Err(PcgError::Breakdown { iteration: 0, quantity: "r·M⁻¹r (is M positive definite?)".into(), value: beta1 });
+            return Err(PcgError::Breakdown {
+                iteration: 0,
+                quantity: "r·M⁻¹r (is M positive definite?)".into(),
+                value: beta1,
+            });
         }
         let beta1 = beta1.sqrt();
         if residual.is_none() && beta1 <= tol * norm_b {
@@ -157,7 +166,11 @@ impl Minres {
             oldb = beta;
             let bb = dot(r2, y);
             if !(bb >= 0.0 && bb.is_finite()) {
-                return Err(PcgError::Breakdown { iteration: it, quantity: "r·M⁻¹r (is M positive definite?)".into(), value: bb });
+                return Err(PcgError::Breakdown {
+                    iteration: it,
+                    quantity: "r·M⁻¹r (is M positive definite?)".into(),
+                    value: bb,
+                });
             }
             beta = bb.sqrt();
             // the QR factorisation of the tridiagonal matrix by Givens rotations
@@ -189,7 +202,7 @@ impl Minres {
                 return Err(PcgError::NonFinite { what: "the MINRES residual estimate".into() });
             }
             let Some(res) = residual.as_deref_mut() else {
-                if phibar <= tol * norm_b || beta == 0.0 {
+                if phibar <= tol * beta1 || beta == 0.0 {
                     return Ok(MinresReport { iterations: it, relative_residual: phibar / norm_b, converged: true });
                 }
                 continue;
@@ -228,8 +241,8 @@ mod tests {
 
     impl SymmetricOperator for Dense {
         fn apply(&self, x: &[f64], y: &mut [f64]) {
-            for i in 0..self.n {
-                y[i] = (0..self.n).map(|j| self.a[i * self.n + j] * x[j]).sum();
+            for (y, row) in y.iter_mut().zip(self.a.chunks_exact(self.n)) {
+                *y = row.iter().zip(x).map(|(a, x)| a * x).sum();
             }
         }
     }
@@ -288,7 +301,7 @@ mod tests {
         z.iter_mut().for_each(|v| *v = 0.0);
         let rep = minres.solve(&op, &Identity, &b, &mut z, Some(&mut Plain { op: &op, b: &b }), 1e-12, 3).unwrap();
         assert!(!rep.converged && rep.iterations == 3, "{rep:?}");
-        // on its own estimate: ‖b − 𝒜z‖ ≤ 1e-10 ‖b‖ in the 𝓜⁻¹ = I norm, checked afterwards
+        // on its own estimate from z₀ = 0: ‖b − 𝒜z‖ ≤ 1e-10 ‖b‖ in the 𝓜⁻¹ = I norm, checked afterwards
         z.iter_mut().for_each(|v| *v = 0.0);
         let rep = minres.solve(&op, &Identity, &b, &mut z, None, 1e-10, 200).unwrap();
         let true_rel = Plain { op: &op, b: &b }.relative(&z);
