@@ -371,7 +371,8 @@ fn the_pressure_block_gives_the_direct_answer_in_at_most_60_minres_iterations_pe
     for u in [u_cg, u_block] {
         assert!((u - direct).abs() <= 1e-8 * direct.abs(), "{u} against the direct {direct}");
     }
-    // issue 27's target; CG on K took 82.2 per solve on this scene (the test above)
+    // issue 27's target; measured 2026-11-25 (`c03b04d`): block 41.8, CG on K 55.7 per solve
+    // on this scene, direct U 6.731469271768e-3, both iterative U within 2.4e-12 of it
     assert!(minres <= 60.0, "{minres} MINRES per solve (CG on K: {cg})");
 }
 
