@@ -58,7 +58,7 @@ pub use problem::friction::{FrictionBlock, FrictionLaw, FrictionRows};
 pub use problem::kkt::{KktResiduals, kkt, kkt_with_stress};
 pub use problem::lagrangian::{Data, Iterate, Lagrangian, LocalLaw, Workspace};
 pub use problem::obstacles::{DiscreteObstacles, NamedObstacle, ObstacleReport, ObstacleRows, Obstacles};
-pub use problem::operators::{ElementOperators, Material, RigidBodyModes};
+pub use problem::operators::{ElementOperators, Material, PressureRows, RigidBodyModes};
 pub use problem::pattern::SymmetricPattern;
 pub use problem::solver::{
     Monitor, PhaseTimer, Silent, Solution, SolveError, SolveReport, Solver, Start, StopReason, one_rank,

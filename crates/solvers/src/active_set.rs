@@ -25,6 +25,7 @@
 
 use crate::linear::{self, InSolver, lower, near_null_space};
 use crate::newton_friction::{SlipPair, friction_active_set};
+use crate::pressure_block::{BlockResidual, BlockRule, PressureBlock, incompressibility};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
 use saddle_core::linalg::{AmgParams, Csr, LinalgError, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
@@ -236,17 +237,23 @@ pub struct IterativeSolve {
     /// The last solutions of the extras' columns (W = K⁻¹(−K δ_V)): they change little from
     /// one Newton step to the next and start the next CG solves.
     previous: Vec<f64>,
+    /// The pressure block (theory §10.1): when present, `amg` is the multigrid of the
+    /// part A of the split (λ = 0 elasticity for an elastic point) and the systems are solved by MINRES on the saddle system
+    /// ([`PressureBlock`]), its iterations counted in `iterations` like CG's.
+    block: Option<Box<PressureBlock>>,
+    /// Solves by the pressure block.
+    pub block_solves: usize,
 }
 
 /// The AMG preconditioner with the active (fixed) coordinates split off as a diagonal block:
 /// z_F = T⁻¹M⁻¹T⁻ᵀ r_F (r zero on the fixed coordinates; M the multigrid of K, TᵀKT in the
 /// coordinates of the rows), z_s = r_s / d_s on a fixed coordinate s.
-struct FixedDofs<'a> {
-    amg: &'a SmoothedAggregation,
-    basis: &'a RowBasis,
+pub(crate) struct FixedDofs<'a> {
+    pub(crate) amg: &'a SmoothedAggregation,
+    pub(crate) basis: &'a RowBasis,
     /// The fixed dofs s with their diagonal entries d_s.
-    fixed: &'a [(usize, f64)],
-    scratch: &'a Mutex<Vec<f64>>,
+    pub(crate) fixed: &'a [(usize, f64)],
+    pub(crate) scratch: &'a Mutex<Vec<f64>>,
 }
 
 impl Preconditioner for FixedDofs<'_> {
@@ -302,6 +309,33 @@ fn follow_the_tangent(
         built_on.clear();
         built_on.extend_from_slice(&m.val);
     }
+}
+
+/// [`follow_the_tangent`] for the pressure block: the multigrid rebuilt on the part
+/// A of the tangent `k` (values on L's `pattern`, the dofs' own coordinates).
+fn follow_the_split_tangent(
+    amg: &mut SmoothedAggregation,
+    block: &PressureBlock,
+    pattern: &SymmetricPattern,
+    k: &[f64],
+    built_on: &mut Vec<f64>,
+    refreshes: &mut usize,
+) {
+    let a = block.split_part(pattern, k);
+    if !changed_enough(built_on, &a.val) {
+        return;
+    }
+    if amg.refresh(&a).is_ok() {
+        *refreshes += 1;
+        built_on.clear();
+        built_on.extend_from_slice(&a.val);
+    }
+}
+
+/// The iterations of one Krylov solve and whether it reached its tolerance.
+struct Report {
+    iterations: usize,
+    converged: bool,
 }
 
 /// The price of one CG iteration with `amg` in iterations of the cycle as built, whose
@@ -571,6 +605,22 @@ impl ActiveSetSystem {
         cg_max_iter: usize,
         refresh_above: usize,
     ) -> Result<Self, SolveError> {
+        let never = BlockRule { ratio: f64::INFINITY, residual: BlockResidual::default() };
+        Self::multigrid_with(l, solver, amg, cg_max_iter, refresh_above, never)
+    }
+
+    /// [`ActiveSetSystem::multigrid`], with the pressure block (theory §10.1) when the element
+    /// has pressure rows and the elastic κ/(2μ) is above `block.ratio` (Newton's
+    /// `pressure_block_ratio`): the multigrid is then built on the part A of the split of the
+    /// elastic stiffness and the systems are solved by MINRES ([`PressureBlock`]).
+    pub fn multigrid_with(
+        l: &Lagrangian<'_>,
+        solver: &str,
+        amg: &AmgParams,
+        cg_max_iter: usize,
+        refresh_above: usize,
+        rule: BlockRule,
+    ) -> Result<Self, SolveError> {
         let basis = RowBasis::new(l.data.rows, l.n_dofs(), l.pattern(), solver)?;
         let near_null = near_null_space(l).ok_or_else(|| SolveError::Unsupported {
             solver: solver.into(),
@@ -579,9 +629,13 @@ impl ActiveSetSystem {
         let c = l.data.elasticity.stiffness_matrix();
         let k_values = l.stiffness(Material::Uniform(&c));
         let k = Csr::from_symmetric_lower(lower(l.pattern()), &k_values);
-        let amg = SmoothedAggregation::new(&k, &near_null, amg).map_err(|e| SolveError::Unsupported {
-            solver: solver.into(),
-            message: format!("multigrid set-up: {e}"),
+        let block = (incompressibility(&c) > rule.ratio)
+            .then(|| l.pressure_rows())
+            .flatten()
+            .map(|rows| Box::new(PressureBlock::new(rows, l.n_dofs(), &c, rule.residual)));
+        let split = block.as_ref().map(|b| b.split_part(l.pattern(), &k_values));
+        let amg = SmoothedAggregation::new(split.as_ref().unwrap_or(&k), &near_null, amg).map_err(|e| {
+            SolveError::Unsupported { solver: solver.into(), message: format!("multigrid set-up: {e}") }
         })?;
         let n = l.n_dofs();
         let built_products = amg.products_per_cycle();
@@ -617,6 +671,8 @@ impl ActiveSetSystem {
             built_products,
             unconverged: 0,
             previous: Vec::new(),
+            block,
+            block_solves: 0,
         };
         Ok(Self::with(l, solver, basis, LinearBackend::Amg(Box::new(iterative))))
     }
@@ -687,6 +743,17 @@ impl ActiveSetSystem {
             it.iterations = 0;
             it.unconverged = 0;
             it.refreshes = 0;
+            it.block_solves = 0;
+        }
+    }
+
+    /// The tangents the next [`ActiveSetSystem::step`]'s matrix was assembled with: the pressure
+    /// block's split follows them (theory §10.1); nothing to do without one.
+    pub fn follow_material(&mut self, material: Material<'_>) {
+        if let LinearBackend::Amg(it) = &mut self.backend
+            && let Some(block) = &mut it.block
+        {
+            block.follow(material);
         }
     }
 
@@ -824,11 +891,19 @@ impl ActiveSetSystem {
                     spent_solves,
                     spent_cost,
                     built_products,
+                    block,
+                    block_solves,
                     ..
                 } = &mut **it;
                 a.assign_symmetric_lower(lower(p), &self.work, fill);
+                let use_block = block.is_some();
                 if *last_iterations > *refresh_above {
-                    follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, built_on, refreshes);
+                    match block.as_deref() {
+                        None => {
+                            follow_the_tangent(amg, basis, a, tangent, l.pattern(), k_dofs, fill, built_on, refreshes)
+                        }
+                        Some(block) => follow_the_split_tangent(amg, block, l.pattern(), k_dofs, built_on, refreshes),
+                    }
                 }
                 let fixed: Vec<(usize, f64)> =
                     (0..nr).filter(|&i| active[i]).map(|i| (basis.dof[i], self.work[cp[basis.dof[i]]])).collect();
@@ -843,11 +918,20 @@ impl ActiveSetSystem {
                         0 => col.iter_mut().for_each(|v| *v = 0.0),
                         _ => col.copy_from_slice(&previous[(c - 1) * n..c * n]),
                     }
-                    let report =
-                        pcg.solve(a, &pre, b, col, cg_tol, *max_iter).map_err(|e| SolveError::Unsupported {
-                            solver: self.solver.clone(),
-                            message: format!("CG on the tangent: {e}"),
-                        })?;
+                    let report = match block.as_deref_mut() {
+                        None => pcg.solve(a, &pre, b, col, cg_tol, *max_iter).map(|r| (r.iterations, r.converged)),
+                        Some(block) => {
+                            *block_solves += 1;
+                            block
+                                .solve(a, basis, &fixed, &pre, b, col, cg_tol, *max_iter)
+                                .map(|r| (r.iterations, r.converged))
+                        }
+                    }
+                    .map_err(|e| SolveError::Unsupported {
+                        solver: self.solver.clone(),
+                        message: format!("{} on the tangent: {e}", if use_block { "MINRES" } else { "CG" }),
+                    })?;
+                    let report = Report { iterations: report.0, converged: report.1 };
                     *iterations += report.iterations;
                     *spent += report.iterations;
                     *spent_cost += report.iterations as f64 * iteration_cost(amg, *built_products);

@@ -30,6 +30,7 @@ mod local_law;
 pub mod newton;
 pub mod newton_friction;
 pub mod penalty;
+pub mod pressure_block;
 mod residual;
 pub mod row_basis;
 #[cfg(feature = "socp")]

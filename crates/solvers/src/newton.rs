@@ -52,6 +52,7 @@ use crate::kh_projection::MetricProjection;
 use crate::linear::InSolver;
 use crate::local_law::{IterateMut, local_law_and_residual};
 use crate::penalty::Penalty;
+use crate::pressure_block::{BlockResidual, BlockRule};
 use crate::residual::History;
 use crate::row_basis::RowBasis;
 use crate::vector::{axpy, axpy_into};
@@ -135,6 +136,17 @@ pub struct Newton {
     /// `amg`); on a perfectly plastic P2 strip punch (56 896 dofs, h = 0) it took 216 per solve,
     /// the refreshed one 71 with this default (`docs/plastic_tangent.md`).
     pub amg_refresh_cg: usize,
+    /// The pressure block (theory §10.1): with the multigrid, an element that offers pressure
+    /// rows (B̄) and an elastic κ/(2μ) above this ratio, each system K x = b is solved as the
+    /// saddle system [A Bᵀ; B −C] by MINRES with the multigrid of A (λ = 0 elasticity for an elastic point) and a
+    /// diagonal pressure block, whose iterations do not grow as ν → ½ (they are counted in
+    /// `pcg_iterations`, the solves in `pressure_block_solves`). Default
+    /// [`PRESSURE_BLOCK_RATIO`]; a huge value (1e300): never.
+    pub pressure_block_ratio: f64,
+    /// Where the pressure block's MINRES stops (theory §10.1): `saddle` (default; its own
+    /// residual ‖r‖_{𝓜⁻¹} of the saddle system at the forcing term) or `displacement` (CG's
+    /// ‖b − K x‖ / ‖b‖, in which the pressure equation's residual counts λ/|T| times over).
+    pub pressure_block_residual: BlockResidual,
     /// Iterations without the KKT residual falling below half its best before Newton is
     /// declared stalled and falls back on the penalty method (theory §4.2.1; 0: never).
     /// Newton near the solution gains orders of magnitude per step: 8 steps without halving
@@ -241,6 +253,8 @@ impl Default for Newton {
             cg_max_iter: 2000,
             amg: AmgParams::default(),
             amg_refresh_cg: AMG_REFRESH_CG,
+            pressure_block_ratio: PRESSURE_BLOCK_RATIO,
+            pressure_block_residual: BlockResidual::Saddle,
             elastic_phase_settled: ELASTIC_PHASE_SETTLED,
             stall_window: 8,
             max_fallbacks: 2,
@@ -255,6 +269,10 @@ pub use crate::forcing::{LAST_STEP_MARGIN, SLOW_CONTRACTION};
 
 /// The default of `elastic_phase_settled`.
 pub const ELASTIC_PHASE_SETTLED: f64 = 0.05;
+
+/// The default of `pressure_block_ratio`: κ/(2μ) = (1 + ν)/(3(1 − 2ν)) = 10 at ν ≈ 0.475
+/// (`docs/plastic_tangent.md`, "The pressure block").
+pub const PRESSURE_BLOCK_RATIO: f64 = 10.0;
 
 /// The default of `amg_refresh_cg`: above the 20–30 iterations the elastic hierarchy takes on
 /// elastic tangents, so that only tangents it no longer approximates trigger a rebuild.
@@ -298,6 +316,7 @@ impl Solver for Newton {
         check::non_negative(path, "elastic_phase_settled", self.elastic_phase_settled)?;
         check::at_least_one(path, "cg_max_iter", self.cg_max_iter)?;
         check::at_least_one(path, "fallback_max_iter", self.fallback_max_iter)?;
+        check::non_negative(path, "pressure_block_ratio", self.pressure_block_ratio)?;
         // AmgParams names its fields `amg.<field>`: under this table's path
         self.amg.validate().map_err(|e| ParameterError { field: join(path, &e.field), ..e })?;
         Ok(())
@@ -703,7 +722,14 @@ impl<'a> Run<'a> {
         let linear = settings.linear.resolve(l.n_dofs(), settings.auto_amg_dofs, nu);
         let multigrid = |timer: &mut PhaseTimer| {
             timer.time("multigrid set-up", || {
-                ActiveSetSystem::multigrid(l, name, &settings.amg, settings.cg_max_iter, settings.amg_refresh_cg)
+                ActiveSetSystem::multigrid_with(
+                    l,
+                    name,
+                    &settings.amg,
+                    settings.cg_max_iter,
+                    settings.amg_refresh_cg,
+                    BlockRule { ratio: settings.pressure_block_ratio, residual: settings.pressure_block_residual },
+                )
             })
         };
         Ok(match linear {
@@ -821,6 +847,12 @@ impl<'a> Run<'a> {
         let cg_tol = if s.elastic_phase && !linear_problem { self.settings.cg_forcing } else { cg_tol };
         let step = match &mut self.system {
             Systems::Serial(system) => {
+                // the tangent of the stage's assembly: elastic in the elastic phase
+                system.follow_material(if s.elastic_phase {
+                    Material::Uniform(&self.c_elastic)
+                } else {
+                    Material::PerPoint(&w.tangents)
+                });
                 let phase = if system.iterative().is_some_and(|it| !it.switched) {
                     "CG solves"
                 } else {
@@ -1003,6 +1035,7 @@ impl<'a> Run<'a> {
                     put("pcg_iterations", iterative.iterations);
                     put("pcg_unconverged", iterative.unconverged);
                     put("multigrid_refreshes", iterative.refreshes);
+                    put("pressure_block_solves", iterative.block_solves);
                     put("auto_switched_to_direct", iterative.switched as usize);
                 }
             }

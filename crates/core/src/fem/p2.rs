@@ -23,7 +23,7 @@ use crate::mesh::dofs::{Dirichlet, DofMap, FIXED};
 use crate::mesh::{TET_EDGES, TetMesh};
 use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
-use crate::problem::operators::{ElementOperators, Material, RigidBodyModes};
+use crate::problem::operators::{ElementOperators, Material, PressureRows, RigidBodyModes};
 use crate::problem::pattern::SymmetricPattern;
 use crate::problem::tensor::{SQRT2, Sym, SymOp};
 use rayon::prelude::*;
@@ -333,6 +333,40 @@ impl ElementOperators for P2Element {
         &self.parts.pattern
     }
 
+    /// With B̄ the trace of ε̄ at the four points of T is θ̄_T = (1/|T|)∫_T div u: B's row T holds
+    /// ∫_T ∂_c N_a = |T| (∇λ_i + ∇λ_j)_c for the edge node (i, j) and nothing for a vertex
+    /// ([`mean_gradient`]). Plain P2 has no element-constant trace.
+    fn pressure_rows(&self) -> Option<PressureRows> {
+        if !self.mean_dilatation {
+            return None;
+        }
+        let ne = self.nodes.len();
+        let mut rows = PressureRows {
+            ptr: Vec::with_capacity(ne + 1),
+            dof: Vec::with_capacity(18 * ne),
+            val: Vec::with_capacity(18 * ne),
+            volume: Vec::with_capacity(ne),
+            points: POINTS,
+        };
+        rows.ptr.push(0);
+        for (e, t) in self.nodes.iter().enumerate() {
+            let volume: f64 = self.weights[POINTS * e..POINTS * (e + 1)].iter().sum();
+            let g = &self.parts.grads[e];
+            for (a, &n) in t.iter().enumerate().skip(4) {
+                let mean = mean_gradient(g, a);
+                for k in 0..3 {
+                    if let Some(j) = self.parts.dofs.free(n, k) {
+                        rows.dof.push(j as u32);
+                        rows.val.push(volume * self.parts.dofs.along(n, k, |c| mean[c]));
+                    }
+                }
+            }
+            rows.ptr.push(rows.dof.len());
+            rows.volume.push(volume);
+        }
+        Some(rows)
+    }
+
     fn n_points(&self) -> usize {
         POINTS * self.parts.mesh.n_elements()
     }
@@ -531,6 +565,31 @@ mod tests {
             operator_checks::assembled_stiffness_matches_the_operator(&inclined(md));
             operator_checks::reassembly_equals_the_assembly(&problem(md), POINTS);
         }
+    }
+
+    #[test]
+    fn pressure_rows_give_the_trace_of_the_mean_dilatation_strain() {
+        // tr ε̄ at each of an element's four points is (B u)_T / |T| (theory §10.1), for any u,
+        // with and without nodal frames; plain P2 has no element-constant trace
+        let mut rng = StdRng::seed_from_u64(11);
+        for l in [problem(true), inclined(true)] {
+            let rows = l.pressure_rows().unwrap();
+            assert_eq!(rows.n_rows(), l.parts.mesh.n_elements());
+            let u: Vec<f64> = (0..l.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut eps = vec![Sym::zeros(); l.n_points()];
+            l.strain(&u, &mut eps);
+            let mut worst: f64 = 0.0;
+            for e in 0..rows.n_rows() {
+                let r = rows.ptr[e]..rows.ptr[e + 1];
+                let bu: f64 = rows.dof[r.clone()].iter().zip(&rows.val[r]).map(|(&j, v)| v * u[j as usize]).sum();
+                for q in 0..POINTS {
+                    let t = &eps[POINTS * e + q];
+                    worst = worst.max((t[0] + t[1] + t[2] - bu / rows.volume[e]).abs());
+                }
+            }
+            assert!(worst < 1e-12, "{worst}");
+        }
+        assert!(problem(false).pressure_rows().is_none());
     }
 
     #[test]

@@ -11,6 +11,7 @@ pub mod csr32;
 pub mod dense_qp;
 pub mod distributed;
 pub mod error;
+pub mod minres;
 pub mod pcg;
 pub mod reduce;
 
@@ -21,4 +22,5 @@ pub use csr32::Csr32;
 pub use dense_qp::{DenseQp, QpError, QpSolution};
 pub use distributed::{DistributedError, DistributedSolve, DistributedSpd};
 pub use error::{AmgError, LinalgError, PcgError};
+pub use minres::{Minres, MinresReport, Residual, SymmetricOperator};
 pub use pcg::{Identity, Jacobi, Pcg, PcgReport, Preconditioner};

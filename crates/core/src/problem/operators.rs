@@ -61,6 +61,32 @@ impl RigidBodyModes {
     }
 }
 
+/// The element-constant pressure of an element whose volumetric strain is one value per element
+/// (B̄, theory §10.1): `tr ε_q(u) = (B u)_e / |T_e|` at every stress point q of element e, with
+/// B's row e = ∫_{T_e} div N_j. The stiffness then splits as K = A + Bᵀ C⁻¹ B, the volumetric
+/// part of every point's tangent carried by the element's pressure (theory §10.1, the pressure
+/// block): what a block preconditioner for nearly incompressible tangents needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PressureRows {
+    /// Row pointers of B (one row per element).
+    pub ptr: Vec<usize>,
+    /// Free dofs of each row.
+    pub dof: Vec<u32>,
+    /// ∫_T div N_j of each entry.
+    pub val: Vec<f64>,
+    /// |T_e|.
+    pub volume: Vec<f64>,
+    /// Stress points per element: those of row e are `points·e .. points·(e + 1)`.
+    pub points: usize,
+}
+
+impl PressureRows {
+    /// Number of rows (elements).
+    pub fn n_rows(&self) -> usize {
+        self.volume.len()
+    }
+}
+
 /// The material of an assembly: one tensor for all points, or one per point.
 #[derive(Clone, Copy, Debug)]
 pub enum Material<'a> {
@@ -121,6 +147,12 @@ pub trait ElementOperators: Debug + Send + Sync {
     /// what a multigrid preconditioner must reproduce); `None` when the element has no nodal
     /// dofs.
     fn rigid_body_modes(&self) -> Option<RigidBodyModes> {
+        None
+    }
+
+    /// The element-constant volumetric strain as rows of B ([`PressureRows`]), for elements
+    /// whose trace of ε is one value per element (B̄); `None` (the default) otherwise.
+    fn pressure_rows(&self) -> Option<PressureRows> {
         None
     }
 
