@@ -332,12 +332,6 @@ fn follow_the_split_tangent(
     }
 }
 
-/// The iterations of one Krylov solve and whether it reached its tolerance.
-struct Report {
-    iterations: usize,
-    converged: bool,
-}
-
 /// The price of one CG iteration with `amg` in iterations of the cycle as built, whose
 /// [`SmoothedAggregation::products_per_cycle`] were `built` (theory §4.2): products with the
 /// fine matrix, CG's own one and the cycle's. A refreshed hierarchy smooths with
@@ -918,7 +912,8 @@ impl ActiveSetSystem {
                         0 => col.iter_mut().for_each(|v| *v = 0.0),
                         _ => col.copy_from_slice(&previous[(c - 1) * n..c * n]),
                     }
-                    let report = match block.as_deref_mut() {
+                    // the Krylov solve's iterations and whether it reached its tolerance
+                    let (its, converged) = match block.as_deref_mut() {
                         None => pcg.solve(a, &pre, b, col, cg_tol, *max_iter).map(|r| (r.iterations, r.converged)),
                         Some(block) => {
                             *block_solves += 1;
@@ -931,13 +926,12 @@ impl ActiveSetSystem {
                         solver: self.solver.clone(),
                         message: format!("{} on the tangent: {e}", if use_block { "MINRES" } else { "CG" }),
                     })?;
-                    let report = Report { iterations: report.0, converged: report.1 };
-                    *iterations += report.iterations;
-                    *spent += report.iterations;
-                    *spent_cost += report.iterations as f64 * iteration_cost(amg, *built_products);
+                    *iterations += its;
+                    *spent += its;
+                    *spent_cost += its as f64 * iteration_cost(amg, *built_products);
                     *spent_solves += 1;
-                    *last_iterations = report.iterations;
-                    *unconverged += !report.converged as usize;
+                    *last_iterations = its;
+                    *unconverged += !converged as usize;
                     x[c * n..(c + 1) * n].copy_from_slice(col);
                     if c > 0 {
                         previous[(c - 1) * n..c * n].copy_from_slice(col);
