@@ -23,12 +23,13 @@
 //! preconditioner as a diagonal block), to a relative tolerance the caller sets per step
 //! (inexact Newton).
 
+use crate::fixed_dofs::FixedDofs;
 use crate::linear::{self, InSolver, lower, near_null_space};
 use crate::newton_friction::{SlipPair, friction_active_set};
 use crate::pressure_block::{BlockResidual, BlockRule, PressureBlock, incompressibility};
 use crate::row_basis::RowBasis;
 use nalgebra::{DMatrix, DVector};
-use saddle_core::linalg::{AmgParams, Csr, LinalgError, Pcg, Preconditioner, SmoothedAggregation, SparseCholesky};
+use saddle_core::linalg::{AmgParams, Csr, LinalgError, Pcg, SmoothedAggregation, SparseCholesky};
 use saddle_core::{ConstraintRows, Lagrangian, Material, SolveError, SymmetricPattern};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
@@ -243,33 +244,6 @@ pub struct IterativeSolve {
     block: Option<Box<PressureBlock>>,
     /// Solves by the pressure block.
     pub block_solves: usize,
-}
-
-/// The AMG preconditioner with the active (fixed) coordinates split off as a diagonal block:
-/// z_F = T⁻¹M⁻¹T⁻ᵀ r_F (r zero on the fixed coordinates; M the multigrid of K, TᵀKT in the
-/// coordinates of the rows), z_s = r_s / d_s on a fixed coordinate s.
-pub(crate) struct FixedDofs<'a> {
-    pub(crate) amg: &'a SmoothedAggregation,
-    pub(crate) basis: &'a RowBasis,
-    /// The fixed dofs s with their diagonal entries d_s.
-    pub(crate) fixed: &'a [(usize, f64)],
-    pub(crate) scratch: &'a Mutex<Vec<f64>>,
-}
-
-impl Preconditioner for FixedDofs<'_> {
-    fn apply(&self, r: &[f64], z: &mut [f64]) {
-        let mut t = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        t.copy_from_slice(r);
-        for &(s, _) in self.fixed {
-            t[s] = 0.0;
-        }
-        self.basis.force_from_coordinates(&mut t);
-        self.amg.apply(&t, z);
-        self.basis.displacement_to_coordinates(z);
-        for &(s, d) in self.fixed {
-            z[s] = r[s] / d;
-        }
-    }
 }
 
 /// The multigrid rebuilt on the tangent (theory §4.2): the aggregates and tentative

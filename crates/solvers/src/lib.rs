@@ -19,6 +19,7 @@ pub mod distributed_basis;
 pub mod distributed_projection;
 pub mod distributed_system;
 mod fallback;
+mod fixed_dofs;
 pub mod forcing;
 pub mod friction;
 pub mod friction_qp;

@@ -30,7 +30,7 @@
 //! (identity rows and columns, [`crate::active_set`]): the pressure rows act on them as
 //! B̃ = B T P, P zeroing the fixed coordinates, so the fixed coordinates stay decoupled.
 
-use crate::active_set::FixedDofs;
+use crate::fixed_dofs::FixedDofs;
 use crate::linear::lower;
 use crate::row_basis::RowBasis;
 use saddle_core::linalg::{Csr, Minres, MinresReport, PcgError, Preconditioner, Residual, SymmetricOperator};
