@@ -139,7 +139,8 @@ enum Command {
         #[arg(long, default_value = "docs/bench")]
         out: PathBuf,
         /// Target numbers of DOFs, comma-separated.
-        #[arg(long, value_delimiter = ',', default_values_t = vec![10_000usize, 50_000, 100_000, 200_000, 400_000])]
+        #[arg(long, value_delimiter = ',', value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..),
+              default_values_t = vec![10_000usize, 50_000, 100_000, 200_000, 400_000])]
         sizes: Vec<usize>,
         /// Solvers, comma-separated: a type (`uzawa`) or TYPE-LINEAR (`newton-amg`, `newton-direct`).
         #[arg(long, value_delimiter = ',', default_values_t = vec!["newton-amg".to_string(), "newton-direct".to_string(), "uzawa".to_string()])]

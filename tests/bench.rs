@@ -87,3 +87,15 @@ fn bench_writes_table_csv_and_plot_with_finite_ratios() {
         assert!(std::fs::metadata(out.join("bench.svg")).unwrap().len() > 1_000);
     }
 }
+
+/// A size of zero DOFs is refused naming the flag and the value, before any scene is read.
+#[test]
+fn a_zero_size_is_refused_naming_the_flag() {
+    let o = Command::new(env!("CARGO_BIN_EXE_saddle"))
+        .args(["bench", "examples/johnson.toml", "--sizes", "10000,0"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(stderr.contains("'0'") && stderr.contains("--sizes"), "{stderr}");
+}

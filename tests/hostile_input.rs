@@ -354,6 +354,14 @@ fn empty_components_are_refused() {
     assert_rejected(&text(&t), &["dirichlet[0].components = []", "fixes no component"]);
 }
 
+#[test]
+fn a_component_listed_twice_is_refused() {
+    let mut t = tiny_johnson();
+    let d = t.get_mut("dirichlet").unwrap().as_array_mut().unwrap();
+    d[0].as_table_mut().unwrap().insert("components".into(), value(r#"["z", "x", "z"]"#));
+    assert_rejected(&text(&t), &[r#"dirichlet[0].components[2] = ["z", "x", "z"]"#, "lists a component twice"]);
+}
+
 /// Found by the property test below: `all = []` selected the whole boundary as the contact zone.
 #[test]
 fn an_empty_region_list_is_refused() {

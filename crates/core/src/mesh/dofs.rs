@@ -150,6 +150,14 @@ impl Dirichlet {
                  \"z\"), or omit the key to clamp all three",
             ));
         }
+        if let Some(c) = self.components.as_ref().and_then(|c| (1..c.len()).find(|&i| c[..i].contains(&c[i]))) {
+            let names: Vec<&str> = self.components().iter().map(|c| ["x", "y", "z"][c.index()]).collect();
+            return Err(ParameterError::new(
+                format!("{}[{c}]", join(path, "components")),
+                format!("{names:?}"),
+                "lists a component twice: name each fixed component once",
+            ));
+        }
         if let Some(v) = &self.value {
             let field = join(path, "value");
             let components = self.components();
