@@ -244,6 +244,8 @@ struct Level {
     p0_fit: f64,
     /// The reported `contact_radius` (the farthest contact row's node).
     radius: f64,
+    /// δ against every base axis node below the surface: (depth, δ) (for choosing the depth).
+    deltas: [(f64, f64); 8],
 }
 
 /// Level `k` of `family` with `element` (and its `contact_rows`), solved by Newton to 1e-10;
@@ -285,7 +287,19 @@ fn nested_level(family: &Family, element: &str, rows: Option<&str>, k: usize, de
         .expect("the axis node of the base grid is a node of every nested level");
     let (a_h, p0_h, _) = hertz(4.0 * force);
     let disp = l.element.nodal_vectors(&sol.u);
+    let axis_delta = |d: f64| {
+        let n = (0..mesh.n_nodes()).find(|&n| {
+            let x = mesh.nodes[n];
+            x[0] == 0.0 && x[1] == 0.0 && (x[2] - d).abs() < 1e-12
+        });
+        n.map_or(f64::NAN, |n| sol.extras[0] - disp[n][2] + half_space_axis_displacement(a_h, p0_h, d))
+    };
+    let mut deltas = [(f64::NAN, f64::NAN); 8];
+    for (slot, d) in deltas.iter_mut().zip(family.base_axis_depths().into_iter().skip(1)) {
+        *slot = (d, axis_delta(d));
+    }
     Level {
+        deltas,
         dofs: l.lagrangian().n_dofs(),
         iterations: sol.report.iterations,
         u: sol.extras[0],
@@ -342,6 +356,7 @@ fn nested_family_probe() {
             let start = std::time::Instant::now();
             let l = nested_level(&family, element, rows, k, depth);
             print_level(element, k, &l, start.elapsed().as_secs_f64());
+            println!("  {element} {k} delta at base axis depths: {:?}", l.deltas);
             for (q, x, exact) in [("a", l.a, a_h), ("p0 fit", l.p0_fit, p0_h), ("delta", l.delta, delta_h)] {
                 assert!((x - exact).abs() < 0.05 * exact, "{element} level {k}: {q} = {x}, Hertz {exact}");
             }

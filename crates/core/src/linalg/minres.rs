@@ -32,16 +32,9 @@ pub trait Residual {
     fn relative(&mut self, z: &[f64]) -> f64;
 }
 
-/// What a MINRES solve achieved.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MinresReport {
-    /// Iterations (products with 𝒜 in the Lanczos loop).
-    pub iterations: usize,
-    /// The caller's relative residual ([`Residual`]) of the returned iterate.
-    pub relative_residual: f64,
-    /// Whether it reached the tolerance.
-    pub converged: bool,
-}
+/// What a MINRES solve achieved: CG's report (its iterations are products with 𝒜 in the
+/// Lanczos loop, its residual the caller's [`Residual`] of the returned iterate).
+pub type MinresReport = super::pcg::PcgReport;
 
 /// MINRES with its work vectors allocated once.
 #[derive(Clone, Debug)]

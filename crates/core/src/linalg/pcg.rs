@@ -63,12 +63,13 @@ impl Preconditioner for Jacobi {
     }
 }
 
-/// What a CG solve achieved.
+/// What a Krylov solve achieved (CG here, MINRES in [`super::minres`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PcgReport {
     /// Iterations (matrix–vector products with A in the Krylov loop).
     pub iterations: usize,
-    /// ‖b − A x‖ / ‖b‖ of the returned x, recomputed from scratch (0 when b = 0).
+    /// The relative residual of the returned x: for CG ‖b − A x‖ / ‖b‖, recomputed from scratch
+    /// (0 when b = 0); for MINRES the caller's [`super::minres::Residual`].
     pub relative_residual: f64,
     /// Whether the relative residual reached the tolerance.
     pub converged: bool,
