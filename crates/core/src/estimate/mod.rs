@@ -29,8 +29,9 @@ pub struct ErrorEstimate {
     pub relative: f64,
     /// η_T per element, in the mesh's order.
     pub indicators: Vec<f64>,
-    /// ∫ (σ* − σ_h) : w, w the element's strain defect ([`Discretisation::strain_defect`]; 0
-    /// without one): the correction of the goal estimate (theory §15.2).
+    /// ∫ σ* : w, σ* the recovered stress and w the element's strain defect
+    /// ([`Discretisation::strain_defect`]; 0 without one): the goal estimate's correction (theory
+    /// §15.2).
     pub defect_cross: f64,
     /// The estimate of |V_k − V_{h,k}| per extra unknown; `None` where the compliance identity
     /// does not apply (theory §15.2).
