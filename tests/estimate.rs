@@ -441,12 +441,22 @@ fn the_strain_defect_moves_the_goal_estimate_of_p2_toward_the_true_error() {
         ("default scene, base 4×4×2, k = 2", family_level(&johnson, [4, 4, 2], 2), [j - dj, j + dj]),
         ("default scene, base 4×4×2, k = 4", family_level(&johnson, [4, 4, 2], 4), [j - dj, j + dj]),
     ];
-    println!("| level | U_h | U_∞ − U_h | (η² − 2X)/|F| | η²/|F| | distances to the interval (new, compliance alone) |");
+    println!(
+        "| level | U_h | U_∞ − U_h | (η² − 2X)/|F| | η²/|F| | distances to the interval (new, compliance alone) |"
+    );
     for (name, lv, [lo, hi]) in &cases {
         let u = lv.sol.extras[0];
         let (signed, alone) = signed_goal_estimates(lv);
         let (lo, hi) = (lo - u, hi - u);
-        let distance = |x: f64| if x < lo { lo - x } else if x > hi { x - hi } else { 0.0 };
+        let distance = |x: f64| {
+            if x < lo {
+                lo - x
+            } else if x > hi {
+                x - hi
+            } else {
+                0.0
+            }
+        };
         println!(
             "| {name} | {u:.6e} | [{lo:.2e}, {hi:.2e}] | {signed:.3e} | {alone:.3e} | {:.2e}, {:.2e} |",
             distance(signed),

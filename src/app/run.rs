@@ -54,8 +54,9 @@ pub fn solve_and_write_with(
     let mut summary = timer.time("summary", || ranks.summary(view, &step.solution, loaded.title.clone()));
     summary.warnings.extend(step.warnings.iter().cloned());
     // the a posteriori estimate (theory §15), on one machine
-    let estimate = (loaded.output.error_estimate && ranks.size() == 1)
-        .then(|| timer.time("estimate", || saddle_core::estimate(view.element, &view.l, &step.solution.u, &step.solution.stress)));
+    let estimate = (loaded.output.error_estimate && ranks.size() == 1).then(|| {
+        timer.time("estimate", || saddle_core::estimate(view.element, &view.l, &step.solution.u, &step.solution.stress))
+    });
     if let Some(w) = estimate.as_ref().and_then(|e| goal_estimate_warning(view, &step.solution.u, e)) {
         summary.warnings.push(w);
     }

@@ -201,8 +201,8 @@ pub fn indicators(
                     cross += (0..6).map(|c| (d[c] + discrete[c]) * w[c]).sum::<f64>();
                 }
             }
-            let weight = mesh.volume(e) / quadrature::POINTS as f64;
-            ((weight * sum).max(0.0).sqrt(), weight * cross)
+            let (vol, points) = (mesh.volume(e), quadrature::POINTS as f64);
+            ((vol * sum / points).max(0.0).sqrt(), vol * cross / points)
         })
         .unzip();
     Indicators { eta, defect_cross: cross.iter().sum() }
