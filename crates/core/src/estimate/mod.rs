@@ -29,28 +29,20 @@ pub struct ErrorEstimate {
     pub relative: f64,
     /// η_T per element, in the mesh's order.
     pub indicators: Vec<f64>,
-    /// ∫ σ* : w, σ* the recovered stress and w the element's strain defect
-    /// ([`Discretisation::strain_defect`]; 0 without one): the goal estimate's correction (theory
-    /// §15.2).
-    pub defect_cross: f64,
     /// The estimate of |V_k − V_{h,k}| per extra unknown; `None` where the compliance identity
     /// does not apply (theory §15.2).
     pub extras: Vec<Option<f64>>,
 }
 
-/// The estimate of the solution with displacements `u` and stresses `stress` of `l` on
-/// `element` (theory §15): the stages recover, compare, sum; the element's strain defect at its
-/// stress points, where it has one, becomes a field within the elements like the stresses and
-/// enters the goal estimate (§15.2).
-pub fn estimate(element: &dyn Discretisation, l: &Lagrangian<'_>, u: &[f64], stress: &StressField) -> ErrorEstimate {
+/// The estimate of the solution with stresses `stress` of `l` on `element` (theory §15): the
+/// stages recover, compare, sum.
+pub fn estimate(element: &dyn Discretisation, l: &Lagrangian<'_>, stress: &StressField) -> ErrorEstimate {
     let field = ElementField::new(element, l, stress);
     let recovered = RecoveredField::average(element, &field);
-    let defect = element.strain_defect(u).map(|w| ElementField::of_points(element, 6, |i, c| w[i][c]));
-    let recovery::Indicators { eta: indicators, defect_cross } =
-        recovery::indicators(element, l, &field, &recovered, defect.as_ref());
+    let indicators = recovery::indicators(element, l, &field, &recovered);
     let energy = indicators.iter().map(|e| e * e).sum::<f64>().sqrt();
     let norm = (2.0 * stress_energy(l, stress)).max(0.0).sqrt();
     let relative = if norm > 0.0 { energy / norm } else { 0.0 };
-    let extras = goal::extra_estimates(energy, defect_cross, l.data.load);
-    ErrorEstimate { energy, relative, indicators, defect_cross, extras }
+    let extras = goal::extra_estimates(energy, l.data.load);
+    ErrorEstimate { energy, relative, indicators, extras }
 }

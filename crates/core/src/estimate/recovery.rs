@@ -145,30 +145,20 @@ impl RecoveredField {
     }
 }
 
-/// The indicators of a solution and the cross term of its strain defect.
-pub struct Indicators {
-    /// η_T per element, in the mesh's order.
-    pub eta: Vec<f64>,
-    /// ∫ σ* : w over the mesh, w the element's strain defect (0 without one; theory §15.2).
-    pub defect_cross: f64,
-}
-
 /// η_T = ‖σ̂* − σ̂_h‖_{E,T} of every element (theory §15.1), integrated with
-/// [`quadrature::points`]; with the strain defect's element field `defect` (6 components: w),
-/// at the same points the cross term ∫_T σ* : w of the goal estimate (theory §15.2).
+/// [`quadrature::points`].
 pub fn indicators(
     element: &dyn Discretisation,
     l: &Lagrangian<'_>,
     field: &ElementField,
     recovered: &RecoveredField,
-    defect: Option<&ElementField>,
-) -> Indicators {
+) -> Vec<f64> {
     let mesh = element.mesh();
     let m = field.components();
     let second_order = mesh.is_second_order();
     let rule = quadrature::points();
     let (law, p) = (*l.data.elasticity, l.data.plasticity());
-    let (eta, cross): (Vec<f64>, Vec<f64>) = (0..mesh.n_elements())
+    (0..mesh.n_elements())
         .into_par_iter()
         .map(|e| {
             let mut nodes = [0usize; 10];
@@ -178,8 +168,7 @@ pub fn indicators(
                 count += 1;
             }
             let (mut discrete, mut n) = ([0.0; 6 + crate::problem::stresses::MAX_HARDENING_DIM], [0.0; 10]);
-            let mut w = [0.0; 6];
-            let (mut sum, mut cross) = (0.0, 0.0);
+            let mut sum = 0.0;
             for lambda in &rule {
                 field.at(e, lambda, &mut discrete[..m]);
                 shape(lambda, second_order, &mut n);
@@ -195,15 +184,8 @@ pub fn indicators(
                 }
                 let s = Sym::from_column_slice(&d[..6]);
                 sum += energy_inner(p, &law, &s, &d[6..m], &s, &d[6..m]);
-                if let Some(defect) = defect {
-                    // σ* = d + σ_h; Mandel: the dot product is the double contraction
-                    defect.at(e, lambda, &mut w);
-                    cross += (0..6).map(|c| (d[c] + discrete[c]) * w[c]).sum::<f64>();
-                }
             }
-            let (vol, points) = (mesh.volume(e), quadrature::POINTS as f64);
-            ((vol * sum / points).max(0.0).sqrt(), vol * cross / points)
+            (mesh.volume(e) * sum / quadrature::POINTS as f64).max(0.0).sqrt()
         })
-        .unzip();
-    Indicators { eta, defect_cross: cross.iter().sum() }
+        .collect()
 }

@@ -20,7 +20,6 @@ use crate::mesh::dofs::{Dirichlet, DofMap};
 use crate::problem::displacements::ConstraintRows;
 use crate::problem::elasticity::Elasticity;
 use crate::problem::operators::ElementOperators;
-use crate::problem::tensor::Sym;
 use std::fmt::Debug;
 
 pub use discrete_problem::{DiscreteProblem, ProblemView};
@@ -122,14 +121,6 @@ pub trait Discretisation: ElementOperators {
     /// Zero, the default, for an element whose B is the strain of its displacements.
     fn strain_consistency_energy(&self, _law: &Elasticity, _u: &[f64]) -> f64 {
         0.0
-    }
-    /// The strain defect w = ε(u) − Bu of the displacement `u` at every stress point (in the
-    /// points' order, Mandel): what the element's strain operator B leaves out of the strain of
-    /// its displacements. The goal estimate of the extras carries its cross term with the stress
-    /// error (theory §15.2). `None`, the default, for an element whose B is the strain of its
-    /// displacements (w = 0).
-    fn strain_defect(&self, _u: &[f64]) -> Option<Vec<Sym>> {
-        None
     }
     /// The element's contact rows of an obstacle's nodal rows `nodal`: the nodal rows (the
     /// default), or rows recombined from them (P2's dual quadratic rows, theory §10.1). An error

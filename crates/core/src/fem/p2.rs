@@ -290,27 +290,6 @@ impl Discretisation for P2Element {
             .sum()
     }
 
-    /// B̄ (theory §10.1) replaces the volumetric strain by its element mean: w = ε(u) − ε̄ =
-    /// ⅓(tr ε(u) − θ̄_T) I at each point, θ̄_T the mean of the four points' tr ε (tr ε is linear,
-    /// the rule exact). None without mean dilatation.
-    fn strain_defect(&self, u: &[f64]) -> Option<Vec<Sym>> {
-        if !self.mean_dilatation {
-            return None;
-        }
-        let mut w = vec![Sym::zeros(); self.nodes.len() * POINTS];
-        w.par_chunks_mut(POINTS).enumerate().for_each(|(e, out)| {
-            let m = self.point_gradients(e, u);
-            let theta: [f64; POINTS] = std::array::from_fn(|q| m[q][0][0] + m[q][1][1] + m[q][2][2]);
-            let mean = theta.iter().sum::<f64>() / POINTS as f64;
-            for (wq, t) in out.iter_mut().zip(&theta) {
-                for k in 0..3 {
-                    wq[k] = (t - mean) / 3.0;
-                }
-            }
-        });
-        Some(w)
-    }
-
     /// VTK_QUADRATIC_TETRA: vertices, then the edge nodes in VTK's order.
     fn degree(&self) -> usize {
         2
@@ -611,27 +590,6 @@ mod tests {
             assert!(worst < 1e-12, "{worst}");
         }
         assert!(problem(false).pressure_rows().is_none());
-    }
-
-    #[test]
-    fn the_strain_defect_is_the_plain_strain_minus_the_mean_dilatation_strain() {
-        // w = ε(u) − ε̄(u) at every point, for any u: against the two strain operators, and its
-        // energy Σ w_q w:Cw is the consistency energy (both are K(tr ε − θ̄)² pointwise); none
-        // without B̄
-        let mut rng = StdRng::seed_from_u64(17);
-        let (plain, bar) = (problem(false), problem(true));
-        let u: Vec<f64> = (0..bar.n_dofs()).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let (mut eps, mut eps_bar) = (vec![Sym::zeros(); bar.n_points()], vec![Sym::zeros(); bar.n_points()]);
-        plain.strain(&u, &mut eps);
-        bar.strain(&u, &mut eps_bar);
-        let w = bar.strain_defect(&u).unwrap();
-        let worst = (0..w.len()).map(|i| (w[i] - (eps[i] - eps_bar[i])).norm()).fold(0.0, f64::max);
-        assert!(worst < 1e-12, "{worst}");
-        let law = Elasticity::new(100.0, 0.3).unwrap();
-        let energy: f64 = w.iter().zip(bar.weights()).map(|(w, q)| q * w.dot(&law.stress(w))).sum();
-        let delta = bar.strain_consistency_energy(&law, &u);
-        assert!(delta > 0.0 && (energy / delta - 1.0).abs() < 1e-12, "{energy} against {delta}");
-        assert!(plain.strain_defect(&u).is_none());
     }
 
     #[test]
