@@ -33,6 +33,7 @@
 use crate::fixed_dofs::FixedDofs;
 use crate::linear::lower;
 use crate::row_basis::RowBasis;
+use saddle_core::linalg::pcg::dot;
 use saddle_core::linalg::{Csr, Minres, MinresReport, PcgError, Preconditioner, Residual, SymmetricOperator};
 use saddle_core::problem::operators::PressureRows;
 use saddle_core::problem::tensor::identity;
@@ -160,7 +161,7 @@ impl PressureBlock {
 
     /// `values` (K's lower triangle on L's `pattern`, the dofs' own coordinates) minus Bᵀ C⁻¹ B:
     /// the part A of the split (module docs), on which the multigrid is built.
-    pub fn subtract_volumetric(&self, pattern: &SymmetricPattern, values: &mut [f64]) {
+    fn subtract_volumetric(&self, pattern: &SymmetricPattern, values: &mut [f64]) {
         let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
         for e in 0..self.b.nrows {
             let r = self.b.ptr[e]..self.b.ptr[e + 1];
@@ -203,7 +204,7 @@ impl PressureBlock {
         max_iter: usize,
     ) -> Result<MinresReport, PcgError> {
         let n = a.nrows;
-        let norm_b = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let norm_b = dot(b, b).sqrt();
         if norm_b == 0.0 {
             x.iter_mut().for_each(|v| *v = 0.0);
             return Ok(MinresReport { iterations: 0, relative_residual: 0.0, converged: true });
@@ -316,7 +317,7 @@ struct Displacement<'a> {
 impl Residual for Displacement<'_> {
     fn relative(&mut self, z: &[f64]) -> f64 {
         self.a.residual(self.b, &z[..self.a.nrows], self.tmp);
-        self.tmp.iter().map(|v| v * v).sum::<f64>().sqrt() / self.norm_b
+        dot(self.tmp, self.tmp).sqrt() / self.norm_b
     }
 }
 
